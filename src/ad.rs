@@ -1,0 +1,137 @@
+//! Forward-mode automatic differentiation helpers (num-dual) without per-call allocation.
+//!
+//! A Lagrangian is written once, generic over the scalar `T: DualNum<Primitive = f64>`. Its
+//! gradient comes from 2D evaluations with first-order duals ([`Dual64`]) and its Hessian from
+//! (2D)(2D+1)/2 evaluations with hyper-dual numbers ([`HyperDual64`]), each seeded along a
+//! pair of coordinate directions. The dual-number argument vectors live in thread-local scratch
+//! buffers, so after the first call on a thread no heap allocation happens — which keeps the
+//! integrator's step loop allocation-free even on the AD path.
+
+use num_dual::{Dual64, HyperDual64};
+use std::cell::RefCell;
+
+thread_local! {
+    static DUAL_SCRATCH: RefCell<Vec<Dual64>> = const { RefCell::new(Vec::new()) };
+    static HYPER_SCRATCH: RefCell<Vec<HyperDual64>> = const { RefCell::new(Vec::new()) };
+}
+
+/// Run `body` with a scratch vector of length `len`, reusing a thread-local buffer when it is
+/// free (a nested call, which cannot borrow it, gets a fresh vector instead of panicking).
+fn with_scratch<S: Copy, R>(
+    key: &'static std::thread::LocalKey<RefCell<Vec<S>>>,
+    len: usize,
+    fill: S,
+    body: impl FnOnce(&mut [S]) -> R,
+) -> R {
+    key.with(|cell| match cell.try_borrow_mut() {
+        Ok(mut buf) => {
+            buf.clear();
+            buf.resize(len, fill);
+            body(&mut buf)
+        }
+        Err(_) => {
+            let mut buf = vec![fill; len];
+            body(&mut buf)
+        }
+    })
+}
+
+/// Gradient of `f` at `x` by forward-mode AD: `grad[i] = ∂f/∂x_i`. Returns f(x).
+pub fn gradient(f: impl Fn(&[Dual64]) -> Dual64, x: &[f64], grad: &mut [f64]) -> f64 {
+    let n = x.len();
+    with_scratch(&DUAL_SCRATCH, n, Dual64::from_re(0.0), |xs| {
+        for (xi, &x0) in xs.iter_mut().zip(x) {
+            *xi = Dual64::from_re(x0);
+        }
+        let mut value = 0.0;
+        if n == 0 {
+            return f(xs).re;
+        }
+        for i in 0..n {
+            xs[i].eps = 1.0;
+            let y = f(xs);
+            xs[i].eps = 0.0;
+            grad[i] = y.eps;
+            value = y.re;
+        }
+        value
+    })
+}
+
+/// Gradient and Hessian of `f` at `x` by hyper-dual numbers: `hess` is row-major n×n.
+/// Returns f(x).
+pub fn hessian(
+    f: impl Fn(&[HyperDual64]) -> HyperDual64,
+    x: &[f64],
+    grad: &mut [f64],
+    hess: &mut [f64],
+) -> f64 {
+    let n = x.len();
+    with_scratch(&HYPER_SCRATCH, n, HyperDual64::from_re(0.0), |xs| {
+        for (xi, &x0) in xs.iter_mut().zip(x) {
+            *xi = HyperDual64::from_re(x0);
+        }
+        if n == 0 {
+            return f(xs).re;
+        }
+        let mut value = 0.0;
+        for i in 0..n {
+            for j in i..n {
+                xs[i].eps1 = 1.0;
+                xs[j].eps2 = 1.0;
+                let y = f(xs);
+                xs[i].eps1 = 0.0;
+                xs[j].eps2 = 0.0;
+                hess[i * n + j] = y.eps1eps2;
+                hess[j * n + i] = y.eps1eps2;
+                if i == j {
+                    grad[i] = y.eps1;
+                }
+                value = y.re;
+            }
+        }
+        value
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use num_dual::DualNum;
+
+    fn rosen<T: DualNum<Primitive = f64> + Copy>(x: &[T]) -> T {
+        let a = T::from(1.0) - x[0];
+        let b = x[1] - x[0] * x[0];
+        a * a + b * b * 100.0 + (x[2] * x[0]).sin()
+    }
+
+    #[test]
+    fn gradient_and_hessian_match_closed_form() {
+        let x = [0.3, -0.7, 1.1];
+        let mut g = [0.0; 3];
+        let v = gradient(rosen, &x, &mut g);
+        let mut g2 = [0.0; 3];
+        let mut h = [0.0; 9];
+        let v2 = hessian(rosen, &x, &mut g2, &mut h);
+        let (x0, x1, x2) = (x[0], x[1], x[2]);
+        let c = (x2 * x0).cos();
+        let s = (x2 * x0).sin();
+        let exact_g = [
+            -2.0 * (1.0 - x0) - 400.0 * x0 * (x1 - x0 * x0) + x2 * c,
+            200.0 * (x1 - x0 * x0),
+            x0 * c,
+        ];
+        let exact_h00 = 2.0 - 400.0 * (x1 - 3.0 * x0 * x0) - x2 * x2 * s;
+        let exact_h02 = c - x0 * x2 * s;
+        assert!((v - v2).abs() < 1e-15);
+        for i in 0..3 {
+            assert!((g[i] - exact_g[i]).abs() < 1e-12, "{i}");
+            assert!((g2[i] - exact_g[i]).abs() < 1e-12, "{i}");
+        }
+        assert!((h[0] - exact_h00).abs() < 1e-10);
+        assert!((h[2] - exact_h02).abs() < 1e-12);
+        assert!((h[6] - exact_h02).abs() < 1e-12);
+        assert!((h[4] - 200.0).abs() < 1e-12);
+        assert!((h[1] + 400.0 * x0).abs() < 1e-12);
+    }
+}

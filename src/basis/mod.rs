@@ -1,0 +1,244 @@
+//! Basis functions on the reference step τ ∈ [0, 1].
+//!
+//! A [`Basis`] is n functions φ_0 … φ_{n−1} with the *boundary-adapted* contract of DESIGN.md §2:
+//! φ_0(0) = 1, φ_0(1) = 0, φ_{n−1}(0) = 0, φ_{n−1}(1) = 1, and every other φ_i vanishes at both
+//! ends. A Galerkin curve on one step is q(t_k + τh) = Σ Q_i φ_i(τ), so Q_0 = q(t_k) and
+//! Q_{n−1} = q(t_k + h), exactly as with the paper's Lagrange basis (its q¹ and qⁿ).
+//!
+//! Bases are small values; [`BasisKind`] names them for scene files and the command line and
+//! builds an [`AnyBasis`], which implements [`Basis`] by dispatching to the concrete type.
+
+mod chebyshev;
+
+pub use chebyshev::ChebyshevLagrange;
+
+use crate::error::{GviError, Result};
+use serde::{Deserialize, Serialize};
+
+/// A family of n functions on [0, 1] obeying the boundary-adapted contract.
+pub trait Basis {
+    /// Number of basis functions n.
+    fn len(&self) -> usize;
+
+    /// Always false: a valid basis has at least two functions.
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Human-readable name, e.g. "chebyshev".
+    fn name(&self) -> &'static str;
+
+    /// The kind, for serialisation and rebuilding (dense output of a stored trajectory).
+    fn kind(&self) -> BasisKind;
+
+    /// Evaluate φ_i(τ) into `values[i]` and dφ_i/dτ into `derivatives[i]`, for all i.
+    /// Both slices have length n. τ may lie outside [0, 1] (extrapolation).
+    fn eval(&self, tau: f64, values: &mut [f64], derivatives: &mut [f64]);
+
+    /// Degree of the polynomial space spanned, or `None` for a non-polynomial basis.
+    fn polynomial_degree(&self) -> Option<usize>;
+
+    /// Points at which [`fit_coefficients`](crate::basis::CurveFit) interpolates a curve to
+    /// obtain coefficients (initial guesses, projections). Default: the n Chebyshev–Lobatto
+    /// points of [0, 1], which include both ends so the fitted coefficients keep the contract.
+    fn interpolation_nodes(&self) -> Vec<f64> {
+        chebyshev_lobatto_points(self.len())
+    }
+}
+
+/// The n Chebyshev–Lobatto points τ_i = (1 − cos(iπ/(n−1)))/2 of [0, 1], increasing.
+pub fn chebyshev_lobatto_points(n: usize) -> Vec<f64> {
+    match n {
+        0 => Vec::new(),
+        1 => vec![0.5],
+        _ => (0..n)
+            .map(|i| {
+                // sin form is symmetric and exact at the ends and the centre.
+                let theta = std::f64::consts::PI * (i as f64) / ((n - 1) as f64);
+                let s = (0.5 * theta).sin();
+                s * s
+            })
+            .collect(),
+    }
+}
+
+/// The bases this crate provides, selectable by value and by name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum BasisKind {
+    /// Lagrange polynomials at Chebyshev–Lobatto points (the paper's spectral basis).
+    #[default]
+    Chebyshev,
+}
+
+impl BasisKind {
+    /// All kinds, for sweeps.
+    pub const ALL: [BasisKind; 1] = [BasisKind::Chebyshev];
+
+    /// The name used in scene files and on the command line.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            BasisKind::Chebyshev => "chebyshev",
+        }
+    }
+
+    /// Build the basis with n functions.
+    pub fn build(self, n: usize) -> Result<AnyBasis> {
+        Ok(match self {
+            BasisKind::Chebyshev => AnyBasis::Chebyshev(ChebyshevLagrange::new(n)?),
+        })
+    }
+}
+
+impl std::fmt::Display for BasisKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl std::str::FromStr for BasisKind {
+    type Err = GviError;
+    fn from_str(s: &str) -> Result<Self> {
+        BasisKind::ALL
+            .into_iter()
+            .find(|k| k.as_str().eq_ignore_ascii_case(s.trim()))
+            .ok_or_else(|| GviError::InvalidArgument {
+                name: "basis".into(),
+                reason: format!(
+                    "unknown basis '{s}' (expected one of: {})",
+                    BasisKind::ALL.map(|k| k.as_str()).join(", ")
+                ),
+            })
+    }
+}
+
+/// Any of the crate's bases, chosen at run time.
+#[derive(Debug, Clone)]
+pub enum AnyBasis {
+    /// See [`ChebyshevLagrange`].
+    Chebyshev(ChebyshevLagrange),
+}
+
+macro_rules! dispatch {
+    ($self:ident, $b:ident => $e:expr) => {
+        match $self {
+            AnyBasis::Chebyshev($b) => $e,
+        }
+    };
+}
+
+impl Basis for AnyBasis {
+    fn len(&self) -> usize {
+        dispatch!(self, b => b.len())
+    }
+    fn name(&self) -> &'static str {
+        dispatch!(self, b => b.name())
+    }
+    fn kind(&self) -> BasisKind {
+        dispatch!(self, b => b.kind())
+    }
+    fn eval(&self, tau: f64, values: &mut [f64], derivatives: &mut [f64]) {
+        dispatch!(self, b => b.eval(tau, values, derivatives))
+    }
+    fn polynomial_degree(&self) -> Option<usize> {
+        dispatch!(self, b => b.polynomial_degree())
+    }
+    fn interpolation_nodes(&self) -> Vec<f64> {
+        dispatch!(self, b => b.interpolation_nodes())
+    }
+}
+
+/// Check the common requirement n ≥ `min` for a basis constructor.
+pub(crate) fn check_size(basis: &str, n: usize, min: usize, max: usize) -> Result<()> {
+    if n < min || n > max {
+        return Err(GviError::InvalidBasisSize {
+            n,
+            basis: basis.to_string(),
+            reason: format!("need {min} ≤ n ≤ {max}"),
+        });
+    }
+    Ok(())
+}
+
+/// Interpolation of curves by a basis: the coefficients Q_i with Σ Q_i φ_i(x_k) = f(x_k) at the
+/// basis's interpolation nodes x_k. For nodal bases this is the identity on nodal values; for
+/// modal bases it is a solve with the (precomputed, factorised) collocation matrix, so the
+/// coefficients are a true representation of the curve rather than nodal values.
+#[derive(Debug, Clone)]
+pub struct CurveFit {
+    nodes: Vec<f64>,
+    lu: crate::linalg::Lu,
+}
+
+impl CurveFit {
+    /// Factorise the collocation matrix A[k][i] = φ_i(x_k) of `basis`.
+    pub fn new<B: Basis + ?Sized>(basis: &B) -> Result<Self> {
+        let n = basis.len();
+        let nodes = basis.interpolation_nodes();
+        ensure_len_nodes(n, nodes.len())?;
+        let mut a = vec![0.0; n * n];
+        let mut v = vec![0.0; n];
+        let mut dv = vec![0.0; n];
+        for (k, &x) in nodes.iter().enumerate() {
+            basis.eval(x, &mut v, &mut dv);
+            a[k * n..(k + 1) * n].copy_from_slice(&v);
+        }
+        let lu = crate::linalg::Lu::factor(a, n).map_err(|_| GviError::InvalidBasisSize {
+            n,
+            basis: basis.name().to_string(),
+            reason: "collocation matrix at the interpolation nodes is singular".into(),
+        })?;
+        Ok(CurveFit { nodes, lu })
+    }
+
+    /// The interpolation nodes x_k.
+    pub fn nodes(&self) -> &[f64] {
+        &self.nodes
+    }
+
+    /// Turn values `f` (n × D, row k = f(x_k)) into coefficients in place (row i = Q_i).
+    pub fn values_to_coefficients(&self, values: &mut [f64], dim: usize) {
+        self.lu.solve_columns_in_place(values, dim);
+    }
+}
+
+fn ensure_len_nodes(n: usize, got: usize) -> Result<()> {
+    crate::error::ensure_len("basis interpolation nodes", n, got)
+}
+
+#[cfg(test)]
+pub(crate) mod contract_tests {
+    use super::*;
+
+    /// Check the boundary contract and derivatives against finite differences; returns the
+    /// largest finite-difference discrepancy relative to the derivative scale.
+    pub fn check_contract<B: Basis>(b: &B) -> f64 {
+        let n = b.len();
+        let (mut v, mut d) = (vec![0.0; n], vec![0.0; n]);
+        b.eval(0.0, &mut v, &mut d);
+        for (i, &x) in v.iter().enumerate() {
+            let want = if i == 0 { 1.0 } else { 0.0 };
+            assert!((x - want).abs() < 1e-13, "φ_{i}(0) = {x}");
+        }
+        b.eval(1.0, &mut v, &mut d);
+        for (i, &x) in v.iter().enumerate() {
+            let want = if i == n - 1 { 1.0 } else { 0.0 };
+            assert!((x - want).abs() < 1e-13, "φ_{i}(1) = {x}");
+        }
+        let mut worst: f64 = 0.0;
+        let eps = 1e-6;
+        let (mut vp, mut vm, mut tmp) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        for k in 0..17 {
+            let tau = 0.03 + 0.94 * (k as f64) / 16.0;
+            b.eval(tau, &mut v, &mut d);
+            b.eval(tau + eps, &mut vp, &mut tmp);
+            b.eval(tau - eps, &mut vm, &mut tmp);
+            let scale = d.iter().fold(1.0f64, |m, x| m.max(x.abs()));
+            for i in 0..n {
+                let fd = (vp[i] - vm[i]) / (2.0 * eps);
+                worst = worst.max((fd - d[i]).abs() / scale);
+            }
+        }
+        worst
+    }
+}

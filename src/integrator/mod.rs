@@ -1,0 +1,417 @@
+//! The Galerkin variational integrator (DESIGN.md §2; paper §3).
+//!
+//! [`GalerkinIntegrator`] is built once per (basis, quadrature, h): it tabulates the basis and
+//! its derivative at the quadrature nodes, the kinetic matrix K_ab = Σ_j b_j φ_a'(c_j) φ_b'(c_j),
+//! the coefficients of constant and linear curves and the extrapolation table used for initial
+//! guesses. The Lagrangian is a separate value passed to [`step`](GalerkinIntegrator::step) and
+//! [`integrate`](GalerkinIntegrator::integrate), as problem and algorithm are in
+//! DifferentialEquations.jl.
+//!
+//! One step, in position–momentum form: given (q_k, p_k), set Q_0 = q_k and solve
+//! p_k + ∂S/∂Q_0 = 0 (the discrete Legendre transform, paper eq. (3.2)) and ∂S/∂Q_i = 0,
+//! i = 1 … n−2 (the internal stage equations (3.1)) for Q_1 … Q_{n−1} by Newton's method with the
+//! exact Jacobian; then q_{k+1} = Q_{n−1} and p_{k+1} = ∂S/∂Q_{n−1}.
+
+mod newton;
+mod workspace;
+
+pub use newton::{DiscreteLagrangian, InitialGuess, NewtonOptions, StepFailure, StepStats};
+pub use workspace::Workspace;
+
+use crate::basis::{AnyBasis, Basis, BasisKind, ChebyshevLagrange, CurveFit};
+use crate::error::{GviError, Result, ensure_finite, ensure_len};
+use crate::lagrangian::Lagrangian;
+use crate::quadrature::{GaussLegendre, Quadrature, QuadratureKind, QuadratureRule};
+use crate::trajectory::Trajectory;
+
+/// A Galerkin variational integrator for a basis `B` and quadrature `Q` at fixed step h.
+///
+/// ```
+/// use galerkin_vi::prelude::*;
+///
+/// // The paper's spectral method: Chebyshev–Lagrange, n = 16, 2n Gauss points, h = 2.
+/// let gvi = GalerkinIntegrator::spectral(16, 2.0).unwrap();
+/// let kepler = Kepler::new(1.0).unwrap();
+/// let traj = gvi.integrate(&kepler, 0.0, &[0.4, 0.0], &[0.0, 2.0], 10).unwrap();
+/// assert_eq!(traj.steps(), 10);
+/// // Dense output along the Galerkin curves.
+/// let q = traj.position_at(3.3).unwrap();
+/// assert!((q[0] * q[0] + q[1] * q[1]).sqrt() < 1.6 + 1e-6);
+/// ```
+#[derive(Debug, Clone)]
+pub struct GalerkinIntegrator<B: Basis = ChebyshevLagrange, Q: Quadrature = GaussLegendre> {
+    basis: B,
+    quadrature: Q,
+    rule: QuadratureRule,
+    h: f64,
+    options: NewtonOptions,
+    tables: Tables,
+}
+
+/// Precomputed basis tables (row-major).
+#[derive(Debug, Clone)]
+pub(crate) struct Tables {
+    pub n: usize,
+    pub m: usize,
+    /// φ_i(c_j) at [j*n + i].
+    pub phi: Vec<f64>,
+    /// dφ_i/dτ(c_j) at [j*n + i].
+    pub dphi: Vec<f64>,
+    /// Quadrature weights b_j.
+    pub weights: Vec<f64>,
+    /// K_ab = Σ_j b_j φ_a'(c_j) φ_b'(c_j), n×n.
+    pub kinetic: Vec<f64>,
+    /// Coefficients of the constant curve 1.
+    pub unit: Vec<f64>,
+    /// Coefficients of the curve τ.
+    pub ramp: Vec<f64>,
+    /// dφ_i/dτ at τ = 1.
+    pub dphi_end: Vec<f64>,
+    /// Extrapolation operator E (n×n): coefficients of the next step's guess are E · Q_prev,
+    /// i.e. the previous curve continued to τ ∈ [1, 2] and re-fitted.
+    /// `None` when the continuation overflows (very large n): extrapolation is then skipped.
+    pub extrapolate: Option<Vec<f64>>,
+}
+
+impl GalerkinIntegrator<ChebyshevLagrange, GaussLegendre> {
+    /// The paper's spectral variational integrator: Chebyshev–Lagrange basis with n functions
+    /// and Gauss–Legendre quadrature with 2n points, step h.
+    pub fn spectral(n: usize, h: f64) -> Result<Self> {
+        GalerkinIntegrator::new(ChebyshevLagrange::new(n)?, GaussLegendre::new(2 * n)?, h)
+    }
+}
+
+impl GalerkinIntegrator<AnyBasis, QuadratureRule> {
+    /// An integrator chosen by value: basis kind and n, quadrature kind and points (`None`:
+    /// the kind's default for n, 2n Gauss–Legendre points), and step h.
+    pub fn from_kinds(
+        basis: BasisKind,
+        n: usize,
+        quadrature: QuadratureKind,
+        points: Option<usize>,
+        h: f64,
+    ) -> Result<Self> {
+        let b = basis.build(n)?;
+        let q = quadrature.build(points.unwrap_or_else(|| quadrature.default_points(n)))?;
+        GalerkinIntegrator::new(b, q, h)
+    }
+}
+
+impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
+    /// Build the integrator: validates h, the quadrature, and that the quadrature is strong
+    /// enough for the basis (the kinetic stage matrix must be invertible; for polynomial bases
+    /// the rule must integrate φ_a'φ_b', of degree 2n − 4, exactly).
+    pub fn new(basis: B, quadrature: Q, h: f64) -> Result<Self> {
+        if !(h.is_finite() && h > 0.0) {
+            return Err(GviError::InvalidStepSize { h });
+        }
+        let n = basis.len();
+        if n < 2 {
+            return Err(GviError::InvalidBasisSize {
+                n,
+                basis: basis.name().into(),
+                reason: "a Galerkin curve needs at least the two end functions".into(),
+            });
+        }
+        let rule = quadrature.rule()?;
+        let tables = Tables::build(&basis, &rule)?;
+        let integrator = GalerkinIntegrator {
+            basis,
+            quadrature,
+            rule,
+            h,
+            options: NewtonOptions::default(),
+            tables,
+        };
+        integrator.check_quadrature_strength()?;
+        Ok(integrator)
+    }
+
+    /// Replace the Newton options.
+    pub fn with_options(mut self, options: NewtonOptions) -> Self {
+        self.options = options;
+        self
+    }
+
+    /// The Newton options.
+    pub fn options(&self) -> &NewtonOptions {
+        &self.options
+    }
+
+    /// The step size h.
+    pub fn step_size(&self) -> f64 {
+        self.h
+    }
+
+    /// Number of basis functions n.
+    pub fn n(&self) -> usize {
+        self.tables.n
+    }
+
+    /// The basis.
+    pub fn basis(&self) -> &B {
+        &self.basis
+    }
+
+    /// The quadrature recipe.
+    pub fn quadrature(&self) -> &Q {
+        &self.quadrature
+    }
+
+    /// The quadrature nodes and weights in use.
+    pub fn rule(&self) -> &QuadratureRule {
+        &self.rule
+    }
+
+    pub(crate) fn tables(&self) -> &Tables {
+        &self.tables
+    }
+
+    /// The kinetic matrix K_ab = Σ_j b_j φ_a'(c_j) φ_b'(c_j) (n×n, row-major, τ-units): the
+    /// Jacobian of a free particle's stage equations is K ⊗ M / h.
+    pub fn kinetic_matrix(&self) -> &[f64] {
+        &self.tables.kinetic
+    }
+
+    /// 2-norm condition number of the stage block of the kinetic matrix (rows 0…n−2, columns
+    /// 1…n−1), the matrix Newton inverts for a free particle. Large values mean the basis is
+    /// ill-conditioned at this n.
+    pub fn kinetic_condition_number(&self) -> f64 {
+        let block = self.stage_kinetic_block();
+        let r = crate::linalg::reciprocal_condition(&block, self.tables.n - 1);
+        if r > 0.0 { 1.0 / r } else { f64::INFINITY }
+    }
+
+    fn stage_kinetic_block(&self) -> Vec<f64> {
+        let n = self.tables.n;
+        let k = n - 1;
+        let mut block = vec![0.0; k * k];
+        for a in 0..k {
+            for b in 0..k {
+                block[a * k + b] = self.tables.kinetic[a * n + b + 1];
+            }
+        }
+        block
+    }
+
+    fn check_quadrature_strength(&self) -> Result<()> {
+        let n = self.tables.n;
+        let required = match self.basis.polynomial_degree() {
+            Some(p) => 2 * p.saturating_sub(1),
+            None => 0,
+        };
+        let block = self.stage_kinetic_block();
+        let rcond = crate::linalg::reciprocal_condition(&block, n - 1);
+        let too_weak_degree =
+            self.basis.polynomial_degree().is_some() && self.rule.degree < required;
+        if too_weak_degree || rcond < 1e-13 {
+            return Err(GviError::QuadratureTooWeak {
+                quadrature: self.quadrature.name(),
+                degree: self.rule.degree,
+                basis: self.basis.name().into(),
+                n,
+                required,
+                rcond,
+            });
+        }
+        Ok(())
+    }
+
+    /// A fresh workspace for `lagrangian` (allocates; reuse it across steps).
+    pub fn workspace<L: Lagrangian>(&self, lagrangian: &L) -> Result<Workspace> {
+        Workspace::new(self, lagrangian)
+    }
+
+    /// Validate an initial state for `lagrangian`.
+    fn check_state<L: Lagrangian>(&self, lagrangian: &L, q: &[f64], p: &[f64]) -> Result<()> {
+        let d = lagrangian.dim();
+        ensure_len("initial position q0", d, q.len())?;
+        ensure_len("initial momentum p0", d, p.len())?;
+        ensure_finite("initial position q0", q)?;
+        ensure_finite("initial momentum p0", p)?;
+        Ok(())
+    }
+
+    /// Integrate `steps` steps from (q0, p0) at time t0, keeping every step's Galerkin
+    /// coefficients for dense output.
+    ///
+    /// On a Newton failure the error carries the trajectory computed up to the failing step.
+    pub fn integrate<L: Lagrangian>(
+        &self,
+        lagrangian: &L,
+        t0: f64,
+        q0: &[f64],
+        p0: &[f64],
+        steps: usize,
+    ) -> std::result::Result<Trajectory, IntegrationFailure> {
+        let fail = |error| IntegrationFailure {
+            error,
+            partial: None,
+        };
+        if steps == 0 || steps > MAX_STEPS {
+            return Err(fail(GviError::InvalidStepCount {
+                steps,
+                reason: format!("need 1 ≤ steps ≤ {MAX_STEPS}"),
+            }));
+        }
+        if !t0.is_finite() {
+            return Err(fail(GviError::NonFinite {
+                what: "initial time t0".into(),
+                value: t0,
+            }));
+        }
+        self.check_state(lagrangian, q0, p0).map_err(fail)?;
+        let mut ws = self.workspace(lagrangian).map_err(fail)?;
+        let d = lagrangian.dim();
+        let mut traj = Trajectory::new(
+            self.basis.kind(),
+            self.tables.n,
+            self.rule.kind,
+            self.rule.len(),
+            self.h,
+            t0,
+            d,
+            steps,
+        );
+        traj.push_state(q0, p0);
+        let mut q = q0.to_vec();
+        let mut p = p0.to_vec();
+        let mut q_next = vec![0.0; d];
+        let mut p_next = vec![0.0; d];
+        for k in 0..steps {
+            let t = t0 + k as f64 * self.h;
+            match self.step(lagrangian, &mut ws, &q, &p, &mut q_next, &mut p_next) {
+                Ok(stats) => {
+                    traj.push_step(ws.coefficients(), &q_next, &p_next, stats);
+                    std::mem::swap(&mut q, &mut q_next);
+                    std::mem::swap(&mut p, &mut p_next);
+                }
+                Err(failure) => {
+                    return Err(IntegrationFailure {
+                        error: GviError::NewtonFailure {
+                            step: k,
+                            t,
+                            residual: failure.residual,
+                            iterations: failure.iterations,
+                            reason: failure.reason,
+                        },
+                        partial: Some(Box::new(traj)),
+                    });
+                }
+            }
+        }
+        Ok(traj)
+    }
+}
+
+/// The most steps one `integrate` call accepts (a guard against absurd input).
+pub const MAX_STEPS: usize = 100_000_000;
+
+/// A failed integration: the error and, for a Newton failure, the trajectory up to the step
+/// that failed.
+#[derive(Debug)]
+pub struct IntegrationFailure {
+    /// What went wrong.
+    pub error: GviError,
+    /// The trajectory computed before the failure (for solver failures).
+    pub partial: Option<Box<Trajectory>>,
+}
+
+impl std::fmt::Display for IntegrationFailure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}", self.error)?;
+        if let Some(t) = &self.partial {
+            write!(f, " ({} steps completed before it)", t.steps())?;
+        }
+        Ok(())
+    }
+}
+
+impl std::error::Error for IntegrationFailure {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        Some(&self.error)
+    }
+}
+
+impl From<IntegrationFailure> for GviError {
+    fn from(f: IntegrationFailure) -> Self {
+        f.error
+    }
+}
+
+impl From<GviError> for IntegrationFailure {
+    fn from(error: GviError) -> Self {
+        IntegrationFailure {
+            error,
+            partial: None,
+        }
+    }
+}
+
+impl Tables {
+    fn build<B: Basis + ?Sized>(basis: &B, rule: &QuadratureRule) -> Result<Self> {
+        let n = basis.len();
+        let m = rule.len();
+        let mut phi = vec![0.0; m * n];
+        let mut dphi = vec![0.0; m * n];
+        for (j, &c) in rule.nodes.iter().enumerate() {
+            let (v, d) = (&mut phi[j * n..(j + 1) * n], &mut dphi[j * n..(j + 1) * n]);
+            basis.eval(c, v, d);
+        }
+        let mut kinetic = vec![0.0; n * n];
+        for j in 0..m {
+            let w = rule.weights[j];
+            let row = &dphi[j * n..(j + 1) * n];
+            for a in 0..n {
+                let wa = w * row[a];
+                for b in 0..n {
+                    kinetic[a * n + b] += wa * row[b];
+                }
+            }
+        }
+        let fit = CurveFit::new(basis)?;
+        let nodes = fit.nodes().to_vec();
+        let mut unit = vec![1.0; n];
+        fit.values_to_coefficients(&mut unit, 1);
+        let mut ramp = nodes.clone();
+        fit.values_to_coefficients(&mut ramp, 1);
+        let (mut v, mut d1) = (vec![0.0; n], vec![0.0; n]);
+        basis.eval(1.0, &mut v, &mut d1);
+        // E = A⁻¹ X with X[k][i] = φ_i(1 + x_k): fit the continued curve's values.
+        let mut extrapolate = vec![0.0; n * n];
+        let mut dv = vec![0.0; n];
+        for (k, &x) in nodes.iter().enumerate() {
+            basis.eval(1.0 + x, &mut v, &mut dv);
+            extrapolate[k * n..(k + 1) * n].copy_from_slice(&v);
+        }
+        fit.values_to_coefficients(&mut extrapolate, n);
+        let extrapolate = extrapolate
+            .iter()
+            .all(|x| x.is_finite())
+            .then_some(extrapolate);
+        let all_finite = phi
+            .iter()
+            .chain(&dphi)
+            .chain(&kinetic)
+            .all(|x| x.is_finite());
+        if !all_finite {
+            return Err(GviError::InvalidBasisSize {
+                n,
+                basis: basis.name().into(),
+                reason: "basis tables are not finite at this size".into(),
+            });
+        }
+        Ok(Tables {
+            n,
+            m,
+            phi,
+            dphi,
+            weights: rule.weights.clone(),
+            kinetic,
+            unit,
+            ramp,
+            dphi_end: d1,
+            extrapolate,
+        })
+    }
+}

@@ -1,0 +1,630 @@
+//! The one-step map: stage equations, their exact Jacobian, initial guesses and Newton.
+
+use super::{GalerkinIntegrator, Tables, Workspace};
+use crate::basis::Basis;
+use crate::error::{GviError, Result, ensure_finite, ensure_len};
+use crate::lagrangian::Lagrangian;
+use crate::quadrature::Quadrature;
+use serde::{Deserialize, Serialize};
+
+/// How the Newton iteration of each step is started.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum InitialGuess {
+    /// The constant curve q(t) = q_k.
+    Constant,
+    /// The straight line q_k + (t − t_k) v_k, with v_k the end velocity of the previous curve
+    /// (or the inverse Legendre transform of p_k on the first step).
+    Linear,
+    /// The previous step's Galerkin curve continued over the new step.
+    Extrapolate,
+    /// Whichever of the three has the smallest stage residual (with very large steps
+    /// extrapolation can be worse than a constant guess, so it is measured, not assumed).
+    #[default]
+    BestResidual,
+}
+
+/// Newton iteration settings.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct NewtonOptions {
+    /// Iteration limit per step.
+    pub max_iterations: usize,
+    /// Stop when the estimated remaining error of the coefficients is below
+    /// `tolerance · max|Q|` (error estimated from the contraction of successive increments).
+    pub tolerance: f64,
+    /// Also stop, as converged at the round-off floor, once increments below
+    /// `floor_tolerance · max|Q|` stop shrinking (iterating further only stirs noise).
+    pub floor_tolerance: f64,
+    /// How each step's iteration starts.
+    pub initial_guess: InitialGuess,
+}
+
+impl Default for NewtonOptions {
+    fn default() -> Self {
+        NewtonOptions {
+            max_iterations: 40,
+            tolerance: 1e-15,
+            floor_tolerance: 1e-10,
+            initial_guess: InitialGuess::BestResidual,
+        }
+    }
+}
+
+/// What one step cost.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+pub struct StepStats {
+    /// Newton iterations (Jacobian factorisations) taken.
+    pub iterations: usize,
+    /// Max-norm of the stage residual at the accepted coefficients.
+    pub residual: f64,
+    /// Evaluations of the Lagrangian's first derivatives (or force), counted per quadrature
+    /// point: the "right-hand-side evaluations" of the step.
+    pub gradient_evaluations: usize,
+    /// Evaluations of second derivatives, per quadrature point.
+    pub hessian_evaluations: usize,
+    /// The initial guess that was used.
+    pub guess: InitialGuess,
+}
+
+/// Which rows and unknowns a solve uses: the initial-value step (rows 0…n−2, unknowns
+/// 1…n−1) or the two-point problem of the discrete Lagrangian (rows and unknowns 1…n−2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Mode {
+    InitialValue,
+    BoundaryValue,
+}
+
+impl Mode {
+    fn first_row(self) -> usize {
+        0
+    }
+    fn first_unknown(self) -> usize {
+        1
+    }
+    fn count(self, n: usize) -> usize {
+        match self {
+            Mode::InitialValue => n - 1,
+            Mode::BoundaryValue => n - 2,
+        }
+    }
+    fn row_offset(self) -> usize {
+        match self {
+            Mode::InitialValue => self.first_row(),
+            Mode::BoundaryValue => 1,
+        }
+    }
+}
+
+fn max_abs(x: &[f64]) -> f64 {
+    x.iter().fold(0.0f64, |m, v| m.max(v.abs()))
+}
+
+impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
+    /// Curve values q(c_j) and velocities q̇(c_j) at every quadrature node from `coeffs`.
+    fn evaluate_curve(&self, ws: &mut Workspace, coeffs_from_cand: bool) {
+        let t = self.tables();
+        let (n, d, h) = (t.n, ws.d, self.step_size());
+        let coeffs = if coeffs_from_cand {
+            &ws.cand
+        } else {
+            &ws.coeffs
+        };
+        for j in 0..t.m {
+            let (phi, dphi) = (&t.phi[j * n..(j + 1) * n], &t.dphi[j * n..(j + 1) * n]);
+            let (qj, vj) = (
+                &mut ws.qj[j * d..(j + 1) * d],
+                &mut ws.vj[j * d..(j + 1) * d],
+            );
+            qj.iter_mut().for_each(|x| *x = 0.0);
+            vj.iter_mut().for_each(|x| *x = 0.0);
+            for i in 0..n {
+                let qi = &coeffs[i * d..(i + 1) * d];
+                let (a, b) = (phi[i], dphi[i] / h);
+                for r in 0..d {
+                    qj[r] += a * qi[r];
+                    vj[r] += b * qi[r];
+                }
+            }
+        }
+    }
+
+    /// ∂S/∂Q_a for every a into `ws.grad`, from the coefficients in `ws.coeffs` (or
+    /// `ws.cand`). Returns the number of first-derivative evaluations.
+    fn action_gradient<L: Lagrangian>(&self, lag: &L, ws: &mut Workspace, cand: bool) -> usize {
+        self.evaluate_curve(ws, cand);
+        let t = self.tables();
+        let (n, m, d, h) = (t.n, t.m, ws.d, self.step_size());
+        ws.grad.iter_mut().for_each(|x| *x = 0.0);
+        if let Some(sep) = &ws.separable {
+            // Kinetic part (1/h) Σ_b K_ab M (Q_b − u_b q_k): constants applied to Q − q_k, which
+            // loses fewer digits than applying them to Q (DESIGN.md §4).
+            let coeffs = if cand { &ws.cand } else { &ws.coeffs };
+            let q0 = &coeffs[..d];
+            for b in 0..n {
+                for r in 0..d {
+                    let mut s = 0.0;
+                    for c in 0..d {
+                        s += sep.mass[r * d + c] * (coeffs[b * d + c] - t.unit[b] * q0[c]);
+                    }
+                    ws.mq[b * d + r] = s;
+                }
+            }
+            for a in 0..n {
+                for b in 0..n {
+                    let k = t.kinetic[a * n + b] / h;
+                    if k != 0.0 {
+                        for r in 0..d {
+                            ws.grad[a * d + r] += k * ws.mq[b * d + r];
+                        }
+                    }
+                }
+            }
+            for j in 0..m {
+                lag.force(&ws.qj[j * d..(j + 1) * d], &mut ws.lq[j * d..(j + 1) * d]);
+                let w = t.weights[j] * h;
+                for a in 0..n {
+                    let f = w * t.phi[j * n + a];
+                    for r in 0..d {
+                        ws.grad[a * d + r] += f * ws.lq[j * d + r];
+                    }
+                }
+            }
+        } else {
+            for j in 0..m {
+                let (lq, lv) = (
+                    &mut ws.lq[j * d..(j + 1) * d],
+                    &mut ws.lv[j * d..(j + 1) * d],
+                );
+                lag.gradient(
+                    &ws.qj[j * d..(j + 1) * d],
+                    &ws.vj[j * d..(j + 1) * d],
+                    lq,
+                    lv,
+                );
+                let w = t.weights[j];
+                for a in 0..n {
+                    let (fq, fv) = (w * h * t.phi[j * n + a], w * t.dphi[j * n + a]);
+                    for r in 0..d {
+                        ws.grad[a * d + r] += fq * lq[r] + fv * lv[r];
+                    }
+                }
+            }
+        }
+        m
+    }
+
+    /// Residual of the stage equations for `mode` into `ws.rhs` (negated, ready for the
+    /// Newton solve); returns its max-norm.
+    fn residual(&self, ws: &mut Workspace, mode: Mode, p_k: &[f64]) -> f64 {
+        let (d, n) = (ws.d, ws.n);
+        let rows = mode.count(n) * d;
+        let off = mode.row_offset() * d;
+        let mut norm = 0.0f64;
+        for i in 0..rows {
+            let mut r = ws.grad[off + i];
+            if mode == Mode::InitialValue && i < d {
+                r += p_k[i];
+            }
+            ws.rhs[i] = -r;
+            norm = norm.max(r.abs());
+            if !r.is_finite() {
+                norm = f64::INFINITY;
+            }
+        }
+        norm
+    }
+
+    /// Assemble the exact Jacobian ∂²S/∂Q_a∂Q_b for `mode` into `ws.jac` (uses the curve values
+    /// left in the workspace by the last gradient evaluation). Returns Hessian evaluations.
+    fn jacobian<L: Lagrangian>(&self, lag: &L, ws: &mut Workspace, mode: Mode) -> usize {
+        let t: &Tables = self.tables();
+        let (n, m, d, h) = (t.n, t.m, ws.d, self.step_size());
+        let cnt = mode.count(n);
+        let size = cnt * d;
+        let (r0, u0) = (mode.row_offset(), mode.first_unknown());
+        let jac = &mut ws.jac[..size * size];
+        match (&ws.separable, mode) {
+            (Some(sep), Mode::InitialValue) => jac.copy_from_slice(&sep.kinetic_jacobian),
+            (Some(sep), Mode::BoundaryValue) => {
+                for a in 0..cnt {
+                    for b in 0..cnt {
+                        let k = t.kinetic[(a + r0) * n + b + u0] / h;
+                        for r in 0..d {
+                            for s in 0..d {
+                                jac[(a * d + r) * size + b * d + s] = k * sep.mass[r * d + s];
+                            }
+                        }
+                    }
+                }
+            }
+            (None, _) => jac.iter_mut().for_each(|x| *x = 0.0),
+        }
+        for j in 0..m {
+            let q = &ws.qj[j * d..(j + 1) * d];
+            let w = t.weights[j];
+            let (phi, dphi) = (&t.phi[j * n..(j + 1) * n], &t.dphi[j * n..(j + 1) * n]);
+            if ws.separable.is_some() {
+                lag.force_jacobian(q, &mut ws.hqq);
+                for a in 0..cnt {
+                    let fa = w * h * phi[a + r0];
+                    if fa == 0.0 {
+                        continue;
+                    }
+                    for b in 0..cnt {
+                        let f = fa * phi[b + u0];
+                        for r in 0..d {
+                            let row = (a * d + r) * size + b * d;
+                            for s in 0..d {
+                                jac[row + s] += f * ws.hqq[r * d + s];
+                            }
+                        }
+                    }
+                }
+            } else {
+                let v = &ws.vj[j * d..(j + 1) * d];
+                lag.hessian(q, v, &mut ws.hqq, &mut ws.hqv, &mut ws.hvv);
+                for a in 0..cnt {
+                    let (pa, da) = (phi[a + r0], dphi[a + r0]);
+                    for b in 0..cnt {
+                        let (pb, db) = (phi[b + u0], dphi[b + u0]);
+                        let cqq = w * h * pa * pb;
+                        let cqv = w * pa * db;
+                        let cvq = w * da * pb;
+                        let cvv = w * da * db / h;
+                        for r in 0..d {
+                            let row = (a * d + r) * size + b * d;
+                            for s in 0..d {
+                                jac[row + s] += cqq * ws.hqq[r * d + s]
+                                    + cqv * ws.hqv[r * d + s]
+                                    + cvq * ws.hqv[s * d + r]
+                                    + cvv * ws.hvv[r * d + s];
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        m
+    }
+
+    /// Velocity v with ∂L/∂v(q, v) = p into `ws.vel` (inverse Legendre transform), starting
+    /// from the value already in `ws.vel`.
+    fn inverse_legendre<L: Lagrangian>(&self, lag: &L, ws: &mut Workspace, q: &[f64], p: &[f64]) {
+        let d = ws.d;
+        if let Some(sep) = &ws.separable {
+            ws.vel.copy_from_slice(p);
+            sep.mass_lu
+                .solve_in_place(&mut ws.vel, &mut ws.small_scratch);
+            return;
+        }
+        // Newton on L_v(q, v) = p with Jacobian L_vv.
+        for _ in 0..20 {
+            let (lq, lv) = (&mut ws.lq[..d], &mut ws.lv[..d]);
+            lag.gradient(q, &ws.vel, lq, lv);
+            let mut err = 0.0f64;
+            for r in 0..d {
+                ws.small_rhs[r] = p[r] - lv[r];
+                err = err.max(ws.small_rhs[r].abs());
+            }
+            if err <= 1e-15 * (1.0 + max_abs(p)) {
+                return;
+            }
+            lag.hessian(q, &ws.vel, &mut ws.hqq, &mut ws.hqv, &mut ws.hvv);
+            if ws.small.refactor(&ws.hvv).is_err() {
+                return;
+            }
+            ws.small
+                .solve_in_place(&mut ws.small_rhs, &mut ws.small_scratch);
+            for r in 0..d {
+                ws.vel[r] += ws.small_rhs[r];
+            }
+            if !ws.vel.iter().all(|x| x.is_finite()) {
+                ws.vel.copy_from_slice(p);
+                return;
+            }
+        }
+    }
+
+    /// Fill `ws.cand` with the guess of kind `g`; false if that guess is unavailable.
+    fn make_guess<L: Lagrangian>(
+        &self,
+        lag: &L,
+        ws: &mut Workspace,
+        g: InitialGuess,
+        q: &[f64],
+        p: &[f64],
+    ) -> bool {
+        let t = self.tables();
+        let (n, d, h) = (t.n, ws.d, self.step_size());
+        match g {
+            InitialGuess::Constant | InitialGuess::BestResidual => {
+                for i in 0..n {
+                    for r in 0..d {
+                        ws.cand[i * d + r] = t.unit[i] * q[r];
+                    }
+                }
+            }
+            InitialGuess::Linear => {
+                if ws.has_prev {
+                    // End velocity of the previous Galerkin curve.
+                    for r in 0..d {
+                        ws.vel[r] = (0..n)
+                            .map(|i| t.dphi_end[i] * ws.prev[i * d + r])
+                            .sum::<f64>()
+                            / h;
+                    }
+                } else {
+                    ws.vel.copy_from_slice(p);
+                    self.inverse_legendre(lag, ws, q, p);
+                }
+                for i in 0..n {
+                    for r in 0..d {
+                        ws.cand[i * d + r] = t.unit[i] * q[r] + t.ramp[i] * h * ws.vel[r];
+                    }
+                }
+            }
+            InitialGuess::Extrapolate => {
+                let Some(e) = &t.extrapolate else {
+                    return false;
+                };
+                if !ws.has_prev {
+                    return false;
+                }
+                for i in 0..n {
+                    for r in 0..d {
+                        ws.cand[i * d + r] =
+                            (0..n).map(|k| e[i * n + k] * ws.prev[k * d + r]).sum();
+                    }
+                }
+            }
+        }
+        // The start of the curve is q_k exactly.
+        ws.cand[..d].copy_from_slice(q);
+        ws.cand.iter().all(|x| x.is_finite())
+    }
+
+    /// Choose the initial guess into `ws.coeffs`; returns (choice, gradient evaluations).
+    fn initial_guess<L: Lagrangian>(
+        &self,
+        lag: &L,
+        ws: &mut Workspace,
+        q: &[f64],
+        p: &[f64],
+    ) -> (InitialGuess, usize) {
+        let choice = self.options().initial_guess;
+        if choice != InitialGuess::BestResidual {
+            let g = if self.make_guess(lag, ws, choice, q, p) {
+                choice
+            } else {
+                self.make_guess(lag, ws, InitialGuess::Linear, q, p);
+                InitialGuess::Linear
+            };
+            ws.coeffs.copy_from_slice(&ws.cand);
+            return (g, 0);
+        }
+        let mut evals = 0;
+        let mut best = (InitialGuess::Constant, f64::INFINITY);
+        for g in [
+            InitialGuess::Extrapolate,
+            InitialGuess::Linear,
+            InitialGuess::Constant,
+        ] {
+            if !self.make_guess(lag, ws, g, q, p) {
+                continue;
+            }
+            evals += self.action_gradient(lag, ws, true);
+            let r = self.residual(ws, Mode::InitialValue, p);
+            if r < best.1 {
+                best = (g, r);
+                ws.best.copy_from_slice(&ws.cand);
+            }
+        }
+        if best.1.is_finite() {
+            ws.coeffs.copy_from_slice(&ws.best);
+        } else {
+            self.make_guess(lag, ws, InitialGuess::Constant, q, p);
+            ws.coeffs.copy_from_slice(&ws.cand);
+        }
+        (best.0, evals)
+    }
+
+    /// Newton's method on the stage equations of `mode`, from the coefficients in
+    /// `ws.coeffs`; on success the coefficients solve them and `ws.grad` holds ∂S/∂Q at the
+    /// solution.
+    fn newton<L: Lagrangian>(
+        &self,
+        lag: &L,
+        ws: &mut Workspace,
+        mode: Mode,
+        p_k: &[f64],
+        stats: &mut StepStats,
+    ) -> std::result::Result<(), StepFailure> {
+        let opts = self.options();
+        let (n, d) = (ws.n, ws.d);
+        let size = mode.count(n) * d;
+        let u0 = mode.first_unknown() * d;
+        let mut previous_increment = f64::INFINITY;
+        let fail = |ws: &Workspace, residual: f64, iterations, reason: &str| {
+            let _ = ws;
+            StepFailure {
+                residual,
+                iterations,
+                reason: reason.to_string(),
+            }
+        };
+        if size == 0 {
+            stats.gradient_evaluations += self.action_gradient(lag, ws, false);
+            stats.residual = self.residual(ws, mode, p_k);
+            return Ok(());
+        }
+        loop {
+            stats.gradient_evaluations += self.action_gradient(lag, ws, false);
+            let res = self.residual(ws, mode, p_k);
+            stats.residual = res;
+            if !res.is_finite() {
+                return Err(fail(
+                    ws,
+                    res,
+                    stats.iterations,
+                    "non-finite residual (the iteration diverged)",
+                ));
+            }
+            if stats.iterations >= opts.max_iterations {
+                return Err(fail(ws, res, stats.iterations, "iteration limit reached"));
+            }
+            stats.hessian_evaluations += self.jacobian(lag, ws, mode);
+            if ws.lu.dim() != size {
+                ws.lu = crate::linalg::Lu::with_capacity(size);
+            }
+            if ws.lu.refactor(&ws.jac[..size * size]).is_err() {
+                return Err(fail(ws, res, stats.iterations, "singular Jacobian"));
+            }
+            ws.lu
+                .solve_in_place(&mut ws.rhs[..size], &mut ws.scratch[..size]);
+            stats.iterations += 1;
+            let delta = max_abs(&ws.rhs[..size]);
+            for i in 0..size {
+                ws.coeffs[u0 + i] += ws.rhs[i];
+            }
+            let scale = max_abs(&ws.coeffs).max(f64::MIN_POSITIVE);
+            if !delta.is_finite() || !scale.is_finite() {
+                return Err(fail(
+                    ws,
+                    f64::INFINITY,
+                    stats.iterations,
+                    "non-finite Newton update",
+                ));
+            }
+            // θ estimates the contraction; undefined on the first iteration.
+            let theta = if previous_increment.is_finite() {
+                delta / previous_increment
+            } else {
+                f64::INFINITY
+            };
+            let converged = delta == 0.0
+                || delta <= opts.tolerance * scale
+                || (theta < 1.0 && theta / (1.0 - theta) * delta <= opts.tolerance * scale)
+                || (theta.is_finite() && theta >= 0.5 && delta <= opts.floor_tolerance * scale);
+            if converged {
+                stats.gradient_evaluations += self.action_gradient(lag, ws, false);
+                stats.residual = self.residual(ws, mode, p_k);
+                return Ok(());
+            }
+            previous_increment = delta;
+        }
+    }
+
+    /// One step of the discrete flow: (q_k, p_k) ↦ (q_{k+1}, p_{k+1}). The step's Galerkin
+    /// coefficients are left in [`Workspace::coefficients`] and remembered for the next
+    /// step's extrapolated guess.
+    ///
+    /// p_{k+1} is computed as p_k + h Σ_j b_j L_q(c_j), which equals ∂S/∂Q_{n−1} once the
+    /// stage equations hold (the basis reproduces constants, so Σ_a u_a ∂S/∂Q_a is the total
+    /// impulse) but avoids the cancellation of large kinetic terms when h is small.
+    pub fn step<L: Lagrangian>(
+        &self,
+        lag: &L,
+        ws: &mut Workspace,
+        q: &[f64],
+        p: &[f64],
+        q_next: &mut [f64],
+        p_next: &mut [f64],
+    ) -> std::result::Result<StepStats, StepFailure> {
+        let d = ws.d;
+        let mut stats = StepStats::default();
+        let (guess, evals) = self.initial_guess(lag, ws, q, p);
+        stats.guess = guess;
+        stats.gradient_evaluations += evals;
+        if let Err(f) = self.newton(lag, ws, Mode::InitialValue, p, &mut stats) {
+            ws.has_prev = false;
+            return Err(f);
+        }
+        let t = self.tables();
+        let (n, h) = (t.n, self.step_size());
+        q_next.copy_from_slice(&ws.coeffs[(n - 1) * d..n * d]);
+        // Total impulse h Σ_j b_j L_q(c_j) (L_q left in ws.lq by the last gradient evaluation).
+        for r in 0..d {
+            let mut impulse = 0.0;
+            for j in 0..t.m {
+                impulse += t.weights[j] * ws.lq[j * d + r];
+            }
+            p_next[r] = p[r] + h * impulse;
+        }
+        ws.prev.copy_from_slice(&ws.coeffs);
+        ws.has_prev = true;
+        Ok(stats)
+    }
+
+    /// The discrete Lagrangian L_d(q0, q1) = ext h Σ_j b_j L(q(c_j), q̇(c_j)) over Galerkin
+    /// curves with q(0) = q0 and q(h) = q1 (paper eq. (1.1)), together with the discrete
+    /// Legendre transforms p0 = −D₁L_d(q0, q1) and p1 = D₂L_d(q0, q1).
+    pub fn discrete_lagrangian<L: Lagrangian>(
+        &self,
+        lag: &L,
+        q0: &[f64],
+        q1: &[f64],
+    ) -> Result<DiscreteLagrangian> {
+        let d = lag.dim();
+        ensure_len("q0", d, q0.len())?;
+        ensure_len("q1", d, q1.len())?;
+        ensure_finite("q0", q0)?;
+        ensure_finite("q1", q1)?;
+        let mut ws = self.workspace(lag)?;
+        let t = self.tables();
+        let n = t.n;
+        // Start from the straight line between the ends.
+        for i in 0..n {
+            for r in 0..d {
+                ws.coeffs[i * d + r] = t.unit[i] * q0[r] + t.ramp[i] * (q1[r] - q0[r]);
+            }
+        }
+        ws.coeffs[..d].copy_from_slice(q0);
+        ws.coeffs[(n - 1) * d..].copy_from_slice(q1);
+        let mut stats = StepStats::default();
+        self.newton(lag, &mut ws, Mode::BoundaryValue, &[], &mut stats)
+            .map_err(|f| GviError::NewtonFailure {
+                step: 0,
+                t: 0.0,
+                residual: f.residual,
+                iterations: f.iterations,
+                reason: format!("discrete Lagrangian: {}", f.reason),
+            })?;
+        let h = self.step_size();
+        let mut value = 0.0;
+        for j in 0..t.m {
+            value +=
+                t.weights[j] * lag.value(&ws.qj[j * d..(j + 1) * d], &ws.vj[j * d..(j + 1) * d]);
+        }
+        Ok(DiscreteLagrangian {
+            value: h * value,
+            p0: ws.grad[..d].iter().map(|x| -x).collect(),
+            p1: ws.grad[(n - 1) * d..n * d].to_vec(),
+            coefficients: ws.coeffs.clone(),
+        })
+    }
+}
+
+/// A step's Newton failure, as returned by [`GalerkinIntegrator::step`] (and turned into
+/// [`GviError::NewtonFailure`] by `integrate`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepFailure {
+    /// Max-norm of the stage residual at the last iterate.
+    pub residual: f64,
+    /// Iterations taken.
+    pub iterations: usize,
+    /// Why it stopped.
+    pub reason: String,
+}
+
+/// The discrete Lagrangian and its discrete Legendre transforms at one pair of end points.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DiscreteLagrangian {
+    /// L_d(q0, q1).
+    pub value: f64,
+    /// p0 = −D₁L_d(q0, q1) (the discrete Legendre transform F⁻L_d).
+    pub p0: Vec<f64>,
+    /// p1 = D₂L_d(q0, q1) (F⁺L_d).
+    pub p1: Vec<f64>,
+    /// The extremal Galerkin curve's coefficients (n×D).
+    pub coefficients: Vec<f64>,
+}

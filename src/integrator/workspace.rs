@@ -1,0 +1,166 @@
+//! Reusable buffers for one integrator and one Lagrangian: after construction, a step
+//! allocates nothing (unless the Lagrangian's own derivative code does).
+
+use super::GalerkinIntegrator;
+use crate::basis::Basis;
+use crate::error::{GviError, Result};
+use crate::lagrangian::Lagrangian;
+use crate::linalg::Lu;
+use crate::quadrature::Quadrature;
+
+/// Work buffers for [`GalerkinIntegrator::step`]; create with
+/// [`GalerkinIntegrator::workspace`]. It also remembers the previous step's Galerkin curve,
+/// from which the next initial guess is extrapolated.
+#[derive(Debug, Clone)]
+pub struct Workspace {
+    pub(crate) d: usize,
+    pub(crate) n: usize,
+    /// Present for separable Lagrangians L = ½vᵀMv − V(q).
+    pub(crate) separable: Option<Separable>,
+    /// Current coefficients, row i = Q_i (n×D).
+    pub(crate) coeffs: Vec<f64>,
+    /// Previous step's coefficients and whether they are valid.
+    pub(crate) prev: Vec<f64>,
+    pub(crate) has_prev: bool,
+    /// Candidate guess and the best one so far.
+    pub(crate) cand: Vec<f64>,
+    pub(crate) best: Vec<f64>,
+    /// Curve values and velocities at the quadrature nodes (m×D).
+    pub(crate) qj: Vec<f64>,
+    pub(crate) vj: Vec<f64>,
+    /// L_q and L_v at the quadrature nodes (m×D).
+    pub(crate) lq: Vec<f64>,
+    pub(crate) lv: Vec<f64>,
+    /// Second derivatives at one node (D×D each).
+    pub(crate) hqq: Vec<f64>,
+    pub(crate) hqv: Vec<f64>,
+    pub(crate) hvv: Vec<f64>,
+    /// ∂S/∂Q_a for every a (n×D).
+    pub(crate) grad: Vec<f64>,
+    /// M (Q_b − u_b q_k) for the separable residual (n×D).
+    pub(crate) mq: Vec<f64>,
+    /// Newton matrix, its factorisation, right-hand side and scratch.
+    pub(crate) jac: Vec<f64>,
+    pub(crate) lu: Lu,
+    pub(crate) rhs: Vec<f64>,
+    pub(crate) scratch: Vec<f64>,
+    /// A velocity (D) and a small D×D solver for inverse Legendre transforms.
+    pub(crate) vel: Vec<f64>,
+    pub(crate) small: Lu,
+    pub(crate) small_rhs: Vec<f64>,
+    pub(crate) small_scratch: Vec<f64>,
+}
+
+/// The constant kinetic part of a separable Lagrangian.
+#[derive(Debug, Clone)]
+pub(crate) struct Separable {
+    /// M, row-major D×D.
+    pub mass: Vec<f64>,
+    /// Factorised M, for v = M⁻¹p.
+    pub mass_lu: Lu,
+    /// (K_ab / h) M for equations a = 0…n−2 and unknowns b = 1…n−1: ((n−1)D)².
+    pub kinetic_jacobian: Vec<f64>,
+}
+
+impl Workspace {
+    pub(crate) fn new<B: Basis, Q: Quadrature, L: Lagrangian>(
+        gvi: &GalerkinIntegrator<B, Q>,
+        lagrangian: &L,
+    ) -> Result<Self> {
+        let t = gvi.tables();
+        let d = lagrangian.dim();
+        if d == 0 {
+            return Err(GviError::DimensionMismatch {
+                what: "configuration space of the Lagrangian (must be ≥ 1)".into(),
+                expected: 1,
+                got: 0,
+            });
+        }
+        let (n, m) = (t.n, t.m);
+        let nu = (n - 1) * d;
+        let separable = match lagrangian.mass_matrix() {
+            None => None,
+            Some(mass) => {
+                if mass.nrows() != d || mass.ncols() != d {
+                    return Err(GviError::DimensionMismatch {
+                        what: "mass matrix".into(),
+                        expected: d,
+                        got: mass.nrows().max(mass.ncols()),
+                    });
+                }
+                let mut flat = vec![0.0; d * d];
+                for r in 0..d {
+                    for s in 0..d {
+                        flat[r * d + s] = mass[(r, s)];
+                    }
+                }
+                crate::error::ensure_finite("mass matrix", &flat)?;
+                let mass_lu =
+                    Lu::factor(flat.clone(), d).map_err(|_| GviError::InvalidParameter {
+                        name: "mass matrix".into(),
+                        value: f64::NAN,
+                        reason: "singular".into(),
+                    })?;
+                let h = gvi.step_size();
+                let mut kj = vec![0.0; nu * nu];
+                for a in 0..n - 1 {
+                    for b in 1..n {
+                        let kab = t.kinetic[a * n + b] / h;
+                        for r in 0..d {
+                            for s in 0..d {
+                                kj[(a * d + r) * nu + (b - 1) * d + s] = kab * flat[r * d + s];
+                            }
+                        }
+                    }
+                }
+                Some(Separable {
+                    mass: flat,
+                    mass_lu,
+                    kinetic_jacobian: kj,
+                })
+            }
+        };
+        Ok(Workspace {
+            d,
+            n,
+            separable,
+            coeffs: vec![0.0; n * d],
+            prev: vec![0.0; n * d],
+            has_prev: false,
+            cand: vec![0.0; n * d],
+            best: vec![0.0; n * d],
+            qj: vec![0.0; m * d],
+            vj: vec![0.0; m * d],
+            lq: vec![0.0; m * d],
+            lv: vec![0.0; m * d],
+            hqq: vec![0.0; d * d],
+            hqv: vec![0.0; d * d],
+            hvv: vec![0.0; d * d],
+            grad: vec![0.0; n * d],
+            mq: vec![0.0; n * d],
+            jac: vec![0.0; nu * nu],
+            lu: Lu::with_capacity(nu),
+            rhs: vec![0.0; nu],
+            scratch: vec![0.0; nu],
+            vel: vec![0.0; d],
+            small: Lu::with_capacity(d),
+            small_rhs: vec![0.0; d],
+            small_scratch: vec![0.0; d],
+        })
+    }
+
+    /// The Galerkin coefficients of the last completed step (n×D, row i = Q_i).
+    pub fn coefficients(&self) -> &[f64] {
+        &self.coeffs
+    }
+
+    /// Forget the previous step's curve (the next guess will not extrapolate).
+    pub fn reset(&mut self) {
+        self.has_prev = false;
+    }
+
+    /// Dimension D.
+    pub fn dim(&self) -> usize {
+        self.d
+    }
+}

@@ -1,0 +1,276 @@
+//! Lagrangians: written once, differentiated automatically.
+//!
+//! [`Lagrangian`] is the general interface: the value L(q, v) generic over the scalar, with
+//! first and second derivatives from forward-mode automatic differentiation unless a system
+//! overrides them with hand-written ones. [`Mechanical`] is the separable special case
+//! L = ½ vᵀ M v − V(q) with a constant mass matrix; every `Mechanical` is a `Lagrangian` through
+//! a blanket implementation, and the integrator exploits the constant kinetic part of the
+//! Jacobian (DESIGN.md §2) for it.
+
+use crate::ad;
+use nalgebra::DMatrix;
+use num_dual::DualNum;
+
+/// A Lagrangian L(q, v) on a configuration space R^D.
+///
+/// Only [`dim`](Lagrangian::dim) and [`lagrangian`](Lagrangian::lagrangian) are required; the
+/// derivatives default to forward-mode automatic differentiation of `lagrangian`.
+///
+/// ```
+/// use galerkin_vi::{Lagrangian, DualNum};
+///
+/// /// A particle in a double well: L = v²/2 − (q² − 1)²/4.
+/// struct DoubleWell;
+/// impl Lagrangian for DoubleWell {
+///     fn dim(&self) -> usize { 1 }
+///     fn lagrangian<T: DualNum<Primitive = f64> + Copy>(&self, q: &[T], v: &[T]) -> T {
+///         let w = q[0] * q[0] - 1.0;
+///         v[0] * v[0] * 0.5 - w * w * 0.25
+///     }
+/// }
+/// let (mut lq, mut lv) = ([0.0], [0.0]);
+/// DoubleWell.gradient(&[2.0], &[0.5], &mut lq, &mut lv);
+/// assert!((lq[0] + 6.0).abs() < 1e-14 && (lv[0] - 0.5).abs() < 1e-14);
+/// ```
+pub trait Lagrangian {
+    /// Dimension D of the configuration space.
+    fn dim(&self) -> usize;
+
+    /// The value L(q, v), generic over the scalar so that dual numbers give derivatives.
+    fn lagrangian<T: DualNum<Primitive = f64> + Copy>(&self, q: &[T], v: &[T]) -> T;
+
+    /// L(q, v) in `f64`.
+    fn value(&self, q: &[f64], v: &[f64]) -> f64 {
+        self.lagrangian(q, v)
+    }
+
+    /// The gradients L_q and L_v at (q, v).
+    fn gradient(&self, q: &[f64], v: &[f64], lq: &mut [f64], lv: &mut [f64]) {
+        let d = self.dim();
+        let mut x = [0.0; 64];
+        if 2 * d <= x.len() {
+            x[..d].copy_from_slice(q);
+            x[d..2 * d].copy_from_slice(v);
+            let mut g = [0.0; 64];
+            ad::gradient(
+                |y| self.lagrangian(&y[..d], &y[d..]),
+                &x[..2 * d],
+                &mut g[..2 * d],
+            );
+            lq.copy_from_slice(&g[..d]);
+            lv.copy_from_slice(&g[d..2 * d]);
+        } else {
+            let x: Vec<f64> = q.iter().chain(v).copied().collect();
+            let mut g = vec![0.0; 2 * d];
+            ad::gradient(|y| self.lagrangian(&y[..d], &y[d..]), &x, &mut g);
+            lq.copy_from_slice(&g[..d]);
+            lv.copy_from_slice(&g[d..]);
+        }
+    }
+
+    /// The second derivatives L_qq, L_qv (entry (r, s) = ∂²L/∂q_r∂v_s) and L_vv, each a
+    /// row-major D×D array. The default uses hyper-dual numbers; the scratch space for
+    /// D > 16 is allocated per call, so large systems should override this.
+    fn hessian(&self, q: &[f64], v: &[f64], lqq: &mut [f64], lqv: &mut [f64], lvv: &mut [f64]) {
+        let d = self.dim();
+        let n = 2 * d;
+        let mut xs = [0.0; 32];
+        let mut gs = [0.0; 32];
+        let mut hs = [0.0; 32 * 32];
+        let mut heap: (Vec<f64>, Vec<f64>, Vec<f64>);
+        let (x, g, h): (&mut [f64], &mut [f64], &mut [f64]) = if n <= 32 {
+            (&mut xs[..n], &mut gs[..n], &mut hs[..n * n])
+        } else {
+            heap = (vec![0.0; n], vec![0.0; n], vec![0.0; n * n]);
+            (&mut heap.0, &mut heap.1, &mut heap.2)
+        };
+        x[..d].copy_from_slice(q);
+        x[d..].copy_from_slice(v);
+        ad::hessian(|y| self.lagrangian(&y[..d], &y[d..]), x, g, h);
+        for r in 0..d {
+            for s in 0..d {
+                lqq[r * d + s] = h[r * n + s];
+                lqv[r * d + s] = h[r * n + d + s];
+                lvv[r * d + s] = h[(d + r) * n + d + s];
+            }
+        }
+    }
+
+    /// The constant mass matrix M when L = ½ vᵀ M v − V(q). The integrator then precomputes
+    /// the kinetic part of the stage Jacobian and calls [`force`](Lagrangian::force) and
+    /// [`force_jacobian`](Lagrangian::force_jacobian) instead of the full derivatives.
+    fn mass_matrix(&self) -> Option<DMatrix<f64>> {
+        None
+    }
+
+    /// For separable Lagrangians: the generalised force L_q(q) = −∇V(q).
+    fn force(&self, q: &[f64], out: &mut [f64]) {
+        let d = self.dim();
+        let zeros = vec![0.0; d];
+        let mut lv = vec![0.0; d];
+        self.gradient(q, &zeros, out, &mut lv);
+    }
+
+    /// For separable Lagrangians: L_qq(q) = −∇²V(q), row-major D×D.
+    fn force_jacobian(&self, q: &[f64], out: &mut [f64]) {
+        let d = self.dim();
+        let zeros = vec![0.0; d];
+        let mut a = vec![0.0; d * d];
+        let mut b = vec![0.0; d * d];
+        self.hessian(q, &zeros, out, &mut a, &mut b);
+    }
+
+    /// The (continuous) Legendre transform p = ∂L/∂v(q, v).
+    fn legendre_transform(&self, q: &[f64], v: &[f64], p: &mut [f64]) {
+        let mut lq = vec![0.0; self.dim()];
+        self.gradient(q, v, &mut lq, p);
+    }
+
+    /// The energy E = L_v·v − L of an autonomous Lagrangian.
+    fn energy(&self, q: &[f64], v: &[f64]) -> f64 {
+        let d = self.dim();
+        let mut lq = vec![0.0; d];
+        let mut lv = vec![0.0; d];
+        self.gradient(q, v, &mut lq, &mut lv);
+        lv.iter().zip(v).map(|(a, b)| a * b).sum::<f64>() - self.value(q, v)
+    }
+}
+
+/// A separable mechanical Lagrangian L = ½ vᵀ M v − V(q) with a constant symmetric
+/// positive-definite mass matrix M.
+///
+/// Implement the potential once, generic over the scalar; its gradient and Hessian come from
+/// automatic differentiation unless overridden with hand-written (faster) ones.
+///
+/// ```
+/// use galerkin_vi::{Mechanical, Lagrangian, DualNum};
+/// use nalgebra::DMatrix;
+///
+/// /// Anharmonic oscillator V = q²/2 + q⁴/4.
+/// struct Quartic;
+/// impl Mechanical for Quartic {
+///     fn degrees_of_freedom(&self) -> usize { 1 }
+///     fn mass(&self) -> DMatrix<f64> { DMatrix::identity(1, 1) }
+///     fn potential<T: DualNum<Primitive = f64> + Copy>(&self, q: &[T]) -> T {
+///         q[0] * q[0] * 0.5 + q[0].powi(4) * 0.25
+///     }
+/// }
+/// let mut f = [0.0];
+/// Quartic.force(&[1.0], &mut f);
+/// assert!((f[0] + 2.0).abs() < 1e-14);
+/// ```
+pub trait Mechanical {
+    /// Dimension D of the configuration space.
+    fn degrees_of_freedom(&self) -> usize;
+    /// The constant mass matrix M (D×D, symmetric positive definite).
+    fn mass(&self) -> DMatrix<f64>;
+    /// The potential V(q), generic over the scalar.
+    fn potential<T: DualNum<Primitive = f64> + Copy>(&self, q: &[T]) -> T;
+    /// ∇V(q). Default: automatic differentiation.
+    fn potential_gradient(&self, q: &[f64], out: &mut [f64]) {
+        ad::gradient(|y| self.potential(y), q, out);
+    }
+    /// ∇²V(q), row-major D×D. Default: automatic differentiation.
+    fn potential_hessian(&self, q: &[f64], out: &mut [f64]) {
+        let d = self.degrees_of_freedom();
+        let mut g = [0.0; 64];
+        if d <= g.len() {
+            ad::hessian(|y| self.potential(y), q, &mut g[..d], out);
+        } else {
+            let mut g = vec![0.0; d];
+            ad::hessian(|y| self.potential(y), q, &mut g, out);
+        }
+    }
+}
+
+impl<S: Mechanical> Lagrangian for S {
+    fn dim(&self) -> usize {
+        self.degrees_of_freedom()
+    }
+
+    fn lagrangian<T: DualNum<Primitive = f64> + Copy>(&self, q: &[T], v: &[T]) -> T {
+        let m = self.mass();
+        let d = self.degrees_of_freedom();
+        let mut kinetic = T::from(0.0);
+        for r in 0..d {
+            for s in 0..d {
+                kinetic += v[r] * v[s] * m[(r, s)];
+            }
+        }
+        kinetic * 0.5 - self.potential(q)
+    }
+
+    fn gradient(&self, q: &[f64], v: &[f64], lq: &mut [f64], lv: &mut [f64]) {
+        self.potential_gradient(q, lq);
+        lq.iter_mut().for_each(|x| *x = -*x);
+        let m = self.mass();
+        for (r, out) in lv.iter_mut().enumerate() {
+            *out = (0..v.len()).map(|s| m[(r, s)] * v[s]).sum();
+        }
+    }
+
+    fn hessian(&self, q: &[f64], _v: &[f64], lqq: &mut [f64], lqv: &mut [f64], lvv: &mut [f64]) {
+        let d = self.degrees_of_freedom();
+        self.potential_hessian(q, lqq);
+        lqq.iter_mut().for_each(|x| *x = -*x);
+        lqv.iter_mut().for_each(|x| *x = 0.0);
+        let m = self.mass();
+        for r in 0..d {
+            for s in 0..d {
+                lvv[r * d + s] = m[(r, s)];
+            }
+        }
+    }
+
+    fn mass_matrix(&self) -> Option<DMatrix<f64>> {
+        Some(self.mass())
+    }
+
+    fn force(&self, q: &[f64], out: &mut [f64]) {
+        self.potential_gradient(q, out);
+        out.iter_mut().for_each(|x| *x = -*x);
+    }
+
+    fn force_jacobian(&self, q: &[f64], out: &mut [f64]) {
+        self.potential_hessian(q, out);
+        out.iter_mut().for_each(|x| *x = -*x);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A non-separable Lagrangian: charged particle in a magnetic field plus a potential.
+    struct Magnetic;
+    impl Lagrangian for Magnetic {
+        fn dim(&self) -> usize {
+            2
+        }
+        fn lagrangian<T: DualNum<Primitive = f64> + Copy>(&self, q: &[T], v: &[T]) -> T {
+            (v[0] * v[0] + v[1] * v[1]) * 0.5 + (q[0] * v[1] - q[1] * v[0]) * 0.5
+                - (q[0] * q[0] + q[1] * q[1] * 2.0) * 0.5
+        }
+    }
+
+    #[test]
+    fn ad_derivatives_of_a_non_separable_lagrangian() {
+        let (q, v) = ([0.3, -0.2], [1.5, 0.7]);
+        let (mut lq, mut lv) = ([0.0; 2], [0.0; 2]);
+        Magnetic.gradient(&q, &v, &mut lq, &mut lv);
+        // L_q = (v1/2 − q0, −v0/2 − 2 q1), L_v = (v0 − q1/2, v1 + q0/2)
+        assert!((lq[0] - (0.35 - 0.3)).abs() < 1e-15);
+        assert!((lq[1] - (-0.75 + 0.4)).abs() < 1e-15);
+        assert!((lv[0] - (1.5 + 0.1)).abs() < 1e-15);
+        assert!((lv[1] - (0.7 + 0.15)).abs() < 1e-15);
+        let (mut a, mut b, mut c) = ([0.0; 4], [0.0; 4], [0.0; 4]);
+        Magnetic.hessian(&q, &v, &mut a, &mut b, &mut c);
+        assert_eq!(a, [-1.0, 0.0, 0.0, -2.0]);
+        assert_eq!(b, [0.0, 0.5, -0.5, 0.0]);
+        assert_eq!(c, [1.0, 0.0, 0.0, 1.0]);
+        assert!(Magnetic.mass_matrix().is_none());
+        let e = Magnetic.energy(&q, &v);
+        let exact = 0.5 * (1.5f64.powi(2) + 0.7f64.powi(2)) + 0.5 * (0.09 + 2.0 * 0.04);
+        assert!((e - exact).abs() < 1e-14);
+    }
+}

@@ -1,0 +1,59 @@
+//! # galerkin-vi
+//!
+//! Galerkin variational integrators with pluggable bases and quadratures, and the *spectral
+//! variational integrators* of Hall & Leok as the default pairing (Chebyshev–Lagrange basis,
+//! 2n-point Gauss–Legendre quadrature, convergence by raising n at a fixed large step h).
+//!
+//! A Lagrangian is written once, generic over the scalar; derivatives come from forward-mode
+//! automatic differentiation unless a system supplies hand-written ones.
+//!
+//! ```
+//! use galerkin_vi::prelude::*;
+//!
+//! let kepler = Kepler::new(1.0)?;
+//! let (q0, p0) = Kepler::paper_initial_state();
+//! let gvi = GalerkinIntegrator::spectral(24, 2.0)?;     // n = 24, h = 2
+//! let traj = gvi.integrate(&kepler, 0.0, &q0, &p0, 100)?;
+//! let exact = kepler.exact_solution(0.0, &q0, &p0)?.expect("bound orbit");
+//! let err = (0..=100)
+//!     .map(|k| {
+//!         let (q, qe) = (&traj.q[k], exact.position(traj.time(k)));
+//!         (q[0] - qe[0]).abs().max((q[1] - qe[1]).abs())
+//!     })
+//!     .fold(0.0, f64::max);
+//! assert!(err < 1e-4);
+//! # Ok::<(), galerkin_vi::GviError>(())
+//! ```
+
+#![warn(missing_docs)]
+// Numerical kernels index several arrays with the same loop variable, as the formulas do.
+#![allow(clippy::needless_range_loop)]
+
+pub mod ad;
+pub mod basis;
+pub mod error;
+pub mod fit;
+pub mod integrator;
+pub mod lagrangian;
+pub mod linalg;
+pub mod plot;
+pub mod quadrature;
+pub mod systems;
+pub mod trajectory;
+
+pub use error::{GviError, Result};
+pub use integrator::{GalerkinIntegrator, IntegrationFailure, NewtonOptions};
+pub use lagrangian::{Lagrangian, Mechanical};
+pub use num_dual::DualNum;
+pub use trajectory::Trajectory;
+
+/// The names most programs need.
+pub mod prelude {
+    pub use crate::basis::{AnyBasis, Basis, BasisKind, ChebyshevLagrange};
+    pub use crate::integrator::{GalerkinIntegrator, InitialGuess, NewtonOptions};
+    pub use crate::lagrangian::{Lagrangian, Mechanical};
+    pub use crate::quadrature::{GaussLegendre, Quadrature, QuadratureKind, QuadratureRule};
+    pub use crate::systems::{HarmonicOscillator, Kepler, Pendulum, System};
+    pub use crate::trajectory::Trajectory;
+    pub use crate::{DualNum, GviError};
+}

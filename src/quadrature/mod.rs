@@ -1,0 +1,231 @@
+//! Quadrature rules on [0, 1].
+//!
+//! The discrete action of one step is S(Q) = h Σ_j b_j L(q(c_j), q̇(c_j)) (paper eq. (1.1)) with
+//! nodes c_j ∈ [0, 1] and weights b_j summing to 1. A [`Quadrature`] produces a
+//! [`QuadratureRule`] (nodes, weights and the degree of polynomial exactness);
+//! [`QuadratureKind`] names the rules for scene files and the command line.
+
+mod gauss_legendre;
+
+pub use gauss_legendre::GaussLegendre;
+
+use crate::error::{GviError, Result};
+use serde::{Deserialize, Serialize};
+
+/// A quadrature rule on [0, 1]: a recipe for nodes and weights.
+pub trait Quadrature {
+    /// Number of points m.
+    fn points(&self) -> usize;
+    /// Largest degree d such that every polynomial of degree ≤ d is integrated exactly.
+    fn degree_of_exactness(&self) -> usize;
+    /// Human-readable name.
+    fn name(&self) -> String;
+    /// The kind, for serialisation.
+    fn kind(&self) -> QuadratureKind;
+    /// Nodes and weights on [0, 1].
+    fn rule(&self) -> Result<QuadratureRule>;
+}
+
+/// Nodes c_j ∈ [0, 1] and weights b_j (Σ b_j = 1) with the rule's degree of exactness.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct QuadratureRule {
+    /// Which family the rule belongs to.
+    pub kind: QuadratureKind,
+    /// Nodes in [0, 1], increasing.
+    pub nodes: Vec<f64>,
+    /// Weights, summing to 1.
+    pub weights: Vec<f64>,
+    /// Polynomial degree of exactness.
+    pub degree: usize,
+}
+
+impl QuadratureRule {
+    /// Validate: equal lengths, at least one node, nodes in [0, 1], finite weights summing to 1.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |reason: String| Err(GviError::InvalidQuadrature { reason });
+        if self.nodes.is_empty() {
+            return bad("the rule has no points".into());
+        }
+        if self.nodes.len() != self.weights.len() {
+            return bad(format!(
+                "{} nodes but {} weights",
+                self.nodes.len(),
+                self.weights.len()
+            ));
+        }
+        if let Some(c) = self
+            .nodes
+            .iter()
+            .find(|c| !c.is_finite() || **c < -1e-14 || **c > 1.0 + 1e-14)
+        {
+            return bad(format!("node {c} is not in [0, 1]"));
+        }
+        if let Some(w) = self.weights.iter().find(|w| !w.is_finite()) {
+            return bad(format!("weight {w} is not finite"));
+        }
+        let sum: f64 = self.weights.iter().sum();
+        if (sum - 1.0).abs() > 1e-12 {
+            return bad(format!("weights sum to {sum}, not 1"));
+        }
+        Ok(())
+    }
+
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// True when the rule has no points (never for a validated rule).
+    pub fn is_empty(&self) -> bool {
+        self.nodes.is_empty()
+    }
+
+    /// Σ_j b_j f(c_j): the integral of f over [0, 1].
+    pub fn integrate(&self, f: impl Fn(f64) -> f64) -> f64 {
+        self.nodes
+            .iter()
+            .zip(&self.weights)
+            .map(|(&c, &b)| b * f(c))
+            .sum()
+    }
+}
+
+/// The quadrature families this crate provides.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum QuadratureKind {
+    /// Gauss–Legendre: m points, exact to degree 2m − 1 (the paper's choice, m = 2n).
+    #[default]
+    GaussLegendre,
+}
+
+impl QuadratureKind {
+    /// All kinds, for sweeps.
+    pub const ALL: [QuadratureKind; 1] = [QuadratureKind::GaussLegendre];
+
+    /// The name used in scene files and on the command line.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            QuadratureKind::GaussLegendre => "gauss-legendre",
+        }
+    }
+
+    /// The paper's default number of points for n basis functions (2n Gauss points).
+    pub fn default_points(self, n: usize) -> usize {
+        match self {
+            QuadratureKind::GaussLegendre => 2 * n,
+        }
+    }
+
+    /// Build the rule with m points.
+    pub fn build(self, points: usize) -> Result<QuadratureRule> {
+        match self {
+            QuadratureKind::GaussLegendre => GaussLegendre::new(points)?.rule(),
+        }
+    }
+}
+
+impl std::fmt::Display for QuadratureKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl std::str::FromStr for QuadratureKind {
+    type Err = GviError;
+    fn from_str(s: &str) -> Result<Self> {
+        QuadratureKind::ALL
+            .into_iter()
+            .find(|k| k.as_str().eq_ignore_ascii_case(s.trim()))
+            .ok_or_else(|| GviError::InvalidArgument {
+                name: "quadrature".into(),
+                reason: format!(
+                    "unknown quadrature '{s}' (expected one of: {})",
+                    QuadratureKind::ALL.map(|k| k.as_str()).join(", ")
+                ),
+            })
+    }
+}
+
+impl Quadrature for QuadratureRule {
+    fn points(&self) -> usize {
+        self.nodes.len()
+    }
+    fn degree_of_exactness(&self) -> usize {
+        self.degree
+    }
+    fn name(&self) -> String {
+        format!("{} ({} points)", self.kind, self.nodes.len())
+    }
+    fn kind(&self) -> QuadratureKind {
+        self.kind
+    }
+    fn rule(&self) -> Result<QuadratureRule> {
+        self.validate()?;
+        Ok(self.clone())
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod exactness_tests {
+    use super::*;
+
+    /// Largest error integrating the monomials τ^k, k = 0..=max_degree.
+    pub fn monomial_errors(rule: &QuadratureRule, max_degree: usize) -> Vec<f64> {
+        (0..=max_degree)
+            .map(|k| {
+                let exact = 1.0 / (k as f64 + 1.0);
+                (rule.integrate(|t| t.powi(k as i32)) - exact).abs()
+            })
+            .collect()
+    }
+
+    /// Legendre polynomial P_k(x) by the three-term recurrence.
+    pub fn legendre(k: usize, x: f64) -> f64 {
+        let (mut p0, mut p1) = (1.0, x);
+        if k == 0 {
+            return p0;
+        }
+        for j in 1..k {
+            let p2 = ((2 * j + 1) as f64 * x * p1 - j as f64 * p0) / (j + 1) as f64;
+            p0 = p1;
+            p1 = p2;
+        }
+        p1
+    }
+
+    /// Assert exactness to `degree` (on the well-conditioned shifted Legendre polynomials,
+    /// whose integrals over [0, 1] are δ_k0) and failure at `degree + 1` (sharpness), tested
+    /// on P_a P_b with a + b = degree + 1 (a ≈ b) — for Gauss-type rules P_a² is the polynomial
+    /// with the largest quadrature error among those of that degree.
+    pub fn assert_sharp_degree(rule: &QuadratureRule) {
+        let d = rule.degree;
+        for k in 0..=d {
+            let exact = if k == 0 { 1.0 } else { 0.0 };
+            let got = rule.integrate(|t| legendre(k, 2.0 * t - 1.0));
+            assert!(
+                (got - exact).abs() < 1e-14,
+                "{:?} with {} points: degree {k} error {:e}",
+                rule.kind,
+                rule.len(),
+                (got - exact).abs()
+            );
+        }
+        let (a, b) = ((d + 2) / 2, (d + 1) / 2);
+        let exact = if a == b {
+            1.0 / (2 * a + 1) as f64
+        } else {
+            0.0
+        };
+        let got = rule.integrate(|t| legendre(a, 2.0 * t - 1.0) * legendre(b, 2.0 * t - 1.0));
+        let monomial = monomial_errors(rule, d + 1)[d + 1];
+        let err = (got - exact).abs().max(monomial);
+        assert!(
+            err > 1e-12,
+            "{:?} with {} points integrates degree {} exactly (error {err:e}): the stated degree {d} is not sharp",
+            rule.kind,
+            rule.len(),
+            d + 1
+        );
+    }
+}
