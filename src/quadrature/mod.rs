@@ -211,7 +211,7 @@ pub(crate) mod exactness_tests {
                 (got - exact).abs()
             );
         }
-        let (a, b) = ((d + 1).div_ceil(2), (d + 1) / 2);
+        let (a, b) = ((d + 1).div_ceil(2), d.div_ceil(2));
         let exact = if a == b {
             1.0 / (2 * a + 1) as f64
         } else {
