@@ -38,6 +38,8 @@ pub mod lagrangian;
 pub mod linalg;
 pub mod plot;
 pub mod quadrature;
+pub mod run;
+pub mod scene;
 pub mod systems;
 pub mod trajectory;
 

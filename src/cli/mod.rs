@@ -1,0 +1,77 @@
+//! The `gvi` command-line tool.
+
+mod run;
+
+use clap::{Parser, Subcommand};
+use galerkin_vi::GviError;
+
+/// Galerkin and spectral variational integrators (Hall & Leok).
+#[derive(Debug, Parser)]
+#[command(name = "gvi", version, about, long_about = None)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Integrate a scene (built-in name or TOML path) and write its table (CSV or JSON).
+    Run(run::RunArgs),
+    /// List the built-in scenes.
+    Scenes,
+}
+
+/// Parse and run; errors are reported by the caller.
+pub fn main_with(cli: Cli) -> Result<(), GviError> {
+    match cli.command {
+        Command::Run(args) => run::run(args),
+        Command::Scenes => {
+            for name in galerkin_vi::scene::Scene::builtin_names() {
+                let scene = galerkin_vi::scene::Scene::load(name)?;
+                println!("{name:<12} {}", scene.description);
+            }
+            Ok(())
+        }
+    }
+}
+
+/// Parse a comma-separated list of numbers, e.g. `--q0 0.4,0`.
+pub fn parse_vector(name: &str, text: &str) -> Result<Vec<f64>, GviError> {
+    text.split(',')
+        .map(|s| {
+            let s = s.trim();
+            s.parse::<f64>().map_err(|_| GviError::InvalidArgument {
+                name: name.to_string(),
+                reason: format!("'{s}' is not a number (expected a comma-separated list)"),
+            })
+        })
+        .collect()
+}
+
+/// Write text to a file (creating parent directories) or to stdout.
+pub fn write_output(path: Option<&std::path::Path>, text: &str) -> Result<(), GviError> {
+    match path {
+        Some(p) => {
+            if let Some(dir) = p.parent().filter(|d| !d.as_os_str().is_empty()) {
+                std::fs::create_dir_all(dir).map_err(|source| GviError::Io {
+                    path: dir.to_path_buf(),
+                    source,
+                })?;
+            }
+            std::fs::write(p, text).map_err(|source| GviError::Io {
+                path: p.to_path_buf(),
+                source,
+            })
+        }
+        None => {
+            use std::io::Write;
+            let mut out = std::io::stdout().lock();
+            out.write_all(text.as_bytes())
+                .and_then(|_| out.flush())
+                .map_err(|source| GviError::Io {
+                    path: "<stdout>".into(),
+                    source,
+                })
+        }
+    }
+}

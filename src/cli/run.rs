@@ -1,0 +1,108 @@
+//! `gvi run SCENE`.
+
+use super::{parse_vector, write_output};
+use clap::{Args, ValueEnum};
+use galerkin_vi::GviError;
+use galerkin_vi::run::{RunOptions, run_scene};
+use galerkin_vi::scene::Scene;
+use std::path::PathBuf;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Format {
+    Csv,
+    Json,
+}
+
+#[derive(Debug, Args)]
+pub struct RunArgs {
+    /// Built-in scene name (harmonic, kepler, pendulum) or path to a TOML scene file.
+    pub scene: String,
+    /// Basis: chebyshev (others as they are available).
+    #[arg(long)]
+    pub basis: Option<String>,
+    /// Quadrature: gauss-legendre (others as they are available).
+    #[arg(long)]
+    pub quadrature: Option<String>,
+    /// Number of basis functions n.
+    #[arg(long)]
+    pub n: Option<usize>,
+    /// Number of quadrature points (default: the rule's default for n; 2n Gauss points).
+    #[arg(long)]
+    pub quad_points: Option<usize>,
+    /// Step size h.
+    #[arg(long, allow_hyphen_values = true)]
+    pub h: Option<f64>,
+    /// Number of steps.
+    #[arg(long)]
+    pub steps: Option<usize>,
+    /// Initial position, comma-separated (e.g. 0.4,0).
+    #[arg(long, allow_hyphen_values = true)]
+    pub q0: Option<String>,
+    /// Initial momentum, comma-separated.
+    #[arg(long, allow_hyphen_values = true)]
+    pub p0: Option<String>,
+    /// Output format.
+    #[arg(long, value_enum, default_value_t = Format::Csv)]
+    pub format: Format,
+    /// Output file (default: stdout).
+    #[arg(long, short)]
+    pub output: Option<PathBuf>,
+    /// Also write an SVG chart of the run (orbit for 2-D systems, q(t) otherwise).
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+}
+
+/// Apply command-line overrides to a scene.
+pub fn apply_overrides(scene: &mut Scene, a: &RunArgs) -> Result<(), GviError> {
+    if let Some(b) = &a.basis {
+        scene.method.basis = b.parse()?;
+    }
+    if let Some(q) = &a.quadrature {
+        scene.method.quadrature = q.parse()?;
+    }
+    if let Some(n) = a.n {
+        scene.method.n = n;
+    }
+    if a.quad_points.is_some() {
+        scene.method.quad_points = a.quad_points;
+    }
+    if let Some(h) = a.h {
+        scene.method.h = h;
+    }
+    if let Some(s) = a.steps {
+        scene.method.steps = s;
+    }
+    if let Some(q) = &a.q0 {
+        scene.initial.q = parse_vector("--q0", q)?;
+    }
+    if let Some(p) = &a.p0 {
+        scene.initial.p = parse_vector("--p0", p)?;
+    }
+    Ok(())
+}
+
+pub fn run(args: RunArgs) -> Result<(), GviError> {
+    let mut scene = Scene::load(&args.scene)?;
+    apply_overrides(&mut scene, &args)?;
+    let options = RunOptions {
+        chart: args.plot.is_some(),
+        ..RunOptions::default()
+    };
+    let result = run_scene(&scene, options)?;
+    let text = match args.format {
+        Format::Csv => result.to_csv(),
+        Format::Json => result.to_json()?,
+    };
+    write_output(args.output.as_deref(), &text)?;
+    if let (Some(path), Some(chart)) = (&args.plot, &result.chart) {
+        chart
+            .save_svg(path)
+            .map_err(|e| GviError::Plot(e.to_string()))?;
+        eprintln!("chart written to {}", path.display());
+    }
+    eprintln!("{}", result.summary);
+    match result.failure {
+        Some(e) => Err(e),
+        None => Ok(()),
+    }
+}

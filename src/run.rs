@@ -1,0 +1,279 @@
+//! Running a scene: build the system and the integrator, integrate, and tabulate the states,
+//! invariants and (where an exact solution exists) errors. This is what `gvi run` does.
+
+use crate::error::{GviError, Result};
+use crate::integrator::GalerkinIntegrator;
+use crate::plot::{Chart, Series};
+use crate::scene::{Scene, SystemSpec};
+use crate::systems::{HarmonicOscillator, Kepler, Pendulum, System};
+use crate::trajectory::Trajectory;
+use serde::Serialize;
+use std::time::Instant;
+
+/// What a run produced. On a Newton failure `failure` is set and the table holds the steps
+/// completed before it.
+#[derive(Debug, Serialize)]
+pub struct RunResult {
+    /// The scene, with command-line overrides applied.
+    pub scene: Scene,
+    /// Column names: `step,t,q0,…,p0,…` then invariants, then `position_error` if known.
+    pub columns: Vec<String>,
+    /// One row per step end.
+    pub rows: Vec<Vec<f64>>,
+    /// Totals and maxima.
+    pub summary: RunSummary,
+    /// The trajectory (states, Galerkin coefficients, per-step cost).
+    pub trajectory: Option<Trajectory>,
+    /// The solver error, if the run stopped early.
+    #[serde(serialize_with = "serialize_error")]
+    pub failure: Option<GviError>,
+    /// Chart of the run (orbit for 2-D systems, q(t) otherwise), when requested.
+    #[serde(skip)]
+    pub chart: Option<Chart>,
+}
+
+fn serialize_error<S: serde::Serializer>(e: &Option<GviError>, s: S) -> Result<S::Ok, S::Error> {
+    match e {
+        Some(e) => s.serialize_some(&e.to_string()),
+        None => s.serialize_none(),
+    }
+}
+
+/// Summary numbers of a run.
+#[derive(Debug, Clone, Serialize)]
+pub struct RunSummary {
+    /// System name.
+    pub system: String,
+    /// Method description.
+    pub method: String,
+    /// Steps completed.
+    pub steps: usize,
+    /// Max over step ends of the max-norm position error (one-step map), if exact known.
+    pub max_position_error: Option<f64>,
+    /// Max over t of the Galerkin curves' position error (sampled), if exact known.
+    pub max_curve_error: Option<f64>,
+    /// Max |I(t_k) − I(t_0)| for each invariant.
+    pub invariant_errors: Vec<(String, f64)>,
+    /// Newton iterations per step (mean).
+    pub newton_iterations_per_step: f64,
+    /// Wall-clock seconds of the integration.
+    pub seconds: f64,
+}
+
+impl std::fmt::Display for RunSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(f, "{}: {}, {} steps", self.system, self.method, self.steps)?;
+        if let Some(e) = self.max_position_error {
+            writeln!(f, "  max position error at step ends: {e:.3e}")?;
+        }
+        if let Some(e) = self.max_curve_error {
+            writeln!(f, "  max position error along the Galerkin curves: {e:.3e}")?;
+        }
+        for (name, e) in &self.invariant_errors {
+            writeln!(f, "  max {name} error: {e:.3e}")?;
+        }
+        write!(
+            f,
+            "  Newton iterations per step: {:.2}; integration time: {:.3} s",
+            self.newton_iterations_per_step, self.seconds
+        )
+    }
+}
+
+/// Options for [`run_scene`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunOptions {
+    /// Samples per step for the error along the Galerkin curves (0: skip).
+    pub curve_samples_per_step: usize,
+    /// Build a chart.
+    pub chart: bool,
+}
+
+impl Default for RunOptions {
+    fn default() -> Self {
+        RunOptions {
+            curve_samples_per_step: 16,
+            chart: false,
+        }
+    }
+}
+
+/// Run a scene. Invalid input is an `Err`; a Newton failure is `Ok` with
+/// [`RunResult::failure`] set and the partial trajectory kept.
+pub fn run_scene(scene: &Scene, options: RunOptions) -> Result<RunResult> {
+    match scene.system {
+        SystemSpec::Harmonic { mass, stiffness } => {
+            run_system(&HarmonicOscillator::new(mass, stiffness)?, scene, options)
+        }
+        SystemSpec::Kepler { mu } => run_system(&Kepler::new(mu)?, scene, options),
+        SystemSpec::Pendulum {
+            length,
+            gravity,
+            mass,
+        } => run_system(&Pendulum::new(length, gravity, mass)?, scene, options),
+    }
+}
+
+/// Run a scene's initial state and method on any [`System`].
+pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> Result<RunResult> {
+    let m = &scene.method;
+    let init = &scene.initial;
+    let gvi = GalerkinIntegrator::from_kinds(m.basis, m.n, m.quadrature, m.quad_points, m.h)?;
+    let d = system.dim();
+    crate::error::ensure_len("initial q (system dimension)", d, init.q.len())?;
+    crate::error::ensure_len("initial p (system dimension)", d, init.p.len())?;
+    let exact = system.exact_solution(init.t0, &init.q, &init.p)?;
+    let start = Instant::now();
+    let (trajectory, failure) = match gvi.integrate(system, init.t0, &init.q, &init.p, m.steps) {
+        Ok(t) => (t, None),
+        Err(f) => match f.partial {
+            Some(partial) => (*partial, Some(f.error)),
+            None => return Err(f.error),
+        },
+    };
+    let seconds = start.elapsed().as_secs_f64();
+
+    let names = system.invariant_names();
+    let mut columns = vec!["step".to_string(), "t".to_string()];
+    columns.extend((0..d).map(|i| format!("q{i}")));
+    columns.extend((0..d).map(|i| format!("p{i}")));
+    columns.extend(names.iter().map(|s| s.to_string()));
+    if exact.is_some() {
+        columns.push("position_error".into());
+    }
+    let mut inv0 = vec![0.0; names.len()];
+    system.invariants(&init.q, &init.p, &mut inv0);
+    let mut inv = vec![0.0; names.len()];
+    let mut inv_err = vec![0.0f64; names.len()];
+    let mut max_pos: Option<f64> = exact.as_ref().map(|_| 0.0);
+    let mut rows = Vec::with_capacity(trajectory.q.len());
+    for k in 0..trajectory.q.len() {
+        let t = trajectory.time(k);
+        let (q, p) = (&trajectory.q[k], &trajectory.p[k]);
+        let mut row = vec![k as f64, t];
+        row.extend_from_slice(q);
+        row.extend_from_slice(p);
+        system.invariants(q, p, &mut inv);
+        for i in 0..names.len() {
+            inv_err[i] = inv_err[i].max((inv[i] - inv0[i]).abs());
+        }
+        row.extend_from_slice(&inv);
+        if let Some(ex) = &exact {
+            let e = max_norm_diff(q, &ex.position(t));
+            max_pos = max_pos.map(|m| m.max(e));
+            row.push(e);
+        }
+        rows.push(row);
+    }
+    let max_curve_error = match (&exact, options.curve_samples_per_step) {
+        (Some(ex), s) if s > 0 && trajectory.steps() > 0 => {
+            let mut worst = 0.0f64;
+            for t in trajectory.sample_times(s) {
+                worst = worst.max(max_norm_diff(&trajectory.position_at(t)?, &ex.position(t)));
+            }
+            Some(worst)
+        }
+        _ => None,
+    };
+    let steps = trajectory.steps();
+    let summary = RunSummary {
+        system: system.name().to_string(),
+        method: format!(
+            "{} basis n = {}, {} with {} points, h = {}",
+            m.basis,
+            m.n,
+            gvi.rule().kind,
+            gvi.rule().len(),
+            m.h
+        ),
+        steps,
+        max_position_error: max_pos,
+        max_curve_error,
+        invariant_errors: names.iter().map(|s| s.to_string()).zip(inv_err).collect(),
+        newton_iterations_per_step: trajectory.newton_iterations() as f64 / steps.max(1) as f64,
+        seconds,
+    };
+    let chart = if options.chart && steps > 0 {
+        Some(run_chart(system, scene, &trajectory, exact.as_ref())?)
+    } else {
+        None
+    };
+    Ok(RunResult {
+        scene: scene.clone(),
+        columns,
+        rows,
+        summary,
+        trajectory: Some(trajectory),
+        failure,
+        chart,
+    })
+}
+
+fn max_norm_diff(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max)
+}
+
+/// Orbit (2-D) or q(t) (1-D) chart: Galerkin curves, step ends and, if known, the exact
+/// solution.
+fn run_chart<S: System>(
+    system: &S,
+    scene: &Scene,
+    traj: &Trajectory,
+    exact: Option<&crate::systems::ExactSolution>,
+) -> Result<Chart> {
+    let samples = traj.sample_times(32);
+    let title = format!("{} — {}", scene.name, scene.description);
+    let two_d = system.dim() >= 2;
+    let point = |q: &[f64], t: f64| if two_d { (q[0], q[1]) } else { (t, q[0]) };
+    let mut curve = Vec::with_capacity(samples.len());
+    for &t in &samples {
+        curve.push(point(&traj.position_at(t)?, t));
+    }
+    let ends: Vec<(f64, f64)> = (0..traj.q.len())
+        .map(|k| point(&traj.q[k], traj.time(k)))
+        .collect();
+    let mut chart = if two_d {
+        Chart::new(title, "q0", "q1").equal_aspect()
+    } else {
+        Chart::new(title, "t", "q")
+    };
+    if let Some(ex) = exact {
+        let pts: Vec<(f64, f64)> = samples.iter().map(|&t| point(&ex.position(t), t)).collect();
+        chart.push(Series::dashed("exact solution", pts));
+    }
+    chart.push(Series::line("Galerkin curves", curve));
+    chart.push(Series::markers("step ends (q_k)", ends));
+    Ok(chart)
+}
+
+impl RunResult {
+    /// The table as CSV text (header line, then one row per step end).
+    pub fn to_csv(&self) -> String {
+        let mut out = self.columns.join(",");
+        out.push('\n');
+        for row in &self.rows {
+            let cells: Vec<String> = row
+                .iter()
+                .enumerate()
+                .map(|(i, x)| {
+                    if i == 0 {
+                        format!("{}", *x as u64)
+                    } else {
+                        format!("{x:e}")
+                    }
+                })
+                .collect();
+            out.push_str(&cells.join(","));
+            out.push('\n');
+        }
+        out
+    }
+
+    /// The whole result as JSON (scene, columns, rows, summary, trajectory with coefficients).
+    pub fn to_json(&self) -> Result<String> {
+        serde_json::to_string_pretty(self).map_err(|e| GviError::Serialize(e.to_string()))
+    }
+}
