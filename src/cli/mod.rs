@@ -16,7 +16,7 @@ pub struct Cli {
 #[derive(Debug, Subcommand)]
 enum Command {
     /// Integrate a scene (built-in name or TOML path) and write its table (CSV or JSON).
-    Run(run::RunArgs),
+    Run(Box<run::RunArgs>),
     /// List the built-in scenes.
     Scenes,
 }
@@ -24,7 +24,7 @@ enum Command {
 /// Parse and run; errors are reported by the caller.
 pub fn main_with(cli: Cli) -> Result<(), GviError> {
     match cli.command {
-        Command::Run(args) => run::run(args),
+        Command::Run(args) => run::run(*args),
         Command::Scenes => {
             for name in galerkin_vi::scene::Scene::builtin_names() {
                 let scene = galerkin_vi::scene::Scene::load(name)?;
