@@ -18,7 +18,10 @@ fn kepler_step(c: &mut Criterion) {
         let (mut qn, mut pn) = (vec![0.0; 2], vec![0.0; 2]);
         group.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
             b.iter(|| {
-                if gvi.step(&kepler, &mut ws, &q, &p, &mut qn, &mut pn).is_err() {
+                if gvi
+                    .step(&kepler, &mut ws, &q, &p, &mut qn, &mut pn)
+                    .is_err()
+                {
                     // Restart the orbit rather than abort the benchmark.
                     q.copy_from_slice(&q0);
                     p.copy_from_slice(&p0);

@@ -239,28 +239,34 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             }
             (None, _) => jac.iter_mut().for_each(|x| *x = 0.0),
         }
+        if ws.separable.is_some() {
+            // Potential part Σ_j h b_j φ_a(c_j) φ_b(c_j) L_qq(c_j) as d² weighted Gram
+            // products Φᵀ diag(g_rs) Φ (one GEMM each) instead of scalar loops (DESIGN.md §4).
+            let dd = d * d;
+            for j in 0..m {
+                let q = &ws.qj[j * d..(j + 1) * d];
+                lag.force_jacobian(q, &mut ws.hall[j * dd..(j + 1) * dd]);
+            }
+            for r in 0..d {
+                for s in 0..d {
+                    for a in 0..cnt {
+                        for j in 0..m {
+                            ws.gram[a * m + j] = t.phi[j * n + a + r0]
+                                * t.weights[j]
+                                * h
+                                * ws.hall[j * dd + r * d + s];
+                        }
+                    }
+                    gram_accumulate(&ws.gram, &t.phi, jac, cnt, m, n, u0, d, r, s);
+                }
+            }
+            return m;
+        }
         for j in 0..m {
             let q = &ws.qj[j * d..(j + 1) * d];
             let w = t.weights[j];
             let (phi, dphi) = (&t.phi[j * n..(j + 1) * n], &t.dphi[j * n..(j + 1) * n]);
-            if ws.separable.is_some() {
-                lag.force_jacobian(q, &mut ws.hqq);
-                for a in 0..cnt {
-                    let fa = w * h * phi[a + r0];
-                    if fa == 0.0 {
-                        continue;
-                    }
-                    for b in 0..cnt {
-                        let f = fa * phi[b + u0];
-                        for r in 0..d {
-                            let row = (a * d + r) * size + b * d;
-                            for s in 0..d {
-                                jac[row + s] += f * ws.hqq[r * d + s];
-                            }
-                        }
-                    }
-                }
-            } else {
+            {
                 let v = &ws.vj[j * d..(j + 1) * d];
                 lag.hessian(q, v, &mut ws.hqq, &mut ws.hqv, &mut ws.hvv);
                 for a in 0..cnt {
@@ -601,6 +607,50 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             p1: ws.grad[(n - 1) * d..n * d].to_vec(),
             coefficients: ws.coeffs.clone(),
         })
+    }
+}
+
+/// jac[(a d + r)·size + b d + s] += Σ_j gram[a m + j] · phi[j n + u0 + b] for a, b < cnt,
+/// where size = cnt·d: one block (r, s) of the Newton matrix as a single matrix product.
+#[allow(clippy::too_many_arguments)]
+fn gram_accumulate(
+    gram: &[f64],
+    phi: &[f64],
+    jac: &mut [f64],
+    cnt: usize,
+    m: usize,
+    n: usize,
+    u0: usize,
+    d: usize,
+    r: usize,
+    s: usize,
+) {
+    let size = cnt * d;
+    // Bounds of every element the product touches (checked, so the unsafe call below only
+    // reads and writes inside the slices):
+    assert!(gram.len() >= cnt * m && phi.len() >= m * n && u0 + cnt <= n);
+    assert!(jac.len() >= size * size && r < d && s < d);
+    // SAFETY: A = gram is cnt×m with strides (m, 1): max index (cnt−1)m + m−1 < cnt·m.
+    // B = phi[u0..] is m×cnt with strides (n, 1): max index u0 + (m−1)n + cnt−1 < m·n.
+    // C = jac[r·size + s..] is cnt×cnt with strides (d·size, d): max index
+    // r·size + s + (cnt−1)(d·size) + (cnt−1)d ≤ size² − 1. C does not alias A or B.
+    unsafe {
+        matrixmultiply::dgemm(
+            cnt,
+            m,
+            cnt,
+            1.0,
+            gram.as_ptr(),
+            m as isize,
+            1,
+            phi.as_ptr().add(u0),
+            n as isize,
+            1,
+            1.0,
+            jac.as_mut_ptr().add(r * size + s),
+            (d * size) as isize,
+            d as isize,
+        );
     }
 }
 

@@ -31,6 +31,9 @@ pub struct Workspace {
     /// L_q and L_v at the quadrature nodes (m×D).
     pub(crate) lq: Vec<f64>,
     pub(crate) lv: Vec<f64>,
+    /// L_qq at every node (m×D×D) and the weighted basis table of one Gram product (n×m).
+    pub(crate) hall: Vec<f64>,
+    pub(crate) gram: Vec<f64>,
     /// Second derivatives at one node (D×D each).
     pub(crate) hqq: Vec<f64>,
     pub(crate) hqv: Vec<f64>,
@@ -133,6 +136,8 @@ impl Workspace {
             vj: vec![0.0; m * d],
             lq: vec![0.0; m * d],
             lv: vec![0.0; m * d],
+            hall: vec![0.0; m * d * d],
+            gram: vec![0.0; n * m],
             hqq: vec![0.0; d * d],
             hqv: vec![0.0; d * d],
             hvv: vec![0.0; d * d],
