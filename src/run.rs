@@ -98,20 +98,41 @@ impl Default for RunOptions {
     }
 }
 
-/// Run a scene. Invalid input is an `Err`; a Newton failure is `Ok` with
-/// [`RunResult::failure`] set and the partial trajectory kept.
-pub fn run_scene(scene: &Scene, options: RunOptions) -> Result<RunResult> {
-    match scene.system {
+/// Something to do with a concrete system, whatever its type: the way scene files (which
+/// name a system at run time) reach code that is generic over [`System`].
+pub trait SystemVisitor {
+    /// What the visit returns.
+    type Output;
+    /// Do it with the concrete system.
+    fn visit<S: System + Sync>(self, system: &S) -> Result<Self::Output>;
+}
+
+/// Build the system a scene names and hand it to `visitor`.
+pub fn visit_system<V: SystemVisitor>(spec: &SystemSpec, visitor: V) -> Result<V::Output> {
+    match *spec {
         SystemSpec::Harmonic { mass, stiffness } => {
-            run_system(&HarmonicOscillator::new(mass, stiffness)?, scene, options)
+            visitor.visit(&HarmonicOscillator::new(mass, stiffness)?)
         }
-        SystemSpec::Kepler { mu } => run_system(&Kepler::new(mu)?, scene, options),
+        SystemSpec::Kepler { mu } => visitor.visit(&Kepler::new(mu)?),
         SystemSpec::Pendulum {
             length,
             gravity,
             mass,
-        } => run_system(&Pendulum::new(length, gravity, mass)?, scene, options),
+        } => visitor.visit(&Pendulum::new(length, gravity, mass)?),
     }
+}
+
+/// Run a scene. Invalid input is an `Err`; a Newton failure is `Ok` with
+/// [`RunResult::failure`] set and the partial trajectory kept.
+pub fn run_scene(scene: &Scene, options: RunOptions) -> Result<RunResult> {
+    struct Run<'a>(&'a Scene, RunOptions);
+    impl SystemVisitor for Run<'_> {
+        type Output = RunResult;
+        fn visit<S: System + Sync>(self, system: &S) -> Result<RunResult> {
+            run_system(system, self.0, self.1)
+        }
+    }
+    visit_system(&scene.system, Run(scene, options))
 }
 
 /// Run a scene's initial state and method on any [`System`].

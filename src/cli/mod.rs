@@ -1,6 +1,7 @@
 //! The `gvi` command-line tool.
 
 mod run;
+mod study;
 
 use clap::{Parser, Subcommand};
 use galerkin_vi::GviError;
@@ -17,6 +18,10 @@ pub struct Cli {
 enum Command {
     /// Integrate a scene (built-in name or TOML path) and write its table (CSV or JSON).
     Run(Box<run::RunArgs>),
+    /// n- or h-refinement sweep with the fitted rate (CSV, JSON, SVG in --out).
+    Refine(Box<study::RefineArgs>),
+    /// Regenerate the paper's experiments (charts and summary.md in --out).
+    Reproduce(study::ReproduceArgs),
     /// List the built-in scenes.
     Scenes,
 }
@@ -25,6 +30,8 @@ enum Command {
 pub fn main_with(cli: Cli) -> Result<(), GviError> {
     match cli.command {
         Command::Run(args) => run::run(*args),
+        Command::Refine(args) => study::run_refine(*args),
+        Command::Reproduce(args) => study::run_reproduce(args),
         Command::Scenes => {
             for name in galerkin_vi::scene::Scene::builtin_names() {
                 let scene = galerkin_vi::scene::Scene::load(name)?;

@@ -1,0 +1,80 @@
+//! `gvi refine` and `gvi reproduce`.
+
+use super::run::{RunArgs, apply_overrides};
+use clap::{Args, ValueEnum};
+use galerkin_vi::GviError;
+use galerkin_vi::scene::Scene;
+use galerkin_vi::studies::refine::{Vary, parse_range, refine};
+use galerkin_vi::studies::reproduce::{Size, reproduce};
+use std::path::PathBuf;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum VaryArg {
+    N,
+    H,
+}
+
+#[derive(Debug, Args)]
+pub struct RefineArgs {
+    /// Vary n (geometric rate fitted) or h (algebraic order fitted).
+    #[arg(long, value_enum)]
+    pub vary: VaryArg,
+    /// Values: A:B:STEP (arithmetic) or A:B:xFACTOR (geometric), e.g. 4:44:2 or 0.01:0.5:x1.5.
+    #[arg(long)]
+    pub range: String,
+    /// For h-sweeps, keep the scene's number of steps (the paper's protocol) instead of its
+    /// time horizon.
+    #[arg(long)]
+    pub fixed_steps: bool,
+    /// Output directory (default ./out/refine).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    #[command(flatten)]
+    pub run: RunArgs,
+}
+
+pub fn run_refine(args: RefineArgs) -> Result<(), GviError> {
+    let mut scene = Scene::load(&args.run.scene)?;
+    apply_overrides(&mut scene, &args.run)?;
+    let values = parse_range(&args.range)?;
+    let vary = match args.vary {
+        VaryArg::N => Vary::N,
+        VaryArg::H => Vary::H,
+    };
+    let study = refine(&scene, vary, &values, args.fixed_steps)?;
+    let dir = args.out.unwrap_or_else(|| PathBuf::from("out/refine"));
+    let files = study.write(&dir)?;
+    eprintln!(
+        "{}: {:?}-refinement, {} runs ({} failed), errors against the {}",
+        study.scene,
+        study.vary,
+        study.points.len(),
+        study.points.iter().filter(|m| m.failure.is_some()).count(),
+        study.reference
+    );
+    eprintln!("  one-step map: {}", study.fit);
+    eprintln!("  Galerkin curves: {}", study.curve_fit);
+    for f in files {
+        eprintln!("  wrote {}", f.display());
+    }
+    Ok(())
+}
+
+#[derive(Debug, Args)]
+pub struct ReproduceArgs {
+    /// Output directory (default ./out/reproduce).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// A reduced version (seconds instead of minutes), for smoke tests.
+    #[arg(long)]
+    pub quick: bool,
+}
+
+pub fn run_reproduce(args: ReproduceArgs) -> Result<(), GviError> {
+    let dir = args.out.unwrap_or_else(|| PathBuf::from("out/reproduce"));
+    let size = if args.quick { Size::Quick } else { Size::Full };
+    let rep = reproduce(&dir, size)?;
+    eprint!("{}", rep.markdown());
+    eprintln!("wrote {}", dir.join("summary.md").display());
+    Ok(())
+}

@@ -1,0 +1,247 @@
+//! Studies: refinement sweeps with fitted rates, and the paper's experiments.
+//!
+//! Every study measures [`Measurement`]s — one integration of a scene's system with one method
+//! — against a [`Reference`] (the exact solution where one is known, otherwise a
+//! high-resolution spectral run), writes CSV/JSON tables and SVG charts, and never aborts on a
+//! solver failure: the failure is recorded in the measurement and shown.
+
+pub mod refine;
+pub mod reproduce;
+
+use crate::error::{GviError, Result};
+use crate::integrator::GalerkinIntegrator;
+use crate::scene::{InitialState, MethodSpec};
+use crate::systems::{ExactSolution, System};
+use crate::trajectory::Trajectory;
+use serde::Serialize;
+use std::path::Path;
+use std::time::Instant;
+
+/// What the errors are measured against.
+pub enum Reference {
+    /// A closed-form solution.
+    Exact(ExactSolution),
+    /// A high-resolution numerical solution (dense output).
+    Numerical(Box<Trajectory>),
+}
+
+impl Reference {
+    /// The reference position at t.
+    pub fn position(&self, t: f64) -> Result<Vec<f64>> {
+        match self {
+            Reference::Exact(e) => Ok(e.position(t)),
+            Reference::Numerical(tr) => tr.position_at(t),
+        }
+    }
+
+    /// The exact solution, or a spectral run at n = 48, h/4 over `horizon` (documented as
+    /// the reference for systems without a closed form).
+    pub fn for_system<S: System>(
+        system: &S,
+        initial: &InitialState,
+        h: f64,
+        horizon: f64,
+    ) -> Result<Reference> {
+        if let Some(e) = system.exact_solution(initial.t0, &initial.q, &initial.p)? {
+            return Ok(Reference::Exact(e));
+        }
+        let href = (h / 4.0).min(1.0);
+        let steps = (horizon / href).ceil().max(1.0) as usize;
+        let gvi = GalerkinIntegrator::spectral(48, href)?;
+        let traj = gvi.integrate(system, initial.t0, &initial.q, &initial.p, steps)?;
+        Ok(Reference::Numerical(Box::new(traj)))
+    }
+
+    /// Short description for reports.
+    pub fn describe(&self) -> &'static str {
+        match self {
+            Reference::Exact(_) => "exact solution",
+            Reference::Numerical(_) => "spectral reference run (n = 48, h/4)",
+        }
+    }
+}
+
+/// One integration and its errors and cost.
+#[derive(Debug, Clone, Serialize)]
+pub struct Measurement {
+    /// Basis.
+    pub basis: String,
+    /// Quadrature.
+    pub quadrature: String,
+    /// Number of basis functions.
+    pub n: usize,
+    /// Step size.
+    pub h: f64,
+    /// Steps requested.
+    pub steps: usize,
+    /// Max over step ends of the max-norm position error (the one-step map).
+    pub map_error: f64,
+    /// Max over sampled t of the Galerkin curves' position error.
+    pub curve_error: f64,
+    /// Max |I₀(t_k) − I₀(t_0)| of the first invariant (the energy).
+    pub energy_error: f64,
+    /// Max error of the second invariant (e.g. angular momentum), if the system has one.
+    pub momentum_error: Option<f64>,
+    /// Total Newton iterations.
+    pub newton_iterations: usize,
+    /// Force / first-derivative evaluations (per quadrature point).
+    pub gradient_evaluations: usize,
+    /// Wall-clock seconds of the integration.
+    pub seconds: f64,
+    /// The solver's error, if the run failed (errors then cover the completed steps only).
+    pub failure: Option<String>,
+}
+
+/// Integrate `system` from `initial` with `method` and measure everything against
+/// `reference`; `curve_samples` points per step for the curve error.
+pub fn measure<S: System>(
+    system: &S,
+    initial: &InitialState,
+    method: &MethodSpec,
+    reference: &Reference,
+    curve_samples: usize,
+) -> Measurement {
+    let mut m = Measurement {
+        basis: method.basis.to_string(),
+        quadrature: method.quadrature.to_string(),
+        n: method.n,
+        h: method.h,
+        steps: method.steps,
+        map_error: f64::NAN,
+        curve_error: f64::NAN,
+        energy_error: f64::NAN,
+        momentum_error: None,
+        newton_iterations: 0,
+        gradient_evaluations: 0,
+        seconds: 0.0,
+        failure: None,
+    };
+    let gvi = match GalerkinIntegrator::from_kinds(
+        method.basis,
+        method.n,
+        method.quadrature,
+        method.quad_points,
+        method.h,
+    ) {
+        Ok(g) => g,
+        Err(e) => {
+            m.failure = Some(e.to_string());
+            return m;
+        }
+    };
+    let start = Instant::now();
+    let result = gvi.integrate(system, initial.t0, &initial.q, &initial.p, method.steps);
+    m.seconds = start.elapsed().as_secs_f64();
+    let traj = match result {
+        Ok(t) => t,
+        Err(f) => {
+            m.failure = Some(f.error.to_string());
+            match f.partial {
+                Some(p) => *p,
+                None => return m,
+            }
+        }
+    };
+    if let Err(e) = fill_errors(system, initial, &traj, reference, curve_samples, &mut m) {
+        m.failure.get_or_insert(e.to_string());
+    }
+    m
+}
+
+fn fill_errors<S: System>(
+    system: &S,
+    initial: &InitialState,
+    traj: &Trajectory,
+    reference: &Reference,
+    curve_samples: usize,
+    m: &mut Measurement,
+) -> Result<()> {
+    m.newton_iterations = traj.newton_iterations();
+    m.gradient_evaluations = traj.gradient_evaluations();
+    let mut map = 0.0f64;
+    for k in 0..traj.q.len() {
+        map = map.max(max_norm_diff(
+            &traj.q[k],
+            &reference.position(traj.time(k))?,
+        ));
+    }
+    m.map_error = map;
+    let mut curve = map;
+    if traj.steps() > 0 && curve_samples > 0 {
+        for t in traj.sample_times(curve_samples) {
+            curve = curve.max(max_norm_diff(
+                &traj.position_at(t)?,
+                &reference.position(t)?,
+            ));
+        }
+    }
+    m.curve_error = curve;
+    let k = system.invariant_names().len();
+    if k > 0 {
+        let (mut i0, mut i) = (vec![0.0; k], vec![0.0; k]);
+        system.invariants(&initial.q, &initial.p, &mut i0);
+        let mut worst = vec![0.0f64; k];
+        for s in 0..traj.q.len() {
+            system.invariants(&traj.q[s], &traj.p[s], &mut i);
+            for c in 0..k {
+                worst[c] = worst[c].max((i[c] - i0[c]).abs());
+            }
+        }
+        m.energy_error = worst[0];
+        m.momentum_error = worst.get(1).copied();
+    }
+    Ok(())
+}
+
+pub(crate) fn max_norm_diff(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max)
+}
+
+/// Measurements as CSV.
+pub fn measurements_csv(ms: &[Measurement]) -> String {
+    let mut out = String::from(
+        "basis,quadrature,n,h,steps,map_error,curve_error,energy_error,momentum_error,\
+         newton_iterations,gradient_evaluations,seconds,failure\n",
+    );
+    for m in ms {
+        out.push_str(&format!(
+            "{},{},{},{:e},{},{:e},{:e},{:e},{},{},{},{:e},{}\n",
+            m.basis,
+            m.quadrature,
+            m.n,
+            m.h,
+            m.steps,
+            m.map_error,
+            m.curve_error,
+            m.energy_error,
+            m.momentum_error
+                .map(|x| format!("{x:e}"))
+                .unwrap_or_default(),
+            m.newton_iterations,
+            m.gradient_evaluations,
+            m.seconds,
+            m.failure
+                .as_deref()
+                .map(|f| format!("\"{}\"", f.replace('"', "'")))
+                .unwrap_or_default()
+        ));
+    }
+    out
+}
+
+/// Write a text file, creating its directory.
+pub fn write_file(path: &Path, text: &str) -> Result<()> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|source| GviError::Io {
+            path: dir.to_path_buf(),
+            source,
+        })?;
+    }
+    std::fs::write(path, text).map_err(|source| GviError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
+}
