@@ -140,7 +140,11 @@ fn max_defect_along<L: Lagrangian>(
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 24, .. ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig {
+        cases: 24,
+        failure_persistence: None,
+        .. ProptestConfig::default()
+    })]
 
     /// Bound Kepler orbits away from collision: start at distance r on the x-axis with a
     /// tangential speed f·√(μ/r), f ∈ [0.85, 1.1], so the periapsis is ≥ 0.45.
