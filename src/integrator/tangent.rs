@@ -369,3 +369,51 @@ fn check_steps(steps: usize) -> Result<()> {
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::newton::Mode;
+    use super::*;
+    use crate::systems::{Kepler, Pendulum};
+
+    /// The stage block of the full action Hessian is the Newton matrix of `jacobian` (both
+    /// evaluated on the converged curve), for the separable and the general path.
+    fn check_block<L: Lagrangian>(lag: &L, q: &[f64], p: &[f64]) {
+        let gvi = GalerkinIntegrator::spectral(7, 0.4).unwrap();
+        let mut ws = gvi.workspace(lag).unwrap();
+        let d = lag.dim();
+        let (mut qn, mut pn) = (vec![0.0; d], vec![0.0; d]);
+        gvi.step(lag, &mut ws, q, p, &mut qn, &mut pn).unwrap();
+        let nodes = gvi.node_hessians(lag, ws.coefficients());
+        let hess = gvi.full_action_hessian(lag, &nodes).unwrap();
+        gvi.jacobian(lag, &mut ws, Mode::InitialValue);
+        let nu = 6 * d;
+        for r in 0..nu {
+            for c in 0..nu {
+                let (a, b) = (hess[(r, c + d)], ws.jac[r * nu + c]);
+                assert!(
+                    (a - b).abs() <= 1e-12 * (1.0 + a.abs()),
+                    "({r},{c}): {a} vs {b}"
+                );
+            }
+        }
+    }
+
+    struct General(Kepler);
+    impl Lagrangian for General {
+        fn dim(&self) -> usize {
+            2
+        }
+        fn lagrangian<T: num_dual::DualNum<Primitive = f64> + Copy>(&self, q: &[T], v: &[T]) -> T {
+            self.0.lagrangian(q, v) + (q[0] * v[1] - q[1] * v[0]) * 0.3
+        }
+    }
+
+    #[test]
+    fn full_hessian_contains_the_newton_matrix() {
+        let k = Kepler::new(1.0).unwrap();
+        check_block(&k, &[0.4, 0.0], &[0.0, 2.0]);
+        check_block(&Pendulum::unit(), &[1.0], &[0.3]);
+        check_block(&General(k), &[0.4, 0.0], &[0.0, 2.0]);
+    }
+}
