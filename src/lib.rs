@@ -30,9 +30,11 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod ad;
+pub mod baselines;
 pub mod basis;
 pub mod error;
 pub mod fit;
+pub mod geometry;
 pub mod integrator;
 pub mod lagrangian;
 pub mod linalg;
@@ -46,14 +48,16 @@ pub mod systems;
 pub mod trajectory;
 
 pub use error::{GviError, Result};
-pub use integrator::{GalerkinIntegrator, IntegrationFailure, NewtonOptions};
+pub use integrator::{GalerkinIntegrator, IntegrationFailure, NewtonOptions, StepJacobian};
 pub use lagrangian::{Lagrangian, Mechanical};
 pub use num_dual::DualNum;
 pub use trajectory::Trajectory;
 
 /// The names most programs need.
 pub mod prelude {
+    pub use crate::baselines::{OneStepMethod, Rk4, StormerVerlet};
     pub use crate::basis::{AnyBasis, Basis, BasisKind, ChebyshevLagrange};
+    pub use crate::geometry::{MomentumMap, Rotation, Translation, symplecticity_defect};
     pub use crate::integrator::{GalerkinIntegrator, InitialGuess, NewtonOptions};
     pub use crate::lagrangian::{Lagrangian, Mechanical};
     pub use crate::quadrature::{GaussLegendre, Quadrature, QuadratureKind, QuadratureRule};

@@ -13,9 +13,11 @@
 //! exact Jacobian; then q_{k+1} = Q_{n−1} and p_{k+1} = ∂S/∂Q_{n−1}.
 
 mod newton;
+mod tangent;
 mod workspace;
 
 pub use newton::{DiscreteLagrangian, InitialGuess, NewtonOptions, StepFailure, StepStats};
+pub use tangent::StepJacobian;
 pub use workspace::Workspace;
 
 use crate::basis::{AnyBasis, Basis, BasisKind, ChebyshevLagrange, CurveFit};

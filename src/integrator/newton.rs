@@ -69,7 +69,7 @@ pub struct StepStats {
 /// Which rows and unknowns a solve uses: the initial-value step (rows 0…n−2, unknowns
 /// 1…n−1) or the two-point problem of the discrete Lagrangian (rows and unknowns 1…n−2).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Mode {
+pub(super) enum Mode {
     InitialValue,
     BoundaryValue,
 }
@@ -216,7 +216,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
 
     /// Assemble the exact Jacobian ∂²S/∂Q_a∂Q_b for `mode` into `ws.jac` (uses the curve values
     /// left in the workspace by the last gradient evaluation). Returns Hessian evaluations.
-    fn jacobian<L: Lagrangian>(&self, lag: &L, ws: &mut Workspace, mode: Mode) -> usize {
+    pub(super) fn jacobian<L: Lagrangian>(&self, lag: &L, ws: &mut Workspace, mode: Mode) -> usize {
         let t: &Tables = self.tables();
         let (n, m, d, h) = (t.n, t.m, ws.d, self.step_size());
         let cnt = mode.count(n);

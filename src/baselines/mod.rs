@@ -1,0 +1,186 @@
+//! Classical baselines behind a common one-step interface, as negative and positive controls
+//! for the geometric checks: classical Runge–Kutta 4 (accurate, not symplectic) and
+//! Störmer–Verlet (second order, symplectic), plus an adapter that puts the Galerkin
+//! integrator behind the same interface.
+//!
+//! The classical methods integrate the canonical equations of a mechanical Lagrangian
+//! L = ½ q̇ᵀMq̇ − V(q): q̇ = M⁻¹p, ṗ = −∇V(q) ([`Lagrangian::force`]).
+
+mod rk4;
+mod verlet;
+
+pub use rk4::Rk4;
+pub use verlet::StormerVerlet;
+
+use crate::basis::Basis;
+use crate::error::{GviError, Result, ensure_finite, ensure_len};
+use crate::integrator::{GalerkinIntegrator, MAX_STEPS, Workspace};
+use crate::lagrangian::Lagrangian;
+use crate::quadrature::Quadrature;
+use nalgebra::DMatrix;
+
+/// A one-step method (q_k, p_k) ↦ (q_{k+1}, p_{k+1}) at a fixed step size.
+pub trait OneStepMethod {
+    /// A label for output, e.g. `rk4 (h = 0.01)`.
+    fn name(&self) -> String;
+    /// The fixed step size h.
+    fn step_size(&self) -> f64;
+    /// Advance one step from (q, p) at time t into (q_next, p_next).
+    fn step(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        p: &[f64],
+        q_next: &mut [f64],
+        p_next: &mut [f64],
+    ) -> Result<()>;
+}
+
+/// Positions and momenta at every step end, (q_k)_k and (p_k)_k.
+pub type States = (Vec<Vec<f64>>, Vec<Vec<f64>>);
+
+/// Integrate `steps` steps of `method` from (q0, p0) at t = 0; returns the positions and
+/// momenta at every step end (steps + 1 of each, starting with the initial state).
+pub fn integrate_one_step<M: OneStepMethod + ?Sized>(
+    method: &mut M,
+    q0: &[f64],
+    p0: &[f64],
+    steps: usize,
+) -> Result<States> {
+    if steps == 0 || steps > MAX_STEPS {
+        return Err(GviError::InvalidStepCount {
+            steps,
+            reason: format!("need 1 ≤ steps ≤ {MAX_STEPS}"),
+        });
+    }
+    ensure_len("initial momentum p0", q0.len(), p0.len())?;
+    ensure_finite("initial position q0", q0)?;
+    ensure_finite("initial momentum p0", p0)?;
+    let h = method.step_size();
+    let d = q0.len();
+    let cap = steps.min(1 << 20) + 1;
+    let (mut qs, mut ps) = (Vec::with_capacity(cap), Vec::with_capacity(cap));
+    qs.push(q0.to_vec());
+    ps.push(p0.to_vec());
+    let (mut qn, mut pn) = (vec![0.0; d], vec![0.0; d]);
+    for k in 0..steps {
+        let (q, p) = (&qs[k], &ps[k]);
+        method.step(k as f64 * h, q, p, &mut qn, &mut pn)?;
+        qs.push(qn.clone());
+        ps.push(pn.clone());
+    }
+    Ok((qs, ps))
+}
+
+/// The pieces of a mechanical Lagrangian the classical methods need: D and M⁻¹.
+#[derive(Debug, Clone)]
+pub(crate) struct CanonicalParts {
+    pub d: usize,
+    pub inverse_mass: DMatrix<f64>,
+}
+
+impl CanonicalParts {
+    pub fn new<L: Lagrangian>(lag: &L, h: f64) -> Result<Self> {
+        if !(h.is_finite() && h > 0.0) {
+            return Err(GviError::InvalidStepSize { h });
+        }
+        let d = lag.dim();
+        let mass = lag.mass_matrix().ok_or_else(|| {
+            GviError::Unsupported(
+                "the classical baselines need a mechanical Lagrangian ½q̇ᵀMq̇ − V(q)".into(),
+            )
+        })?;
+        if mass.shape() != (d, d) {
+            return Err(GviError::DimensionMismatch {
+                what: "mass matrix".into(),
+                expected: d,
+                got: mass.nrows().max(mass.ncols()),
+            });
+        }
+        let inverse_mass = mass
+            .try_inverse()
+            .filter(|m| m.iter().all(|x| x.is_finite()))
+            .ok_or_else(|| GviError::InvalidParameter {
+                name: "mass matrix".into(),
+                value: f64::NAN,
+                reason: "singular".into(),
+            })?;
+        Ok(CanonicalParts { d, inverse_mass })
+    }
+
+    /// v = M⁻¹ p.
+    pub fn velocity(&self, p: &[f64], v: &mut [f64]) {
+        for r in 0..self.d {
+            v[r] = (0..self.d).map(|s| self.inverse_mass[(r, s)] * p[s]).sum();
+        }
+    }
+
+    pub fn check(&self, q: &[f64], p: &[f64], qn: &[f64], pn: &[f64]) -> Result<()> {
+        ensure_len("q", self.d, q.len())?;
+        ensure_len("p", self.d, p.len())?;
+        ensure_len("q_next", self.d, qn.len())?;
+        ensure_len("p_next", self.d, pn.len())?;
+        Ok(())
+    }
+}
+
+/// The Galerkin variational integrator behind the [`OneStepMethod`] interface (owns a
+/// workspace, so the next step's initial guess extrapolates the previous curve).
+#[derive(Debug)]
+pub struct GalerkinMethod<'a, L: Lagrangian, B: Basis, Q: Quadrature> {
+    integrator: &'a GalerkinIntegrator<B, Q>,
+    lagrangian: &'a L,
+    workspace: Workspace,
+}
+
+impl<'a, L: Lagrangian, B: Basis, Q: Quadrature> GalerkinMethod<'a, L, B, Q> {
+    /// Wrap an integrator and a Lagrangian.
+    pub fn new(integrator: &'a GalerkinIntegrator<B, Q>, lagrangian: &'a L) -> Result<Self> {
+        Ok(GalerkinMethod {
+            integrator,
+            lagrangian,
+            workspace: integrator.workspace(lagrangian)?,
+        })
+    }
+}
+
+impl<L: Lagrangian, B: Basis, Q: Quadrature> OneStepMethod for GalerkinMethod<'_, L, B, Q> {
+    fn name(&self) -> String {
+        format!(
+            "galerkin ({} basis, n = {}, {}, h = {})",
+            self.integrator.basis().name(),
+            self.integrator.n(),
+            self.integrator.quadrature().name(),
+            self.integrator.step_size()
+        )
+    }
+
+    fn step_size(&self) -> f64 {
+        self.integrator.step_size()
+    }
+
+    fn step(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        p: &[f64],
+        q_next: &mut [f64],
+        p_next: &mut [f64],
+    ) -> Result<()> {
+        let d = self.lagrangian.dim();
+        ensure_len("q", d, q.len())?;
+        ensure_len("p", d, p.len())?;
+        ensure_len("q_next", d, q_next.len())?;
+        ensure_len("p_next", d, p_next.len())?;
+        self.integrator
+            .step(self.lagrangian, &mut self.workspace, q, p, q_next, p_next)
+            .map(|_| ())
+            .map_err(|f| GviError::NewtonFailure {
+                step: (t / self.integrator.step_size()).round().max(0.0) as usize,
+                t,
+                residual: f.residual,
+                iterations: f.iterations,
+                reason: f.reason,
+            })
+    }
+}

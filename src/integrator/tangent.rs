@@ -1,0 +1,419 @@
+//! The exact derivative of the one-step map (its tangent map), by the implicit function
+//! theorem — no finite differences.
+//!
+//! With X = (Q_1 … Q_{n−1}) the stage equations F(X; q_k, p_k) = 0 are
+//! F_0 = p_k + ∂S/∂Q_0 and F_a = ∂S/∂Q_a (a = 1 … n−2), with Q_0 = q_k. Differentiating,
+//! F_X dX + F_q dq_k + F_p dp_k = 0 where F_X = ∂²S/∂Q_a∂Q_b (rows a = 0 … n−2, columns
+//! b = 1 … n−1; the Newton matrix), F_q is the column block b = 0 of the full Hessian of the
+//! action, and F_p is the identity on the first D rows. Then dq_{k+1} = dQ_{n−1} and
+//! dp_{k+1} = Σ_b ∂²S/∂Q_{n−1}∂Q_b dQ_b (all b, including b = 0 with dQ_0 = dq_k).
+//!
+//! Numerically, dp_{k+1} is evaluated in the algebraically identical impulse form
+//! dp_{k+1} = dp_k + h Σ_j b_j (L_qq δq(c_j) + L_qv δq̇(c_j)) — the derivative of
+//! p_{k+1} = p_k + h Σ_j b_j L_q(c_j), which is how [`GalerkinIntegrator::step`] computes
+//! p_{k+1} — because it does not subtract the large kinetic terms of the row n−1 of the
+//! Hessian (DESIGN.md §4). The two agree on the solution manifold of the stage equations.
+
+use super::{GalerkinIntegrator, MAX_STEPS, Workspace};
+use crate::basis::Basis;
+use crate::error::{GviError, Result, ensure_finite, ensure_len};
+use crate::lagrangian::Lagrangian;
+use crate::quadrature::Quadrature;
+use nalgebra::DMatrix;
+
+/// The exact Jacobian of one step (q_k, p_k) ↦ (q_{k+1}, p_{k+1}) and the step's result.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepJacobian {
+    /// ∂(q_{k+1}, p_{k+1}) / ∂(q_k, p_k), 2D×2D, with coordinates ordered (q, p): rows and
+    /// columns 0…D−1 are positions, D…2D−1 momenta.
+    pub matrix: DMatrix<f64>,
+    /// q_{k+1}.
+    pub q_next: Vec<f64>,
+    /// p_{k+1}.
+    pub p_next: Vec<f64>,
+}
+
+/// Second derivatives of L along one Galerkin curve, at every quadrature node.
+struct NodeHessians {
+    /// Curve values and velocities (m×D).
+    q: Vec<f64>,
+    v: Vec<f64>,
+    /// L_qq, L_qv, L_vv per node (m×D×D, row-major blocks).
+    qq: Vec<f64>,
+    qv: Vec<f64>,
+    vv: Vec<f64>,
+}
+
+impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
+    /// Perform one step from (q, p) and return its exact Jacobian (implicit function theorem
+    /// on the stage equations, see the [module docs](self)) with the new state.
+    ///
+    /// ```
+    /// use galerkin_vi::prelude::*;
+    /// use galerkin_vi::geometry::symplecticity_defect;
+    ///
+    /// let gvi = GalerkinIntegrator::spectral(8, 0.5)?;
+    /// let kepler = Kepler::new(1.0)?;
+    /// let jac = gvi.step_jacobian(&kepler, &[0.4, 0.0], &[0.0, 2.0])?;
+    /// assert_eq!(jac.matrix.shape(), (4, 4));
+    /// // The one-step map is symplectic: JᵀΩJ = Ω to round-off.
+    /// assert!(symplecticity_defect(&jac.matrix) < 1e-11);
+    /// # Ok::<(), galerkin_vi::GviError>(())
+    /// ```
+    pub fn step_jacobian<L: Lagrangian>(
+        &self,
+        lag: &L,
+        q: &[f64],
+        p: &[f64],
+    ) -> Result<StepJacobian> {
+        self.check_state(lag, q, p)?;
+        let mut ws = self.workspace(lag)?;
+        self.step_jacobian_in(lag, &mut ws, q, p, 0)
+    }
+
+    /// [`step_jacobian`](Self::step_jacobian) with a caller-owned workspace (whose previous
+    /// curve seeds the initial guess); `step_index` only labels errors.
+    pub fn step_jacobian_in<L: Lagrangian>(
+        &self,
+        lag: &L,
+        ws: &mut Workspace,
+        q: &[f64],
+        p: &[f64],
+        step_index: usize,
+    ) -> Result<StepJacobian> {
+        self.check_state(lag, q, p)?;
+        ensure_len("workspace dimension", lag.dim(), ws.dim())?;
+        let d = ws.d;
+        let (mut q_next, mut p_next) = (vec![0.0; d], vec![0.0; d]);
+        self.step(lag, ws, q, p, &mut q_next, &mut p_next)
+            .map_err(|f| GviError::NewtonFailure {
+                step: step_index,
+                t: step_index as f64 * self.step_size(),
+                residual: f.residual,
+                iterations: f.iterations,
+                reason: f.reason,
+            })?;
+        let matrix = self.step_jacobian_from_coefficients(lag, ws.coefficients())?;
+        Ok(StepJacobian {
+            matrix,
+            q_next,
+            p_next,
+        })
+    }
+
+    /// The step Jacobian at a solved step, from that step's Galerkin coefficients (n×D
+    /// row-major, row i = Q_i, e.g. [`Trajectory::coefficients`](crate::Trajectory)`[k]`).
+    /// The coefficients must solve the stage equations; p_k does not enter the Jacobian.
+    pub fn step_jacobian_from_coefficients<L: Lagrangian>(
+        &self,
+        lag: &L,
+        coefficients: &[f64],
+    ) -> Result<DMatrix<f64>> {
+        let t = self.tables();
+        let (n, m, h, d) = (t.n, t.m, self.step_size(), lag.dim());
+        ensure_len("Galerkin coefficients", n * d, coefficients.len())?;
+        ensure_finite("Galerkin coefficients", coefficients)?;
+        let nodes = self.node_hessians(lag, coefficients);
+        let hess = self.full_action_hessian(lag, &nodes)?;
+        let nd = n * d;
+        let nu = nd - d;
+        // Solve F_X dX = −(F_q dq + F_p dp) for the 2D unit directions.
+        let fx = hess.view((0, d), (nu, nu)).clone_owned();
+        let mut rhs = DMatrix::<f64>::zeros(nu, 2 * d);
+        for r in 0..nu {
+            for s in 0..d {
+                rhs[(r, s)] = -hess[(r, s)];
+            }
+        }
+        for r in 0..d {
+            rhs[(r, d + r)] -= 1.0;
+        }
+        let dx = fx.lu().solve(&rhs).ok_or_else(|| GviError::NewtonFailure {
+            step: 0,
+            t: 0.0,
+            residual: f64::NAN,
+            iterations: 0,
+            reason: "step Jacobian: singular stage matrix".into(),
+        })?;
+        // dQ for all coefficients: dQ_0 = dq.
+        let mut dq_all = DMatrix::<f64>::zeros(nd, 2 * d);
+        for r in 0..d {
+            dq_all[(r, r)] = 1.0;
+        }
+        dq_all.view_mut((d, 0), (nu, 2 * d)).copy_from(&dx);
+        let mut jac = DMatrix::<f64>::zeros(2 * d, 2 * d);
+        jac.view_mut((0, 0), (d, 2 * d))
+            .copy_from(&dq_all.view((nu, 0), (d, 2 * d)));
+        // dp_{k+1} = dp_k + h Σ_j b_j (L_qq δq_j + L_qv δv_j).
+        for r in 0..d {
+            jac[(d + r, d + r)] = 1.0;
+        }
+        let (mut dqj, mut dvj) = (vec![0.0; d * 2 * d], vec![0.0; d * 2 * d]);
+        for j in 0..m {
+            let (phi, dphi) = (&t.phi[j * n..(j + 1) * n], &t.dphi[j * n..(j + 1) * n]);
+            dqj.iter_mut().for_each(|x| *x = 0.0);
+            dvj.iter_mut().for_each(|x| *x = 0.0);
+            for i in 0..n {
+                let (a, b) = (phi[i], dphi[i] / h);
+                for s in 0..d {
+                    for c in 0..2 * d {
+                        let x = dq_all[(i * d + s, c)];
+                        dqj[s * 2 * d + c] += a * x;
+                        dvj[s * 2 * d + c] += b * x;
+                    }
+                }
+            }
+            let w = h * t.weights[j];
+            let (qq, qv) = (
+                &nodes.qq[j * d * d..(j + 1) * d * d],
+                &nodes.qv[j * d * d..(j + 1) * d * d],
+            );
+            for r in 0..d {
+                for c in 0..2 * d {
+                    let mut acc = 0.0;
+                    for s in 0..d {
+                        acc +=
+                            qq[r * d + s] * dqj[s * 2 * d + c] + qv[r * d + s] * dvj[s * 2 * d + c];
+                    }
+                    jac[(d + r, c)] += w * acc;
+                }
+            }
+        }
+        if jac.iter().any(|x| !x.is_finite()) {
+            return Err(GviError::NonFinite {
+                what: "step Jacobian".into(),
+                value: f64::NAN,
+            });
+        }
+        Ok(jac)
+    }
+
+    /// Curve and second derivatives of L at every node for the given coefficients.
+    fn node_hessians<L: Lagrangian>(&self, lag: &L, coeffs: &[f64]) -> NodeHessians {
+        let t = self.tables();
+        let (n, m, h, d) = (t.n, t.m, self.step_size(), lag.dim());
+        let mut out = NodeHessians {
+            q: vec![0.0; m * d],
+            v: vec![0.0; m * d],
+            qq: vec![0.0; m * d * d],
+            qv: vec![0.0; m * d * d],
+            vv: vec![0.0; m * d * d],
+        };
+        let separable = lag.mass_matrix().is_some();
+        for j in 0..m {
+            let (phi, dphi) = (&t.phi[j * n..(j + 1) * n], &t.dphi[j * n..(j + 1) * n]);
+            let (qj, vj) = (
+                &mut out.q[j * d..(j + 1) * d],
+                &mut out.v[j * d..(j + 1) * d],
+            );
+            for i in 0..n {
+                for r in 0..d {
+                    qj[r] += phi[i] * coeffs[i * d + r];
+                    vj[r] += dphi[i] / h * coeffs[i * d + r];
+                }
+            }
+            let blk = j * d * d..(j + 1) * d * d;
+            if separable {
+                // L_qv = 0; the constant L_vv = M enters through the kinetic matrix.
+                lag.force_jacobian(qj, &mut out.qq[blk]);
+            } else {
+                lag.hessian(
+                    qj,
+                    vj,
+                    &mut out.qq[blk.clone()],
+                    &mut out.qv[blk.clone()],
+                    &mut out.vv[blk],
+                );
+            }
+        }
+        out
+    }
+
+    /// The full (nD)×(nD) Hessian ∂²S/∂Q_a∂Q_b of the discrete action (the same formulas as
+    /// the Newton Jacobian, over all rows and columns).
+    fn full_action_hessian<L: Lagrangian>(
+        &self,
+        lag: &L,
+        nodes: &NodeHessians,
+    ) -> Result<DMatrix<f64>> {
+        let t = self.tables();
+        let (n, m, h, d) = (t.n, t.m, self.step_size(), lag.dim());
+        let nd = n * d;
+        let mut hess = DMatrix::<f64>::zeros(nd, nd);
+        let mass = lag.mass_matrix();
+        if let Some(mass) = &mass {
+            if mass.shape() != (d, d) {
+                return Err(GviError::DimensionMismatch {
+                    what: "mass matrix".into(),
+                    expected: d,
+                    got: mass.nrows().max(mass.ncols()),
+                });
+            }
+            for a in 0..n {
+                for b in 0..n {
+                    let k = t.kinetic[a * n + b] / h;
+                    for r in 0..d {
+                        for s in 0..d {
+                            hess[(a * d + r, b * d + s)] = k * mass[(r, s)];
+                        }
+                    }
+                }
+            }
+        }
+        for j in 0..m {
+            let w = t.weights[j];
+            let (phi, dphi) = (&t.phi[j * n..(j + 1) * n], &t.dphi[j * n..(j + 1) * n]);
+            let blk = j * d * d..(j + 1) * d * d;
+            let (qq, qv, vv) = (
+                &nodes.qq[blk.clone()],
+                &nodes.qv[blk.clone()],
+                &nodes.vv[blk],
+            );
+            for a in 0..n {
+                let (pa, da) = (phi[a], dphi[a]);
+                for b in 0..n {
+                    let (pb, db) = (phi[b], dphi[b]);
+                    let cqq = w * h * pa * pb;
+                    if mass.is_some() {
+                        for r in 0..d {
+                            for s in 0..d {
+                                hess[(a * d + r, b * d + s)] += cqq * qq[r * d + s];
+                            }
+                        }
+                        continue;
+                    }
+                    let (cqv, cvq, cvv) = (w * pa * db, w * da * pb, w * da * db / h);
+                    for r in 0..d {
+                        for s in 0..d {
+                            hess[(a * d + r, b * d + s)] += cqq * qq[r * d + s]
+                                + cqv * qv[r * d + s]
+                                + cvq * qv[s * d + r]
+                                + cvv * vv[r * d + s];
+                        }
+                    }
+                }
+            }
+        }
+        Ok(hess)
+    }
+
+    /// The tangent map along a run of `steps` steps from (q0, p0): the cumulative products
+    /// Φ_k = J_{k−1} ⋯ J_0 for k = 1 … steps (each 2D×2D, order (q, p)), i.e. the solution of
+    /// the discrete variational equations.
+    pub fn tangent_map<L: Lagrangian>(
+        &self,
+        lag: &L,
+        q0: &[f64],
+        p0: &[f64],
+        steps: usize,
+    ) -> Result<Vec<DMatrix<f64>>> {
+        check_steps(steps)?;
+        self.check_state(lag, q0, p0)?;
+        let mut ws = self.workspace(lag)?;
+        let (mut q, mut p) = (q0.to_vec(), p0.to_vec());
+        let d = lag.dim();
+        let mut phi = DMatrix::<f64>::identity(2 * d, 2 * d);
+        let mut out = Vec::with_capacity(steps.min(1 << 16));
+        for k in 0..steps {
+            let sj = self.step_jacobian_in(lag, &mut ws, &q, &p, k)?;
+            phi = &sj.matrix * &phi;
+            out.push(phi.clone());
+            q = sj.q_next;
+            p = sj.p_next;
+        }
+        Ok(out)
+    }
+
+    /// Estimates of all 2D Lyapunov exponents of the discrete flow from (q0, p0) over
+    /// `steps` steps (time steps·h), by re-orthonormalising the tangent map with a QR
+    /// factorisation every step (Benettin's method). Sorted in decreasing order; for a
+    /// symplectic map they come in ± pairs (to the accuracy of the finite-time estimate).
+    pub fn lyapunov_estimate<L: Lagrangian>(
+        &self,
+        lag: &L,
+        q0: &[f64],
+        p0: &[f64],
+        steps: usize,
+    ) -> Result<Vec<f64>> {
+        check_steps(steps)?;
+        self.check_state(lag, q0, p0)?;
+        let mut ws = self.workspace(lag)?;
+        let (mut q, mut p) = (q0.to_vec(), p0.to_vec());
+        let d2 = 2 * lag.dim();
+        let mut basis = DMatrix::<f64>::identity(d2, d2);
+        let mut sums = vec![0.0; d2];
+        for k in 0..steps {
+            let sj = self.step_jacobian_in(lag, &mut ws, &q, &p, k)?;
+            let qr = (&sj.matrix * &basis).qr();
+            let r = qr.r();
+            for (i, s) in sums.iter_mut().enumerate() {
+                *s += r[(i, i)].abs().ln();
+            }
+            basis = qr.q();
+            q = sj.q_next;
+            p = sj.p_next;
+        }
+        let time = steps as f64 * self.step_size();
+        let mut exps: Vec<f64> = sums.iter().map(|s| s / time).collect();
+        exps.sort_by(|a, b| b.total_cmp(a));
+        Ok(exps)
+    }
+}
+
+fn check_steps(steps: usize) -> Result<()> {
+    if steps == 0 || steps > MAX_STEPS {
+        return Err(GviError::InvalidStepCount {
+            steps,
+            reason: format!("need 1 ≤ steps ≤ {MAX_STEPS}"),
+        });
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::newton::Mode;
+    use super::*;
+    use crate::systems::{Kepler, Pendulum};
+
+    /// The stage block of the full action Hessian is the Newton matrix of `jacobian` (both
+    /// evaluated on the converged curve), for the separable and the general path.
+    fn check_block<L: Lagrangian>(lag: &L, q: &[f64], p: &[f64]) {
+        let gvi = GalerkinIntegrator::spectral(7, 0.4).unwrap();
+        let mut ws = gvi.workspace(lag).unwrap();
+        let d = lag.dim();
+        let (mut qn, mut pn) = (vec![0.0; d], vec![0.0; d]);
+        gvi.step(lag, &mut ws, q, p, &mut qn, &mut pn).unwrap();
+        let nodes = gvi.node_hessians(lag, ws.coefficients());
+        let hess = gvi.full_action_hessian(lag, &nodes).unwrap();
+        gvi.jacobian(lag, &mut ws, Mode::InitialValue);
+        let nu = 6 * d;
+        for r in 0..nu {
+            for c in 0..nu {
+                let (a, b) = (hess[(r, c + d)], ws.jac[r * nu + c]);
+                assert!(
+                    (a - b).abs() <= 1e-12 * (1.0 + a.abs()),
+                    "({r},{c}): {a} vs {b}"
+                );
+            }
+        }
+    }
+
+    struct General(Kepler);
+    impl Lagrangian for General {
+        fn dim(&self) -> usize {
+            2
+        }
+        fn lagrangian<T: num_dual::DualNum<Primitive = f64> + Copy>(&self, q: &[T], v: &[T]) -> T {
+            self.0.lagrangian(q, v) + (q[0] * v[1] - q[1] * v[0]) * 0.3
+        }
+    }
+
+    #[test]
+    fn full_hessian_contains_the_newton_matrix() {
+        let k = Kepler::new(1.0).unwrap();
+        check_block(&k, &[0.4, 0.0], &[0.0, 2.0]);
+        check_block(&Pendulum::unit(), &[1.0], &[0.3]);
+        check_block(&General(k), &[0.4, 0.0], &[0.0, 2.0]);
+    }
+}
