@@ -1,5 +1,6 @@
 //! The `gvi` command-line tool.
 
+mod check;
 mod run;
 mod study;
 
@@ -18,6 +19,9 @@ pub struct Cli {
 enum Command {
     /// Integrate a scene (built-in name or TOML path) and write its table (CSV or JSON).
     Run(Box<run::RunArgs>),
+    /// Geometric diagnostics: symplecticity defect of every step's exact Jacobian, energy and
+    /// momentum-map errors at step ends and along the Galerkin curves.
+    Check(Box<run::RunArgs>),
     /// n- or h-refinement sweep with the fitted rate (CSV, JSON, SVG in --out).
     Refine(Box<study::RefineArgs>),
     /// Regenerate the paper's experiments (charts and summary.md in --out).
@@ -30,6 +34,7 @@ enum Command {
 pub fn main_with(cli: Cli) -> Result<(), GviError> {
     match cli.command {
         Command::Run(args) => run::run(*args),
+        Command::Check(args) => check::run_check(*args),
         Command::Refine(args) => study::run_refine(*args),
         Command::Reproduce(args) => study::run_reproduce(args),
         Command::Scenes => {

@@ -1,7 +1,7 @@
 //! The geometric health check of a run (`gvi check SCENE`).
 
 use super::{
-    MomentumMap, Rotation, energy_along_curves, energy_at_step_ends, momentum_along_curves,
+    MomentumMap, energy_along_curves, energy_at_step_ends, momentum_along_curves,
     momentum_at_step_ends, relative_symplecticity_defect, symplecticity_defect,
 };
 use crate::basis::Basis;
@@ -32,16 +32,7 @@ impl fmt::Debug for NamedMomentumMap {
 /// problem is rotation invariant (angular momentum); the harmonic oscillator and the pendulum
 /// (one degree of freedom, not invariant under translation) have none listed.
 pub fn known_symmetries<S: System + ?Sized>(system: &S) -> Vec<NamedMomentumMap> {
-    let mut out = Vec::new();
-    if system.name() == "kepler" && system.dim() == 2 {
-        if let Ok(rot) = Rotation::planar(2, 1, 0, 1) {
-            out.push(NamedMomentumMap {
-                name: "angular_momentum".into(),
-                map: Box::new(rot),
-            });
-        }
-    }
-    out
+    system.symmetries()
 }
 
 /// Drift of one momentum map over a run.

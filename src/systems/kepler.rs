@@ -85,6 +85,17 @@ impl System for Kepler {
         out[0] = 0.5 * (p[0] * p[0] + p[1] * p[1]) - self.mu / r;
         out[1] = q[0] * p[1] - q[1] * p[0];
     }
+    fn symmetries(&self) -> Vec<crate::geometry::NamedMomentumMap> {
+        // L is invariant under rotations of the plane: angular momentum q × p.
+        crate::geometry::Rotation::planar(2, 1, 0, 1)
+            .map(|rot| {
+                vec![crate::geometry::NamedMomentumMap {
+                    name: "angular_momentum".into(),
+                    map: Box::new(rot),
+                }]
+            })
+            .unwrap_or_default()
+    }
     fn exact_solution(&self, t0: f64, q0: &[f64], p0: &[f64]) -> Result<Option<ExactSolution>> {
         ensure_len("q0", 2, q0.len())?;
         ensure_len("p0", 2, p0.len())?;

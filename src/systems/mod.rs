@@ -30,6 +30,12 @@ pub trait System: Lagrangian {
     /// (length `invariant_names().len()`).
     fn invariants(&self, q: &[f64], p: &[f64], out: &mut [f64]);
 
+    /// The continuous symmetries of the Lagrangian as momentum maps (discrete Noether: the
+    /// integrator conserves them at step ends). Default: none.
+    fn symmetries(&self) -> Vec<crate::geometry::NamedMomentumMap> {
+        Vec::new()
+    }
+
     /// The exact solution through (q0, p0) at t0, if this system has one in closed form.
     /// `Ok(None)` when none is known for this system or this initial state.
     fn exact_solution(&self, t0: f64, q0: &[f64], p0: &[f64]) -> Result<Option<ExactSolution>> {

@@ -1,0 +1,27 @@
+//! `gvi check SCENE`: symplecticity, energy and momentum-map diagnostics of a run.
+
+use super::run::{RunArgs, apply_overrides};
+use galerkin_vi::GviError;
+use galerkin_vi::geometry::{CheckReport, check_report};
+use galerkin_vi::integrator::GalerkinIntegrator;
+use galerkin_vi::run::{SystemVisitor, visit_system};
+use galerkin_vi::scene::Scene;
+use galerkin_vi::systems::System;
+
+pub fn run_check(args: RunArgs) -> Result<(), GviError> {
+    let mut scene = Scene::load(&args.scene)?;
+    apply_overrides(&mut scene, &args)?;
+    struct Check<'a>(&'a Scene);
+    impl SystemVisitor for Check<'_> {
+        type Output = CheckReport;
+        fn visit<S: System + Sync>(self, system: &S) -> Result<CheckReport, GviError> {
+            let m = &self.0.method;
+            let gvi =
+                GalerkinIntegrator::from_kinds(m.basis, m.n, m.quadrature, m.quad_points, m.h)?;
+            check_report(&gvi, system, &self.0.initial.q, &self.0.initial.p, m.steps)
+        }
+    }
+    let report = visit_system(&scene.system, Check(&scene))?;
+    println!("{report}");
+    Ok(())
+}
