@@ -83,12 +83,14 @@ impl Lu {
                 self.piv.swap(k, p);
             }
             let pivot = a[k * n + k];
-            for r in k + 1..n {
-                let f = a[r * n + k] / pivot;
-                a[r * n + k] = f;
+            let (top, below) = a.split_at_mut((k + 1) * n);
+            let pivot_row = &top[k * n + k + 1..(k + 1) * n];
+            for row in below.chunks_exact_mut(n) {
+                let f = row[k] / pivot;
+                row[k] = f;
                 if f != 0.0 {
-                    for c in k + 1..n {
-                        a[r * n + c] -= f * a[k * n + c];
+                    for (x, &y) in row[k + 1..].iter_mut().zip(pivot_row) {
+                        *x -= f * y;
                     }
                 }
             }
@@ -126,15 +128,100 @@ impl Lu {
         let n = self.n;
         let mut col = vec![0.0; n];
         let mut scratch = vec![0.0; n];
+        self.solve_columns_with(b, cols, &mut col, &mut scratch);
+    }
+
+    /// [`solve_columns_in_place`](Lu::solve_columns_in_place) with caller-provided scratch
+    /// vectors of length n (no allocation).
+    pub fn solve_columns_with(
+        &self,
+        b: &mut [f64],
+        cols: usize,
+        col: &mut [f64],
+        scratch: &mut [f64],
+    ) {
+        let n = self.n;
         for c in 0..cols {
             for i in 0..n {
                 col[i] = b[i * cols + c];
             }
-            self.solve_in_place(&mut col, &mut scratch);
+            self.solve_in_place(col, scratch);
             for i in 0..n {
                 b[i * cols + c] = col[i];
             }
         }
+    }
+}
+
+/// A strided matrix operand for [`gemm`]: element (i, j) is `data[offset + i·row_stride +
+/// j·col_stride]`.
+#[derive(Debug, Clone, Copy)]
+pub struct Strided {
+    /// Offset of element (0, 0).
+    pub offset: usize,
+    /// Distance between rows.
+    pub row_stride: usize,
+    /// Distance between columns.
+    pub col_stride: usize,
+}
+
+impl Strided {
+    /// Dense row-major storage with `cols` columns, starting at `offset`.
+    pub fn rows(offset: usize, cols: usize) -> Self {
+        Strided {
+            offset,
+            row_stride: cols,
+            col_stride: 1,
+        }
+    }
+
+    fn last(&self, rows: usize, cols: usize) -> usize {
+        self.offset + (rows.max(1) - 1) * self.row_stride + (cols.max(1) - 1) * self.col_stride
+    }
+}
+
+/// C ← α A B + β C for A (m×k), B (k×n), C (m×n) given as strided views into slices — a safe,
+/// bounds-checked front end to `matrixmultiply::dgemm`. Panics only on inconsistent strides
+/// (a programming error inside the crate, never on user data).
+#[allow(clippy::too_many_arguments)]
+pub fn gemm(
+    m: usize,
+    k: usize,
+    n: usize,
+    alpha: f64,
+    a: &[f64],
+    sa: Strided,
+    b: &[f64],
+    sb: Strided,
+    beta: f64,
+    c: &mut [f64],
+    sc: Strided,
+) {
+    if m == 0 || n == 0 {
+        return;
+    }
+    assert!(k == 0 || sa.last(m, k) < a.len(), "gemm: A out of bounds");
+    assert!(k == 0 || sb.last(k, n) < b.len(), "gemm: B out of bounds");
+    assert!(sc.last(m, n) < c.len(), "gemm: C out of bounds");
+    // SAFETY: every element read or written lies inside its slice (checked above); C is a
+    // distinct mutable slice, so it cannot alias A or B.
+    unsafe {
+        matrixmultiply::dgemm(
+            m,
+            k,
+            n,
+            alpha,
+            a.as_ptr().add(sa.offset),
+            sa.row_stride as isize,
+            sa.col_stride as isize,
+            b.as_ptr().add(sb.offset),
+            sb.row_stride as isize,
+            sb.col_stride as isize,
+            beta,
+            c.as_mut_ptr().add(sc.offset),
+            sc.row_stride as isize,
+            sc.col_stride as isize,
+        );
     }
 }
 

@@ -200,6 +200,18 @@ impl CurveFit {
     pub fn values_to_coefficients(&self, values: &mut [f64], dim: usize) {
         self.lu.solve_columns_in_place(values, dim);
     }
+
+    /// As [`values_to_coefficients`](CurveFit::values_to_coefficients), with two scratch
+    /// vectors of length n (no allocation).
+    pub fn values_to_coefficients_with(
+        &self,
+        values: &mut [f64],
+        dim: usize,
+        col: &mut [f64],
+        scratch: &mut [f64],
+    ) {
+        self.lu.solve_columns_with(values, dim, col, scratch);
+    }
 }
 
 fn ensure_len_nodes(n: usize, got: usize) -> Result<()> {

@@ -73,6 +73,8 @@ pub(crate) struct Tables {
     /// i.e. the previous curve continued to τ ∈ [1, 2] and re-fitted.
     /// `None` when the continuation overflows (very large n): extrapolation is then skipped.
     pub extrapolate: Option<Vec<f64>>,
+    /// Interpolation of curve values at the basis's interpolation nodes.
+    pub fit: CurveFit,
 }
 
 impl GalerkinIntegrator<ChebyshevLagrange, GaussLegendre> {
@@ -414,6 +416,7 @@ impl Tables {
             ramp,
             dphi_end: d1,
             extrapolate,
+            fit,
         })
     }
 }

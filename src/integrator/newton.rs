@@ -4,6 +4,7 @@ use super::{GalerkinIntegrator, Tables, Workspace};
 use crate::basis::Basis;
 use crate::error::{GviError, Result, ensure_finite, ensure_len};
 use crate::lagrangian::Lagrangian;
+use crate::linalg::{Strided, gemm};
 use crate::quadrature::Quadrature;
 use serde::{Deserialize, Serialize};
 
@@ -18,6 +19,10 @@ pub enum InitialGuess {
     Linear,
     /// The previous step's Galerkin curve continued over the new step.
     Extrapolate,
+    /// A cheap explicit predictor: classical Runge–Kutta 4 on the Euler–Lagrange equations
+    /// q̈ = M⁻¹ L_q(q) over the step (separable Lagrangians only), sampled at the basis's
+    /// interpolation nodes by cubic Hermite interpolation and fitted in the basis.
+    Predictor,
     /// Whichever of the three has the smallest stage residual (with very large steps
     /// extrapolation can be worse than a constant guess, so it is measured, not assumed).
     #[default]
@@ -37,6 +42,8 @@ pub struct NewtonOptions {
     pub floor_tolerance: f64,
     /// How each step's iteration starts.
     pub initial_guess: InitialGuess,
+    /// Substeps of the RK4 predictor guess (`None`: max(n, 8)).
+    pub predictor_substeps: Option<usize>,
 }
 
 impl Default for NewtonOptions {
@@ -46,6 +53,7 @@ impl Default for NewtonOptions {
             tolerance: 1e-15,
             floor_tolerance: 1e-10,
             initial_guess: InitialGuess::BestResidual,
+            predictor_substeps: None,
         }
     }
 }
@@ -100,32 +108,31 @@ fn max_abs(x: &[f64]) -> f64 {
 }
 
 impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
-    /// Curve values q(c_j) and velocities q̇(c_j) at every quadrature node from `coeffs`.
+    /// Curve values q(c_j) and velocities q̇(c_j) at every quadrature node from `coeffs`:
+    /// q = Φ Q and q̇ = Φ' Q / h as two matrix products.
     fn evaluate_curve(&self, ws: &mut Workspace, coeffs_from_cand: bool) {
         let t = self.tables();
-        let (n, d, h) = (t.n, ws.d, self.step_size());
+        let (n, m, d, h) = (t.n, t.m, ws.d, self.step_size());
         let coeffs = if coeffs_from_cand {
             &ws.cand
         } else {
             &ws.coeffs
         };
-        for j in 0..t.m {
-            let (phi, dphi) = (&t.phi[j * n..(j + 1) * n], &t.dphi[j * n..(j + 1) * n]);
-            let (qj, vj) = (
-                &mut ws.qj[j * d..(j + 1) * d],
-                &mut ws.vj[j * d..(j + 1) * d],
-            );
-            qj.iter_mut().for_each(|x| *x = 0.0);
-            vj.iter_mut().for_each(|x| *x = 0.0);
-            for i in 0..n {
-                let qi = &coeffs[i * d..(i + 1) * d];
-                let (a, b) = (phi[i], dphi[i] / h);
-                for r in 0..d {
-                    qj[r] += a * qi[r];
-                    vj[r] += b * qi[r];
-                }
-            }
-        }
+        let (rn, rd) = (Strided::rows(0, n), Strided::rows(0, d));
+        gemm(m, n, d, 1.0, &t.phi, rn, coeffs, rd, 0.0, &mut ws.qj, rd);
+        gemm(
+            m,
+            n,
+            d,
+            1.0 / h,
+            &t.dphi,
+            rn,
+            coeffs,
+            rd,
+            0.0,
+            &mut ws.vj,
+            rd,
+        );
     }
 
     /// ∂S/∂Q_a for every a into `ws.grad`, from the coefficients in `ws.coeffs` (or
@@ -149,26 +156,46 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                     ws.mq[b * d + r] = s;
                 }
             }
-            for a in 0..n {
-                for b in 0..n {
-                    let k = t.kinetic[a * n + b] / h;
-                    if k != 0.0 {
-                        for r in 0..d {
-                            ws.grad[a * d + r] += k * ws.mq[b * d + r];
-                        }
-                    }
-                }
-            }
+            let rd = Strided::rows(0, d);
+            gemm(
+                n,
+                n,
+                d,
+                1.0 / h,
+                &t.kinetic,
+                Strided::rows(0, n),
+                &ws.mq,
+                rd,
+                0.0,
+                &mut ws.grad,
+                rd,
+            );
             for j in 0..m {
                 lag.force(&ws.qj[j * d..(j + 1) * d], &mut ws.lq[j * d..(j + 1) * d]);
                 let w = t.weights[j] * h;
-                for a in 0..n {
-                    let f = w * t.phi[j * n + a];
-                    for r in 0..d {
-                        ws.grad[a * d + r] += f * ws.lq[j * d + r];
-                    }
+                for r in 0..d {
+                    ws.scaled[j * d + r] = w * ws.lq[j * d + r];
                 }
             }
+            // grad += Φᵀ (h b ∘ L_q): the transpose is a strided view of the table.
+            let phi_t = Strided {
+                offset: 0,
+                row_stride: 1,
+                col_stride: n,
+            };
+            gemm(
+                n,
+                m,
+                d,
+                1.0,
+                &t.phi,
+                phi_t,
+                &ws.scaled,
+                rd,
+                1.0,
+                &mut ws.grad,
+                rd,
+            );
         } else {
             for j in 0..m {
                 let (lq, lv) = (
@@ -331,6 +358,81 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         }
     }
 
+    /// The RK4 predictor into `ws.cand`; false when unavailable (non-separable Lagrangian) or
+    /// not finite.
+    fn predict<L: Lagrangian>(&self, lag: &L, ws: &mut Workspace, q: &[f64], p: &[f64]) -> bool {
+        let Some(sep) = &ws.separable else {
+            return false;
+        };
+        let t = self.tables();
+        let (n, d, h) = (t.n, ws.d, self.step_size());
+        let sub = ws.rk_substeps;
+        let dt = h / sub as f64;
+        let w = 2 * d;
+        // State y = (q, v) at every substep end, v = M⁻¹p at the start.
+        ws.rk_states[..d].copy_from_slice(q);
+        ws.vel.copy_from_slice(p);
+        sep.mass_lu
+            .solve_in_place(&mut ws.vel, &mut ws.small_scratch);
+        ws.rk_states[d..w].copy_from_slice(&ws.vel);
+        for s in 0..sub {
+            let (done, rest) = ws.rk_states.split_at_mut((s + 1) * w);
+            let y0 = &done[s * w..];
+            let y1 = &mut rest[..w];
+            // k_i = f(y0 + c_i dt k_{i−1}); f(q, v) = (v, M⁻¹ L_q(q)).
+            for stage in 0..4 {
+                let c = match stage {
+                    0 => 0.0,
+                    3 => dt,
+                    _ => 0.5 * dt,
+                };
+                for r in 0..w {
+                    let prev = if stage == 0 {
+                        0.0
+                    } else {
+                        ws.rk_k[(stage - 1) * w + r]
+                    };
+                    ws.rk_tmp[r] = y0[r] + c * prev;
+                }
+                let k = &mut ws.rk_k[stage * w..(stage + 1) * w];
+                k[..d].copy_from_slice(&ws.rk_tmp[d..w]);
+                lag.force(&ws.rk_tmp[..d], &mut k[d..w]);
+                sep.mass_lu
+                    .solve_in_place(&mut k[d..w], &mut ws.small_scratch);
+            }
+            for r in 0..w {
+                let k = &ws.rk_k;
+                y1[r] =
+                    y0[r] + dt / 6.0 * (k[r] + 2.0 * k[w + r] + 2.0 * k[2 * w + r] + k[3 * w + r]);
+            }
+        }
+        // Cubic Hermite interpolation at the interpolation nodes, then fit coefficients.
+        for (k, &x) in t.fit.nodes().iter().enumerate() {
+            let pos = (x * sub as f64).clamp(0.0, sub as f64);
+            let i = (pos.floor() as usize).min(sub - 1);
+            let s = pos - i as f64;
+            let (s2, s3) = (s * s, s * s * s);
+            let (h00, h10, h01, h11) = (
+                2.0 * s3 - 3.0 * s2 + 1.0,
+                s3 - 2.0 * s2 + s,
+                -2.0 * s3 + 3.0 * s2,
+                s3 - s2,
+            );
+            let (a, b) = (
+                &ws.rk_states[i * w..(i + 1) * w],
+                &ws.rk_states[(i + 1) * w..(i + 2) * w],
+            );
+            for r in 0..d {
+                ws.cand[k * d + r] =
+                    h00 * a[r] + h10 * dt * a[d + r] + h01 * b[r] + h11 * dt * b[d + r];
+            }
+        }
+        t.fit
+            .values_to_coefficients_with(&mut ws.cand, d, &mut ws.fit_col, &mut ws.fit_scratch);
+        let _ = n;
+        true
+    }
+
     /// Fill `ws.cand` with the guess of kind `g`; false if that guess is unavailable.
     fn make_guess<L: Lagrangian>(
         &self,
@@ -367,6 +469,11 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                     for r in 0..d {
                         ws.cand[i * d + r] = t.unit[i] * q[r] + t.ramp[i] * h * ws.vel[r];
                     }
+                }
+            }
+            InitialGuess::Predictor => {
+                if !self.predict(lag, ws, q, p) {
+                    return false;
                 }
             }
             InitialGuess::Extrapolate => {
@@ -411,6 +518,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let mut evals = 0;
         let mut best = (InitialGuess::Constant, f64::INFINITY);
         for g in [
+            InitialGuess::Predictor,
             InitialGuess::Extrapolate,
             InitialGuess::Linear,
             InitialGuess::Constant,
@@ -626,32 +734,24 @@ fn gram_accumulate(
     s: usize,
 ) {
     let size = cnt * d;
-    // Bounds of every element the product touches (checked, so the unsafe call below only
-    // reads and writes inside the slices):
-    assert!(gram.len() >= cnt * m && phi.len() >= m * n && u0 + cnt <= n);
-    assert!(jac.len() >= size * size && r < d && s < d);
-    // SAFETY: A = gram is cnt×m with strides (m, 1): max index (cnt−1)m + m−1 < cnt·m.
-    // B = phi[u0..] is m×cnt with strides (n, 1): max index u0 + (m−1)n + cnt−1 < m·n.
-    // C = jac[r·size + s..] is cnt×cnt with strides (d·size, d): max index
-    // r·size + s + (cnt−1)(d·size) + (cnt−1)d ≤ size² − 1. C does not alias A or B.
-    unsafe {
-        matrixmultiply::dgemm(
-            cnt,
-            m,
-            cnt,
-            1.0,
-            gram.as_ptr(),
-            m as isize,
-            1,
-            phi.as_ptr().add(u0),
-            n as isize,
-            1,
-            1.0,
-            jac.as_mut_ptr().add(r * size + s),
-            (d * size) as isize,
-            d as isize,
-        );
-    }
+    let c = Strided {
+        offset: r * size + s,
+        row_stride: d * size,
+        col_stride: d,
+    };
+    gemm(
+        cnt,
+        m,
+        cnt,
+        1.0,
+        gram,
+        Strided::rows(0, m),
+        phi,
+        Strided::rows(u0, n),
+        1.0,
+        jac,
+        c,
+    );
 }
 
 /// A step's Newton failure, as returned by [`GalerkinIntegrator::step`] (and turned into

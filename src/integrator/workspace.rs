@@ -40,6 +40,8 @@ pub struct Workspace {
     pub(crate) hvv: Vec<f64>,
     /// ∂S/∂Q_a for every a (n×D).
     pub(crate) grad: Vec<f64>,
+    /// Weighted forces h b_j L_q(c_j) (m×D).
+    pub(crate) scaled: Vec<f64>,
     /// M (Q_b − u_b q_k) for the separable residual (n×D).
     pub(crate) mq: Vec<f64>,
     /// Newton matrix, its factorisation, right-hand side and scratch.
@@ -47,6 +49,14 @@ pub struct Workspace {
     pub(crate) lu: Lu,
     pub(crate) rhs: Vec<f64>,
     pub(crate) scratch: Vec<f64>,
+    /// RK4 predictor: substeps, states at substep ends ((S+1)×2D), stages (4×2D), stage input.
+    pub(crate) rk_substeps: usize,
+    pub(crate) rk_states: Vec<f64>,
+    pub(crate) rk_k: Vec<f64>,
+    pub(crate) rk_tmp: Vec<f64>,
+    /// Scratch for fitting values to coefficients (n each).
+    pub(crate) fit_col: Vec<f64>,
+    pub(crate) fit_scratch: Vec<f64>,
     /// A velocity (D) and a small D×D solver for inverse Legendre transforms.
     pub(crate) vel: Vec<f64>,
     pub(crate) small: Lu,
@@ -143,10 +153,20 @@ impl Workspace {
             hvv: vec![0.0; d * d],
             grad: vec![0.0; n * d],
             mq: vec![0.0; n * d],
+            scaled: vec![0.0; m * d],
             jac: vec![0.0; nu * nu],
             lu: Lu::with_capacity(nu),
             rhs: vec![0.0; nu],
             scratch: vec![0.0; nu],
+            rk_substeps: gvi.options().predictor_substeps.unwrap_or(n.max(8)),
+            rk_states: vec![
+                0.0;
+                (gvi.options().predictor_substeps.unwrap_or(n.max(8)) + 1) * 2 * d
+            ],
+            rk_k: vec![0.0; 8 * d],
+            rk_tmp: vec![0.0; 2 * d],
+            fit_col: vec![0.0; n],
+            fit_scratch: vec![0.0; n],
             vel: vec![0.0; d],
             small: Lu::with_capacity(d),
             small_rhs: vec![0.0; d],
