@@ -9,8 +9,14 @@
 //! builds an [`AnyBasis`], which implements [`Basis`] by dispatching to the concrete type.
 
 mod chebyshev;
+mod fourier;
+mod hermite;
+mod legendre;
 
 pub use chebyshev::ChebyshevLagrange;
+pub use fourier::Fourier;
+pub use hermite::Hermite;
+pub use legendre::Legendre;
 
 use crate::error::{GviError, Result};
 use serde::{Deserialize, Serialize};
@@ -69,16 +75,30 @@ pub enum BasisKind {
     /// Lagrange polynomials at Chebyshev–Lobatto points (the paper's spectral basis).
     #[default]
     Chebyshev,
+    /// Modal boundary-adapted (integrated) Legendre polynomials.
+    Legendre,
+    /// Hermite–Birkhoff: end values and derivatives plus interior nodal values (n ≥ 4).
+    Hermite,
+    /// Linear end functions plus sines sin(kπτ) (not polynomial).
+    Fourier,
 }
 
 impl BasisKind {
     /// All kinds, for sweeps.
-    pub const ALL: [BasisKind; 1] = [BasisKind::Chebyshev];
+    pub const ALL: [BasisKind; 4] = [
+        BasisKind::Chebyshev,
+        BasisKind::Legendre,
+        BasisKind::Hermite,
+        BasisKind::Fourier,
+    ];
 
     /// The name used in scene files and on the command line.
     pub fn as_str(self) -> &'static str {
         match self {
             BasisKind::Chebyshev => "chebyshev",
+            BasisKind::Legendre => "legendre",
+            BasisKind::Hermite => "hermite",
+            BasisKind::Fourier => "fourier",
         }
     }
 
@@ -86,6 +106,9 @@ impl BasisKind {
     pub fn build(self, n: usize) -> Result<AnyBasis> {
         Ok(match self {
             BasisKind::Chebyshev => AnyBasis::Chebyshev(ChebyshevLagrange::new(n)?),
+            BasisKind::Legendre => AnyBasis::Legendre(Legendre::new(n)?),
+            BasisKind::Hermite => AnyBasis::Hermite(Hermite::new(n)?),
+            BasisKind::Fourier => AnyBasis::Fourier(Fourier::new(n)?),
         })
     }
 }
@@ -117,12 +140,21 @@ impl std::str::FromStr for BasisKind {
 pub enum AnyBasis {
     /// See [`ChebyshevLagrange`].
     Chebyshev(ChebyshevLagrange),
+    /// See [`Legendre`].
+    Legendre(Legendre),
+    /// See [`Hermite`].
+    Hermite(Hermite),
+    /// See [`Fourier`].
+    Fourier(Fourier),
 }
 
 macro_rules! dispatch {
     ($self:ident, $b:ident => $e:expr) => {
         match $self {
             AnyBasis::Chebyshev($b) => $e,
+            AnyBasis::Legendre($b) => $e,
+            AnyBasis::Hermite($b) => $e,
+            AnyBasis::Fourier($b) => $e,
         }
     };
 }
