@@ -301,3 +301,23 @@ pub(crate) mod contract_tests {
         worst
     }
 }
+
+#[cfg(test)]
+mod kind_tests {
+    use super::*;
+
+    #[test]
+    fn kinds_round_trip_and_build() {
+        for kind in BasisKind::ALL {
+            assert_eq!(kind.as_str().parse::<BasisKind>().unwrap(), kind);
+            let json = serde_json::to_string(&kind).unwrap();
+            assert_eq!(json, format!("\"{}\"", kind.as_str()));
+            let b = kind.build(6).unwrap();
+            assert_eq!((b.kind(), b.len(), b.name()), (kind, 6, kind.as_str()));
+            // AnyBasis dispatches eval and the contract holds through it.
+            assert!(contract_tests::check_contract(&b) < 1e-6);
+        }
+        assert!("hermite".parse::<BasisKind>().unwrap().build(3).is_err());
+        assert!("bessel".parse::<BasisKind>().is_err());
+    }
+}

@@ -259,3 +259,32 @@ pub(crate) mod exactness_tests {
         );
     }
 }
+
+#[cfg(test)]
+mod kind_tests {
+    use super::*;
+
+    #[test]
+    fn kinds_round_trip_and_build() {
+        for kind in QuadratureKind::ALL {
+            assert_eq!(kind.as_str().parse::<QuadratureKind>().unwrap(), kind);
+            let json = serde_json::to_string(&kind).unwrap();
+            assert_eq!(json, format!("\"{}\"", kind.as_str()));
+            for n in [2, 5, 16] {
+                let rule = kind.build(kind.default_points(n)).unwrap();
+                assert_eq!(rule.kind, kind);
+                assert_eq!(rule.len(), kind.default_points(n));
+                // Every default except the trapezoid rule is exact for φ_a'φ_b' (degree 2n − 4),
+                // with room to spare (degree ≥ 4n − 1).
+                if kind != QuadratureKind::Trapezoid {
+                    assert!(
+                        rule.degree >= 4 * n - 1,
+                        "{kind} n = {n}: degree {}",
+                        rule.degree
+                    );
+                }
+            }
+        }
+        assert!("simpson".parse::<QuadratureKind>().is_err());
+    }
+}
