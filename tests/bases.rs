@@ -300,11 +300,12 @@ fn large_n_conditioning_decides_convergence() {
         leg(64) < leg(48) && leg(64) < 1e-10,
         "Legendre stopped converging"
     );
+    // Measured ratios at n = 64: Chebyshev/Legendre 1.0e3, Hermite/Legendre 1.0e5; the stalled
+    // errors are round-off driven and vary by a few × between n, so assert only a factor 10.
     for basis in [BasisKind::Chebyshev, BasisKind::Hermite] {
         let e64 = err[&(basis, 64)].0;
-        assert!(
-            e64 > 1e-9 && e64 > 100.0 * leg(64),
-            "{basis} did not stall: {e64:e}"
-        );
+        assert!(e64 > 10.0 * leg(64), "{basis} did not stall: {e64:e}");
     }
+    let herm = |n| err[&(BasisKind::Hermite, n)].0;
+    assert!(herm(64) > herm(48), "Hermite error no longer grows with n");
 }
