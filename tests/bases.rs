@@ -115,7 +115,7 @@ fn polynomial_bases_give_the_same_flow_on_kepler() {
 /// Mixed Newton outcomes at n = 5, 6 (h = 2): with the default `BestResidual` guess, Chebyshev
 /// and Legendre fail at n = 5 while Hermite succeeds, and at n = 6 Legendre and Hermite fail
 /// while Chebyshev succeeds (measured; before the Chebyshev extrapolation fix only Legendre
-/// failed at n = 6); with `InitialGuess::Extrapolate` all succeed. Not a basis defect: the
+/// failed at n = 6); with `InitialGuess::Extrapolate` all succeeded (measured before that fix). Not a basis defect: the
 /// integrator picks the guess by a residual norm measured in basis coordinates (not
 /// basis-invariant) and does not retry another guess when Newton fails. Ignored until the
 /// integrator retries (see the report of the `bases` branch).
