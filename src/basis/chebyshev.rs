@@ -70,6 +70,37 @@ impl ChebyshevLagrange {
     pub fn nodes(&self) -> &[f64] {
         &self.nodes
     }
+
+    /// Extrapolation (τ outside [0, 1]), where the second barycentric formula is unstable: its
+    /// denominator Σ w_i/(τ − τ_i) is ~1/ℓ(τ) and cancels catastrophically (relative error
+    /// 1e-3 at τ = 2 for n = 20). Use the first ("modified Lagrange") form instead, backward
+    /// stable everywhere (Higham 2004): ℓ_i(τ) = ℓ(τ) w̃_i/(τ − τ_i) with the true weights
+    /// w̃_i = (−1)^{N} 4^N/(2N) · w_i (N = n − 1), and ℓ_i'(τ) = ℓ_i(τ) Σ_{j≠i} 1/(τ − τ_j),
+    /// whose terms all have one sign outside [0, 1] (prefix + suffix sums, no cancellation).
+    /// For very large n and far extrapolation the values overflow (they are genuinely huge).
+    fn eval_outside(&self, tau: f64, values: &mut [f64], derivatives: &mut [f64]) {
+        let n = self.nodes.len();
+        let big_n = (n - 1) as f64;
+        let sign = if (n - 1) % 2 == 0 { 1.0 } else { -1.0 };
+        // (−1)^N 4^N/(2N) Π_j (τ − τ_j) = (−1)^N Π_j 4(τ − τ_j) / (8N).
+        let mut scale = sign / (8.0 * big_n);
+        for &x in &self.nodes {
+            scale *= 4.0 * (tau - x);
+        }
+        let mut prefix = 0.0;
+        for (d, &x) in derivatives.iter_mut().zip(&self.nodes) {
+            *d = prefix;
+            prefix += 1.0 / (tau - x);
+        }
+        let mut suffix = 0.0;
+        for i in (0..n).rev() {
+            let t = 1.0 / (tau - self.nodes[i]);
+            let li = scale * self.weights[i] * t;
+            values[i] = li;
+            derivatives[i] = li * (derivatives[i] + suffix);
+            suffix += t;
+        }
+    }
 }
 
 impl Basis for ChebyshevLagrange {
@@ -86,6 +117,10 @@ impl Basis for ChebyshevLagrange {
     }
 
     fn eval(&self, tau: f64, values: &mut [f64], derivatives: &mut [f64]) {
+        if !(0.0..=1.0).contains(&tau) {
+            self.eval_outside(tau, values, derivatives);
+            return;
+        }
         let n = self.nodes.len();
         // Values by the second barycentric formula; an exact node hit gives a unit vector.
         let hit = self.nodes.iter().position(|&x| x == tau);
@@ -171,6 +206,41 @@ mod tests {
         }
         assert!(worst_v < 1e-13, "value error {worst_v}");
         assert!(worst_d < 1e-12, "relative derivative error {worst_d}");
+    }
+
+    #[test]
+    fn extrapolation_is_accurate() {
+        // ℓ_i outside [0, 1] against an independent evaluation: the same polynomials expanded
+        // in the Legendre basis (three-term recurrence, stable for growing P_k) through an
+        // exact change of basis on [0, 1].
+        use crate::basis::{CurveFit, Legendre};
+        for n in [2, 3, 8, 20, 40] {
+            let (cheb, leg) = (
+                ChebyshevLagrange::new(n).unwrap(),
+                Legendre::new(n).unwrap(),
+            );
+            let fit = CurveFit::new(&leg).unwrap();
+            let mut coef = vec![0.0; n * n];
+            let (mut v, mut d) = (vec![0.0; n], vec![0.0; n]);
+            for (k, &x) in fit.nodes().iter().enumerate() {
+                cheb.eval(x, &mut v, &mut d);
+                coef[k * n..(k + 1) * n].copy_from_slice(&v);
+            }
+            fit.values_to_coefficients(&mut coef, n);
+            let (mut lv, mut ld) = (vec![0.0; n], vec![0.0; n]);
+            for tau in [1.0 + 1e-9, 1.01, 1.3, 1.5, 2.0, -0.5, -1e-12] {
+                cheb.eval(tau, &mut v, &mut d);
+                leg.eval(tau, &mut lv, &mut ld);
+                let big = v.iter().fold(1.0f64, |m, x| m.max(x.abs()));
+                let dbig = d.iter().fold(1.0f64, |m, x| m.max(x.abs()));
+                for i in 0..n {
+                    let want: f64 = (0..n).map(|a| coef[a * n + i] * lv[a]).sum();
+                    let dwant: f64 = (0..n).map(|a| coef[a * n + i] * ld[a]).sum();
+                    assert!((v[i] - want).abs() < 1e-12 * big, "n={n} τ={tau} ℓ_{i}");
+                    assert!((d[i] - dwant).abs() < 1e-11 * dbig, "n={n} τ={tau} ℓ_{i}'");
+                }
+            }
+        }
     }
 
     #[test]

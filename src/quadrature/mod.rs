@@ -5,9 +5,15 @@
 //! [`QuadratureRule`] (nodes, weights and the degree of polynomial exactness);
 //! [`QuadratureKind`] names the rules for scene files and the command line.
 
+mod clenshaw_curtis;
 mod gauss_legendre;
+mod gauss_lobatto;
+mod trapezoid;
 
+pub use clenshaw_curtis::ClenshawCurtis;
 pub use gauss_legendre::GaussLegendre;
+pub use gauss_lobatto::GaussLobatto;
+pub use trapezoid::Trapezoid;
 
 use crate::error::{GviError, Result};
 use serde::{Deserialize, Serialize};
@@ -97,23 +103,44 @@ pub enum QuadratureKind {
     /// Gauss–Legendre: m points, exact to degree 2m − 1 (the paper's choice, m = 2n).
     #[default]
     GaussLegendre,
+    /// Gauss–Lobatto: m points including both ends, exact to degree 2m − 3.
+    GaussLobatto,
+    /// Clenshaw–Curtis: m Chebyshev extrema, exact to degree m − 1 (m for odd m).
+    ClenshawCurtis,
+    /// Composite trapezoid: m equispaced points, degree 1 (not exact for polynomial bases;
+    /// meant for the Fourier basis).
+    Trapezoid,
 }
 
 impl QuadratureKind {
     /// All kinds, for sweeps.
-    pub const ALL: [QuadratureKind; 1] = [QuadratureKind::GaussLegendre];
+    pub const ALL: [QuadratureKind; 4] = [
+        QuadratureKind::GaussLegendre,
+        QuadratureKind::GaussLobatto,
+        QuadratureKind::ClenshawCurtis,
+        QuadratureKind::Trapezoid,
+    ];
 
     /// The name used in scene files and on the command line.
     pub fn as_str(self) -> &'static str {
         match self {
             QuadratureKind::GaussLegendre => "gauss-legendre",
+            QuadratureKind::GaussLobatto => "gauss-lobatto",
+            QuadratureKind::ClenshawCurtis => "clenshaw-curtis",
+            QuadratureKind::Trapezoid => "trapezoid",
         }
     }
 
-    /// The paper's default number of points for n basis functions (2n Gauss points).
+    /// The default number of points for n basis functions: the paper's 2n for Gauss–Legendre
+    /// (degree 4n − 1); 2n + 1 for Gauss–Lobatto (degree 4n − 1); 4n for Clenshaw–Curtis
+    /// (degree 4n − 1); 8n for the trapezoid rule, which is never exact for polynomial bases
+    /// (the integrator rejects it for them) and is meant for the Fourier basis.
     pub fn default_points(self, n: usize) -> usize {
         match self {
             QuadratureKind::GaussLegendre => 2 * n,
+            QuadratureKind::GaussLobatto => 2 * n + 1,
+            QuadratureKind::ClenshawCurtis => 4 * n,
+            QuadratureKind::Trapezoid => 8 * n,
         }
     }
 
@@ -121,6 +148,9 @@ impl QuadratureKind {
     pub fn build(self, points: usize) -> Result<QuadratureRule> {
         match self {
             QuadratureKind::GaussLegendre => GaussLegendre::new(points)?.rule(),
+            QuadratureKind::GaussLobatto => GaussLobatto::new(points)?.rule(),
+            QuadratureKind::ClenshawCurtis => ClenshawCurtis::new(points)?.rule(),
+            QuadratureKind::Trapezoid => Trapezoid::new(points)?.rule(),
         }
     }
 }
@@ -227,5 +257,34 @@ pub(crate) mod exactness_tests {
             rule.len(),
             d + 1
         );
+    }
+}
+
+#[cfg(test)]
+mod kind_tests {
+    use super::*;
+
+    #[test]
+    fn kinds_round_trip_and_build() {
+        for kind in QuadratureKind::ALL {
+            assert_eq!(kind.as_str().parse::<QuadratureKind>().unwrap(), kind);
+            let json = serde_json::to_string(&kind).unwrap();
+            assert_eq!(json, format!("\"{}\"", kind.as_str()));
+            for n in [2, 5, 16] {
+                let rule = kind.build(kind.default_points(n)).unwrap();
+                assert_eq!(rule.kind, kind);
+                assert_eq!(rule.len(), kind.default_points(n));
+                // Every default except the trapezoid rule is exact for φ_a'φ_b' (degree 2n − 4),
+                // with room to spare (degree ≥ 4n − 1).
+                if kind != QuadratureKind::Trapezoid {
+                    assert!(
+                        rule.degree >= 4 * n - 1,
+                        "{kind} n = {n}: degree {}",
+                        rule.degree
+                    );
+                }
+            }
+        }
+        assert!("simpson".parse::<QuadratureKind>().is_err());
     }
 }
