@@ -180,9 +180,14 @@ impl Strided {
     }
 }
 
-/// C ← α A B + β C for A (m×k), B (k×n), C (m×n) given as strided views into slices — a safe,
-/// bounds-checked front end to `matrixmultiply::dgemm`. Panics only on inconsistent strides
-/// (a programming error inside the crate, never on user data).
+/// C ← α A B + β C for A (m×k), B (k×n), C (m×n) given as strided views into slices.
+///
+/// A plain i-k-j loop whose innermost loop runs over contiguous rows of B and C when their
+/// column stride is 1 (so it vectorises), and which never allocates — BLAS-style libraries
+/// allocate packing buffers on every call, which the step loop must not do. The matrices of
+/// a step are small (at most a few hundred rows), where this loop is within a small factor of
+/// a packed kernel. Panics only on inconsistent strides (a programming error inside the
+/// crate, never on user data).
 #[allow(clippy::too_many_arguments)]
 pub fn gemm(
     m: usize,
@@ -203,25 +208,98 @@ pub fn gemm(
     assert!(k == 0 || sa.last(m, k) < a.len(), "gemm: A out of bounds");
     assert!(k == 0 || sb.last(k, n) < b.len(), "gemm: B out of bounds");
     assert!(sc.last(m, n) < c.len(), "gemm: C out of bounds");
-    // SAFETY: every element read or written lies inside its slice (checked above); C is a
-    // distinct mutable slice, so it cannot alias A or B.
-    unsafe {
-        matrixmultiply::dgemm(
+    if n <= 4 && sa.col_stride == 1 {
+        // Few columns (C = Φ Q with D ≤ 4): one dot product per entry over contiguous rows of A.
+        for i in 0..m {
+            let a0 = sa.offset + i * sa.row_stride;
+            let arow = &a[a0..a0 + k];
+            for j in 0..n {
+                let b0 = sb.offset + j * sb.col_stride;
+                let mut acc = 0.0;
+                for (kk, &x) in arow.iter().enumerate() {
+                    acc += x * b[b0 + kk * sb.row_stride];
+                }
+                let ci = sc.offset + i * sc.row_stride + j * sc.col_stride;
+                c[ci] = alpha * acc + if beta == 0.0 { 0.0 } else { beta * c[ci] };
+            }
+        }
+        return;
+    }
+    let contiguous = sb.col_stride == 1 && sc.col_stride == 1;
+    for i in 0..m {
+        let c0 = sc.offset + i * sc.row_stride;
+        if beta == 0.0 {
+            for j in 0..n {
+                c[c0 + j * sc.col_stride] = 0.0;
+            }
+        } else if beta != 1.0 {
+            for j in 0..n {
+                c[c0 + j * sc.col_stride] *= beta;
+            }
+        }
+        let a0 = sa.offset + i * sa.row_stride;
+        for kk in 0..k {
+            let aik = alpha * a[a0 + kk * sa.col_stride];
+            if aik == 0.0 {
+                continue;
+            }
+            let b0 = sb.offset + kk * sb.row_stride;
+            if contiguous {
+                let crow = &mut c[c0..c0 + n];
+                for (x, &y) in crow.iter_mut().zip(&b[b0..b0 + n]) {
+                    *x += aik * y;
+                }
+            } else {
+                for j in 0..n {
+                    c[c0 + j * sc.col_stride] += aik * b[b0 + j * sb.col_stride];
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod gemm_tests {
+    use super::*;
+
+    #[test]
+    fn gemm_matches_a_naive_product_with_strides() {
+        let (m, k, n) = (3, 4, 5);
+        let a: Vec<f64> = (0..m * k).map(|x| (x as f64).sin()).collect();
+        let b: Vec<f64> = (0..k * n).map(|x| (x as f64 * 0.7).cos()).collect();
+        // B transposed view: B stored as n×k.
+        let bt: Vec<f64> = (0..n * k).map(|idx| b[(idx % k) * n + idx / k]).collect();
+        let mut c = vec![1.0; 2 * m * n];
+        let sc = Strided {
+            offset: 1,
+            row_stride: 2 * n,
+            col_stride: 2,
+        };
+        gemm(
             m,
             k,
             n,
-            alpha,
-            a.as_ptr().add(sa.offset),
-            sa.row_stride as isize,
-            sa.col_stride as isize,
-            b.as_ptr().add(sb.offset),
-            sb.row_stride as isize,
-            sb.col_stride as isize,
-            beta,
-            c.as_mut_ptr().add(sc.offset),
-            sc.row_stride as isize,
-            sc.col_stride as isize,
+            2.0,
+            &a,
+            Strided::rows(0, k),
+            &bt,
+            Strided {
+                offset: 0,
+                row_stride: 1,
+                col_stride: k,
+            },
+            0.5,
+            &mut c,
+            sc,
         );
+        for i in 0..m {
+            for j in 0..n {
+                let exact: f64 =
+                    0.5 + 2.0 * (0..k).map(|t| a[i * k + t] * b[t * n + j]).sum::<f64>();
+                assert!((c[1 + i * 2 * n + 2 * j] - exact).abs() < 1e-13);
+            }
+        }
+        assert_eq!(c[0], 1.0);
     }
 }
 

@@ -86,6 +86,13 @@ fn polynomial_bases_give_the_same_flow_on_kepler() {
                 "n = {n}: Newton failed for some basis: {ok:?}"
             );
         }
+        if n < 7 {
+            // n ≤ 6 at h = 2 is far from resolved (errors O(1)): the stage equations have
+            // several roots and which one Newton reaches depends on the coordinates of the
+            // guess. Agreement is asserted once the discrete solution is unique near the flow.
+            println!("n = {n}: outcomes {ok:?} (not compared)");
+            continue;
+        }
         let Some(cheb) = &runs[0] else {
             println!("n = {n}: Chebyshev failed to converge (outcomes {ok:?})");
             continue;

@@ -44,6 +44,14 @@ pub struct NewtonOptions {
     pub initial_guess: InitialGuess,
     /// Substeps of the RK4 predictor guess (`None`: max(n, 8)).
     pub predictor_substeps: Option<usize>,
+    /// Simplified Newton: reuse the factorised Jacobian across iterations and steps while
+    /// the iteration contracts by at least `reuse_contraction` per iteration.
+    pub reuse_jacobian: bool,
+    /// Contraction factor above which a reused Jacobian is refactorised (full Newton).
+    pub reuse_contraction: f64,
+    /// Also start each step with the previous step's factorisation (pays off when h is small
+    /// compared with the time scale, so that the Newton matrix changes little per step).
+    pub reuse_across_steps: bool,
 }
 
 impl Default for NewtonOptions {
@@ -54,6 +62,9 @@ impl Default for NewtonOptions {
             floor_tolerance: 1e-10,
             initial_guess: InitialGuess::BestResidual,
             predictor_substeps: None,
+            reuse_jacobian: true,
+            reuse_contraction: 0.1,
+            reuse_across_steps: false,
         }
     }
 }
@@ -70,6 +81,8 @@ pub struct StepStats {
     pub gradient_evaluations: usize,
     /// Evaluations of second derivatives, per quadrature point.
     pub hessian_evaluations: usize,
+    /// LU factorisations of the Newton matrix.
+    pub factorizations: usize,
     /// The initial guess that was used.
     pub guess: InitialGuess,
 }
@@ -284,7 +297,14 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                                 * ws.hall[j * dd + r * d + s];
                         }
                     }
-                    gram_accumulate(&ws.gram, &t.phi, jac, cnt, m, n, u0, d, r, s);
+                    gram_accumulate(
+                        &ws.gram,
+                        &t.phi,
+                        &mut ws.block,
+                        jac,
+                        (cnt, m, n, u0),
+                        (r, s),
+                    );
                 }
             }
             return m;
@@ -571,30 +591,47 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             stats.residual = self.residual(ws, mode, p_k);
             return Ok(());
         }
+        // Simplified Newton: keep the factorised Jacobian (from an earlier iteration or the
+        // previous step) while the iteration contracts fast; refactor at the current iterate
+        // (full Newton) as soon as it does not.
+        let reuse = opts.reuse_jacobian && mode == Mode::InitialValue;
+        let mut have_lu = reuse && opts.reuse_across_steps && ws.lu_valid && ws.lu.dim() == size;
+        let mut fresh = false;
+        let mut it = 0;
         loop {
             stats.gradient_evaluations += self.action_gradient(lag, ws, false);
             let res = self.residual(ws, mode, p_k);
             stats.residual = res;
             if !res.is_finite() {
+                ws.lu_valid = false;
                 return Err(fail(
                     ws,
                     res,
-                    stats.iterations,
+                    it,
                     "non-finite residual (the iteration diverged)",
                 ));
             }
-            if stats.iterations >= opts.max_iterations {
-                return Err(fail(ws, res, stats.iterations, "iteration limit reached"));
+            if it >= opts.max_iterations {
+                ws.lu_valid = false;
+                return Err(fail(ws, res, it, "iteration limit reached"));
             }
-            stats.hessian_evaluations += self.jacobian(lag, ws, mode);
-            if ws.lu.dim() != size {
-                ws.lu = crate::linalg::Lu::with_capacity(size);
-            }
-            if ws.lu.refactor(&ws.jac[..size * size]).is_err() {
-                return Err(fail(ws, res, stats.iterations, "singular Jacobian"));
+            if !have_lu {
+                stats.hessian_evaluations += self.jacobian(lag, ws, mode);
+                if ws.lu.dim() != size {
+                    ws.lu = crate::linalg::Lu::with_capacity(size);
+                }
+                stats.factorizations += 1;
+                if ws.lu.refactor(&ws.jac[..size * size]).is_err() {
+                    ws.lu_valid = false;
+                    return Err(fail(ws, res, it, "singular Jacobian"));
+                }
+                ws.lu_valid = mode == Mode::InitialValue;
+                have_lu = true;
+                fresh = true;
             }
             ws.lu
                 .solve_in_place(&mut ws.rhs[..size], &mut ws.scratch[..size]);
+            it += 1;
             stats.iterations += 1;
             let delta = max_abs(&ws.rhs[..size]);
             for i in 0..size {
@@ -602,12 +639,8 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             }
             let scale = max_abs(&ws.coeffs).max(f64::MIN_POSITIVE);
             if !delta.is_finite() || !scale.is_finite() {
-                return Err(fail(
-                    ws,
-                    f64::INFINITY,
-                    stats.iterations,
-                    "non-finite Newton update",
-                ));
+                ws.lu_valid = false;
+                return Err(fail(ws, f64::INFINITY, it, "non-finite Newton update"));
             }
             // θ estimates the contraction; undefined on the first iteration.
             let theta = if previous_increment.is_finite() {
@@ -623,6 +656,12 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 stats.gradient_evaluations += self.action_gradient(lag, ws, false);
                 stats.residual = self.residual(ws, mode, p_k);
                 return Ok(());
+            }
+            // A reused (stale) Jacobian that does not contract quickly is replaced.
+            let slow = theta.is_finite() && theta > opts.reuse_contraction;
+            let growing = delta > previous_increment;
+            if !reuse || slow || growing || (!fresh && it >= 2 && !theta.is_finite()) {
+                have_lu = false;
             }
             previous_increment = delta;
         }
@@ -649,9 +688,36 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let (guess, evals) = self.initial_guess(lag, ws, q, p);
         stats.guess = guess;
         stats.gradient_evaluations += evals;
-        if let Err(f) = self.newton(lag, ws, Mode::InitialValue, p, &mut stats) {
-            ws.has_prev = false;
-            return Err(f);
+        if let Err(first) = self.newton(lag, ws, Mode::InitialValue, p, &mut stats) {
+            // Fallback: Newton from each of the other guesses before giving up (with very large
+            // steps the residual-best guess can lie in the basin of no root, or of another).
+            let mut solved = false;
+            for g in [
+                InitialGuess::Predictor,
+                InitialGuess::Extrapolate,
+                InitialGuess::Linear,
+                InitialGuess::Constant,
+            ] {
+                if g == guess || !self.make_guess(lag, ws, g, q, p) {
+                    continue;
+                }
+                ws.coeffs.copy_from_slice(&ws.cand);
+                if self
+                    .newton(lag, ws, Mode::InitialValue, p, &mut stats)
+                    .is_ok()
+                {
+                    stats.guess = g;
+                    solved = true;
+                    break;
+                }
+            }
+            if !solved {
+                ws.has_prev = false;
+                return Err(StepFailure {
+                    iterations: stats.iterations,
+                    ..first
+                });
+            }
         }
         let t = self.tables();
         let (n, h) = (t.n, self.step_size());
@@ -719,26 +785,20 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
 }
 
 /// jac[(a d + r)·size + b d + s] += Σ_j gram[a m + j] · phi[j n + u0 + b] for a, b < cnt,
-/// where size = cnt·d: one block (r, s) of the Newton matrix as a single matrix product.
-#[allow(clippy::too_many_arguments)]
+/// where size = cnt·d (jac is size×size): one block (r, s) of the Newton matrix as a single
+/// matrix product.
 fn gram_accumulate(
     gram: &[f64],
     phi: &[f64],
+    block: &mut [f64],
     jac: &mut [f64],
-    cnt: usize,
-    m: usize,
-    n: usize,
-    u0: usize,
-    d: usize,
-    r: usize,
-    s: usize,
+    dims: (usize, usize, usize, usize),
+    rs: (usize, usize),
 ) {
+    let (cnt, m, n, u0) = dims;
+    let (r, s, d) = (rs.0, rs.1, jac.len().isqrt() / cnt.max(1));
     let size = cnt * d;
-    let c = Strided {
-        offset: r * size + s,
-        row_stride: d * size,
-        col_stride: d,
-    };
+    // Contiguous product first (vectorised inner loop), then scatter into the (r, s) block.
     gemm(
         cnt,
         m,
@@ -748,10 +808,16 @@ fn gram_accumulate(
         Strided::rows(0, m),
         phi,
         Strided::rows(u0, n),
-        1.0,
-        jac,
-        c,
+        0.0,
+        block,
+        Strided::rows(0, cnt),
     );
+    for a in 0..cnt {
+        let row = (a * d + r) * size + s;
+        for b in 0..cnt {
+            jac[row + b * d] += block[a * cnt + b];
+        }
+    }
 }
 
 /// A step's Newton failure, as returned by [`GalerkinIntegrator::step`] (and turned into

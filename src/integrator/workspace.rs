@@ -34,6 +34,8 @@ pub struct Workspace {
     /// L_qq at every node (m×D×D) and the weighted basis table of one Gram product (n×m).
     pub(crate) hall: Vec<f64>,
     pub(crate) gram: Vec<f64>,
+    /// One (n−1)×(n−1) block of the Newton matrix.
+    pub(crate) block: Vec<f64>,
     /// Second derivatives at one node (D×D each).
     pub(crate) hqq: Vec<f64>,
     pub(crate) hqv: Vec<f64>,
@@ -47,6 +49,8 @@ pub struct Workspace {
     /// Newton matrix, its factorisation, right-hand side and scratch.
     pub(crate) jac: Vec<f64>,
     pub(crate) lu: Lu,
+    /// Whether `lu` factorises a Newton matrix of the initial-value step (reusable).
+    pub(crate) lu_valid: bool,
     pub(crate) rhs: Vec<f64>,
     pub(crate) scratch: Vec<f64>,
     /// RK4 predictor: substeps, states at substep ends ((S+1)×2D), stages (4×2D), stage input.
@@ -148,6 +152,7 @@ impl Workspace {
             lv: vec![0.0; m * d],
             hall: vec![0.0; m * d * d],
             gram: vec![0.0; n * m],
+            block: vec![0.0; n * n],
             hqq: vec![0.0; d * d],
             hqv: vec![0.0; d * d],
             hvv: vec![0.0; d * d],
@@ -156,6 +161,7 @@ impl Workspace {
             scaled: vec![0.0; m * d],
             jac: vec![0.0; nu * nu],
             lu: Lu::with_capacity(nu),
+            lu_valid: false,
             rhs: vec![0.0; nu],
             scratch: vec![0.0; nu],
             rk_substeps: gvi.options().predictor_substeps.unwrap_or(n.max(8)),
@@ -182,6 +188,7 @@ impl Workspace {
     /// Forget the previous step's curve (the next guess will not extrapolate).
     pub fn reset(&mut self) {
         self.has_prev = false;
+        self.lu_valid = false;
     }
 
     /// Dimension D.
