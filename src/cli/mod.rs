@@ -24,6 +24,9 @@ enum Command {
     Check(Box<run::RunArgs>),
     /// n- or h-refinement sweep with the fitted rate (CSV, JSON, SVG in --out).
     Refine(Box<study::RefineArgs>),
+    /// Every basis × quadrature over a range of n at fixed h: error and kinetic condition
+    /// number against n (CSV, JSON, SVG in --out).
+    CompareBases(Box<study::CompareBasesArgs>),
     /// Regenerate the paper's experiments (charts and summary.md in --out).
     Reproduce(study::ReproduceArgs),
     /// List the built-in scenes.
@@ -36,6 +39,7 @@ pub fn main_with(cli: Cli) -> Result<(), GviError> {
         Command::Run(args) => run::run(*args),
         Command::Check(args) => check::run_check(*args),
         Command::Refine(args) => study::run_refine(*args),
+        Command::CompareBases(args) => study::run_compare_bases(*args),
         Command::Reproduce(args) => study::run_reproduce(args),
         Command::Scenes => {
             for name in galerkin_vi::scene::Scene::builtin_names() {

@@ -78,3 +78,52 @@ pub fn run_reproduce(args: ReproduceArgs) -> Result<(), GviError> {
     eprintln!("wrote {}", dir.join("summary.md").display());
     Ok(())
 }
+
+#[derive(Debug, Args)]
+pub struct CompareBasesArgs {
+    /// Values of n: A:B:STEP (default 4:48:4).
+    #[arg(long, default_value = "4:48:4")]
+    pub range: String,
+    /// Quadratures to pair with every basis, comma-separated (default: all).
+    #[arg(long)]
+    pub quadratures: Option<String>,
+    /// Output directory (default ./out/compare-bases).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    #[command(flatten)]
+    pub run: RunArgs,
+}
+
+pub fn run_compare_bases(args: CompareBasesArgs) -> Result<(), GviError> {
+    use galerkin_vi::quadrature::QuadratureKind;
+    let mut scene = Scene::load(&args.run.scene)?;
+    apply_overrides(&mut scene, &args.run)?;
+    let ns: Vec<usize> = parse_range(&args.range)?
+        .into_iter()
+        .map(|x| x.round() as usize)
+        .collect();
+    let quads: Vec<QuadratureKind> = match &args.quadratures {
+        None => QuadratureKind::ALL.to_vec(),
+        Some(list) => list.split(',').map(str::parse).collect::<Result<_, _>>()?,
+    };
+    let cmp = galerkin_vi::studies::compare_bases::compare_bases(&scene, &ns, &quads)?;
+    let dir = args
+        .out
+        .unwrap_or_else(|| PathBuf::from("out/compare-bases"));
+    let files = cmp.write(&dir)?;
+    eprintln!(
+        "{}: {} runs at h = {} ({} failed or rejected), errors against the {}",
+        cmp.scene,
+        cmp.points.len(),
+        cmp.h,
+        cmp.points
+            .iter()
+            .filter(|p| p.measurement.failure.is_some())
+            .count(),
+        cmp.reference
+    );
+    for f in files {
+        eprintln!("  wrote {}", f.display());
+    }
+    Ok(())
+}

@@ -5,6 +5,7 @@
 //! high-resolution spectral run), writes CSV/JSON tables and SVG charts, and never aborts on a
 //! solver failure: the failure is recorded in the measurement and shown.
 
+pub mod compare_bases;
 pub mod refine;
 pub mod reproduce;
 
