@@ -1,12 +1,17 @@
-//! Studies: refinement sweeps with fitted rates, and the paper's experiments.
+//! Studies: refinement sweeps with fitted rates, the paper's experiments, work–precision
+//! against classical peers, stability maps, and n- versus h-refinement cost.
 //!
 //! Every study measures [`Measurement`]s — one integration of a scene's system with one method
 //! — against a [`Reference`] (the exact solution where one is known, otherwise a
 //! high-resolution spectral run), writes CSV/JSON tables and SVG charts, and never aborts on a
 //! solver failure: the failure is recorded in the measurement and shown.
 
+pub mod compare_refinement;
+pub mod peers;
 pub mod refine;
 pub mod reproduce;
+pub mod stability;
+pub mod work_precision;
 
 use crate::error::{GviError, Result};
 use crate::integrator::GalerkinIntegrator;
