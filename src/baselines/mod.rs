@@ -1,14 +1,24 @@
 //! Classical baselines behind a common one-step interface, as negative and positive controls
-//! for the geometric checks: classical Runge–Kutta 4 (accurate, not symplectic) and
-//! Störmer–Verlet (second order, symplectic), plus an adapter that puts the Galerkin
-//! integrator behind the same interface.
+//! for the geometric checks and as peers in the work–precision and stability studies:
+//! classical Runge–Kutta 4 (accurate, not symplectic), Störmer–Verlet (second order,
+//! symplectic), s-stage Gauss–Legendre collocation (order 2s, symplectic), Yoshida-6 and
+//! Kahan–Li-8 compositions of Störmer–Verlet, DOP853 (external, cargo feature `dop853`), plus
+//! an adapter that puts the Galerkin integrator behind the same interface.
 //!
 //! The classical methods integrate the canonical equations of a mechanical Lagrangian
 //! L = ½ q̇ᵀMq̇ − V(q): q̇ = M⁻¹p, ṗ = −∇V(q) ([`Lagrangian::force`]).
 
+mod composition;
+#[cfg(feature = "dop853")]
+mod dop853;
+mod gauss_collocation;
 mod rk4;
 mod verlet;
 
+pub use composition::{Composition, CompositionScheme};
+#[cfg(feature = "dop853")]
+pub use dop853::Dop853Baseline;
+pub use gauss_collocation::{GaussCollocationBaseline, MAX_GAUSS_STAGES};
 pub use rk4::Rk4;
 pub use verlet::StormerVerlet;
 
@@ -34,6 +44,12 @@ pub trait OneStepMethod {
         q_next: &mut [f64],
         p_next: &mut [f64],
     ) -> Result<()>;
+    /// Force (right-hand-side) evaluations so far: ∇V calls for the classical methods, the
+    /// Lagrangian's first derivatives per quadrature point for the Galerkin method. The
+    /// default, for methods that do not count, is 0.
+    fn force_evaluations(&self) -> usize {
+        0
+    }
 }
 
 /// Positions and momenta at every step end, (q_k)_k and (p_k)_k.
@@ -131,6 +147,7 @@ pub struct GalerkinMethod<'a, L: Lagrangian, B: Basis, Q: Quadrature> {
     integrator: &'a GalerkinIntegrator<B, Q>,
     lagrangian: &'a L,
     workspace: Workspace,
+    evaluations: usize,
 }
 
 impl<'a, L: Lagrangian, B: Basis, Q: Quadrature> GalerkinMethod<'a, L, B, Q> {
@@ -140,6 +157,7 @@ impl<'a, L: Lagrangian, B: Basis, Q: Quadrature> GalerkinMethod<'a, L, B, Q> {
             integrator,
             lagrangian,
             workspace: integrator.workspace(lagrangian)?,
+            evaluations: 0,
         })
     }
 }
@@ -159,6 +177,10 @@ impl<L: Lagrangian, B: Basis, Q: Quadrature> OneStepMethod for GalerkinMethod<'_
         self.integrator.step_size()
     }
 
+    fn force_evaluations(&self) -> usize {
+        self.evaluations
+    }
+
     fn step(
         &mut self,
         t: f64,
@@ -174,7 +196,7 @@ impl<L: Lagrangian, B: Basis, Q: Quadrature> OneStepMethod for GalerkinMethod<'_
         ensure_len("p_next", d, p_next.len())?;
         self.integrator
             .step(self.lagrangian, &mut self.workspace, q, p, q_next, p_next)
-            .map(|_| ())
+            .map(|stats| self.evaluations += stats.gradient_evaluations)
             .map_err(|f| GviError::NewtonFailure {
                 step: (t / self.integrator.step_size()).round().max(0.0) as usize,
                 t,

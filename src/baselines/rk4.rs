@@ -28,6 +28,7 @@ pub struct Rk4<'a, L: Lagrangian> {
     ps: Vec<f64>,
     kq: Vec<f64>,
     kp: Vec<f64>,
+    evaluations: usize,
 }
 
 impl<'a, L: Lagrangian> Rk4<'a, L> {
@@ -43,6 +44,7 @@ impl<'a, L: Lagrangian> Rk4<'a, L> {
             ps: vec![0.0; d],
             kq: vec![0.0; 4 * d],
             kp: vec![0.0; 4 * d],
+            evaluations: 0,
         })
     }
 }
@@ -56,6 +58,10 @@ impl<L: Lagrangian> OneStepMethod for Rk4<'_, L> {
         self.h
     }
 
+    fn force_evaluations(&self) -> usize {
+        self.evaluations
+    }
+
     fn step(
         &mut self,
         _t: f64,
@@ -67,6 +73,7 @@ impl<L: Lagrangian> OneStepMethod for Rk4<'_, L> {
         self.parts.check(q, p, q_next, p_next)?;
         let (d, h) = (self.parts.d, self.h);
         let c = [0.0, 0.5, 0.5, 1.0];
+        self.evaluations += 4;
         for s in 0..4 {
             for r in 0..d {
                 if s == 0 {

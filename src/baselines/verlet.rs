@@ -27,6 +27,10 @@ pub struct StormerVerlet<'a, L: Lagrangian> {
     force: Vec<f64>,
     half: Vec<f64>,
     vel: Vec<f64>,
+    evaluations: usize,
+    /// Position of the last end-of-step force (first same as last).
+    cached_q: Vec<f64>,
+    has_cache: bool,
 }
 
 impl<'a, L: Lagrangian> StormerVerlet<'a, L> {
@@ -41,6 +45,9 @@ impl<'a, L: Lagrangian> StormerVerlet<'a, L> {
             force: vec![0.0; d],
             half: vec![0.0; d],
             vel: vec![0.0; d],
+            evaluations: 0,
+            cached_q: vec![0.0; d],
+            has_cache: false,
         })
     }
 }
@@ -54,6 +61,10 @@ impl<L: Lagrangian> OneStepMethod for StormerVerlet<'_, L> {
         self.h
     }
 
+    fn force_evaluations(&self) -> usize {
+        self.evaluations
+    }
+
     fn step(
         &mut self,
         _t: f64,
@@ -64,7 +75,11 @@ impl<L: Lagrangian> OneStepMethod for StormerVerlet<'_, L> {
     ) -> Result<()> {
         self.parts.check(q, p, q_next, p_next)?;
         let (d, h) = (self.parts.d, self.h);
-        self.lagrangian.force(q, &mut self.force);
+        // `self.force` still holds f(q) when q is the previous step's end (first same as last).
+        if !(self.has_cache && self.cached_q.as_slice() == q) {
+            self.lagrangian.force(q, &mut self.force);
+            self.evaluations += 1;
+        }
         for r in 0..d {
             self.half[r] = p[r] + 0.5 * h * self.force[r];
         }
@@ -73,9 +88,12 @@ impl<L: Lagrangian> OneStepMethod for StormerVerlet<'_, L> {
             q_next[r] = q[r] + h * self.vel[r];
         }
         self.lagrangian.force(q_next, &mut self.force);
+        self.evaluations += 1;
         for r in 0..d {
             p_next[r] = self.half[r] + 0.5 * h * self.force[r];
         }
+        self.cached_q.copy_from_slice(q_next);
+        self.has_cache = true;
         Ok(())
     }
 }

@@ -3,6 +3,7 @@
 mod check;
 mod run;
 mod study;
+mod study2;
 
 use clap::{Parser, Subcommand};
 use galerkin_vi::GviError;
@@ -29,6 +30,15 @@ enum Command {
     CompareBases(Box<study::CompareBasesArgs>),
     /// Regenerate the paper's experiments (charts and summary.md in --out).
     Reproduce(study::ReproduceArgs),
+    /// Max position error against CPU time for the Galerkin method and classical peers
+    /// (Verlet, RK4, Gauss, compositions, DOP853), with the Pareto front (CSV, JSON, SVG).
+    WorkPrecision(Box<study2::WorkPrecisionArgs>),
+    /// Stability map over (h, n) of the Galerkin method and the largest stable h of each
+    /// baseline (CSV, JSON, SVG heat map).
+    Stability(Box<study2::StabilityArgs>),
+    /// n-refinement at fixed h against h-refinement at fixed n: error against force
+    /// evaluations and seconds (CSV, JSON, SVG).
+    CompareRefinement(Box<study2::CompareRefinementArgs>),
     /// List the built-in scenes.
     Scenes,
 }
@@ -41,6 +51,9 @@ pub fn main_with(cli: Cli) -> Result<(), GviError> {
         Command::Refine(args) => study::run_refine(*args),
         Command::CompareBases(args) => study::run_compare_bases(*args),
         Command::Reproduce(args) => study::run_reproduce(args),
+        Command::WorkPrecision(args) => study2::run_work_precision(*args),
+        Command::Stability(args) => study2::run_stability(*args),
+        Command::CompareRefinement(args) => study2::run_compare_refinement(*args),
         Command::Scenes => {
             for name in galerkin_vi::scene::Scene::builtin_names() {
                 let scene = galerkin_vi::scene::Scene::load(name)?;

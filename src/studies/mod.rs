@@ -1,4 +1,5 @@
-//! Studies: refinement sweeps with fitted rates, and the paper's experiments.
+//! Studies: refinement sweeps with fitted rates, the paper's experiments, work–precision
+//! against classical peers, stability maps, and n- versus h-refinement cost.
 //!
 //! Every study measures [`Measurement`]s — one integration of a scene's system with one method
 //! — against a [`Reference`] (the exact solution where one is known, otherwise a
@@ -6,8 +7,12 @@
 //! solver failure: the failure is recorded in the measurement and shown.
 
 pub mod compare_bases;
+pub mod compare_refinement;
+pub mod peers;
 pub mod refine;
 pub mod reproduce;
+pub mod stability;
+pub mod work_precision;
 
 use crate::error::{GviError, Result};
 use crate::integrator::GalerkinIntegrator;

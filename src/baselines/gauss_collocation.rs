@@ -1,0 +1,269 @@
+//! s-stage Gauss–Legendre collocation (implicit Runge–Kutta of order 2s, symplectic) for the
+//! canonical equations of a mechanical Lagrangian, q̇ = M⁻¹p, ṗ = f(q) = −∇V(q).
+//!
+//! Butcher tableau: c_i the Gauss–Legendre nodes on [0, 1], b_i their weights,
+//! a_ij = ∫₀^{c_i} ℓ_j(τ) dτ (ℓ_j the Lagrange polynomials at the nodes); Hairer, Lubich &
+//! Wanner, *Geometric Numerical Integration*, §II.1.3.
+//!
+//! For separable systems the stage momenta can be eliminated: with v₀ = M⁻¹p, the stage
+//! positions are Q_i = q + h c_i v₀ + Z_i where
+//! Z = h² (A² ⊗ M⁻¹) F(Z), F_i = f(q + h c_i v₀ + Z_i),
+//! and then q' = q + h v₀ + h² Σ_i (bᵀA)_i M⁻¹F_i, p' = p + h Σ_i b_i F_i.
+//! The sD equations are solved by simplified Newton (Jacobian I − h²(A²⊗M⁻¹)·(I⊗∂f(q)),
+//! factorised once per step) iterated until the increment stops decreasing at round-off level.
+
+use super::{CanonicalParts, OneStepMethod};
+use crate::error::{GviError, Result};
+use crate::lagrangian::Lagrangian;
+use crate::quadrature::{GaussLegendre, Quadrature};
+use nalgebra::{DMatrix, DVector};
+
+/// The largest number of stages accepted.
+pub const MAX_GAUSS_STAGES: usize = 8;
+
+/// Iteration cap of the simplified Newton solve.
+const MAX_ITERATIONS: usize = 60;
+
+/// s-stage Gauss–Legendre collocation (order 2s, symplectic, A-stable) for q̇ = M⁻¹p,
+/// ṗ = −∇V(q).
+///
+/// ```
+/// use galerkin_vi::baselines::{GaussCollocationBaseline, OneStepMethod};
+/// use galerkin_vi::systems::HarmonicOscillator;
+///
+/// let ho = HarmonicOscillator::unit();
+/// let mut g = GaussCollocationBaseline::new(&ho, 3, 0.1)?;
+/// let (mut q, mut p) = ([0.0], [0.0]);
+/// g.step(0.0, &[1.0], &[0.0], &mut q, &mut p)?;
+/// assert!((q[0] - 0.1f64.cos()).abs() < 1e-12);
+/// // Quadratic invariants are conserved exactly by Gauss methods.
+/// assert!((q[0] * q[0] + p[0] * p[0] - 1.0).abs() < 1e-14);
+/// # Ok::<(), galerkin_vi::GviError>(())
+/// ```
+#[derive(Debug, Clone)]
+pub struct GaussCollocationBaseline<'a, L: Lagrangian> {
+    lagrangian: &'a L,
+    h: f64,
+    s: usize,
+    parts: CanonicalParts,
+    c: Vec<f64>,
+    b: Vec<f64>,
+    /// (A²)_ij, row-major s×s.
+    a2: Vec<f64>,
+    /// (bᵀA)_j.
+    ba: Vec<f64>,
+    evaluations: usize,
+    iterations: usize,
+    // Work buffers.
+    v0: Vec<f64>,
+    z: Vec<f64>,
+    f: Vec<f64>,
+    minv_f: Vec<f64>,
+    stage_q: Vec<f64>,
+    jac: Vec<f64>,
+}
+
+impl<'a, L: Lagrangian> GaussCollocationBaseline<'a, L> {
+    /// Gauss collocation with `s` stages (1 ≤ s ≤ 8) and step h for a mechanical Lagrangian.
+    pub fn new(lagrangian: &'a L, s: usize, h: f64) -> Result<Self> {
+        if !(1..=MAX_GAUSS_STAGES).contains(&s) {
+            return Err(GviError::InvalidArgument {
+                name: "Gauss collocation stages".into(),
+                reason: format!("s = {s}; need 1 ≤ s ≤ {MAX_GAUSS_STAGES}"),
+            });
+        }
+        let parts = CanonicalParts::new(lagrangian, h)?;
+        let rule = GaussLegendre::new(s)?.rule()?;
+        let (c, b) = (rule.nodes.clone(), rule.weights.clone());
+        // a_ij = ∫₀^{c_i} ℓ_j: the s-point Gauss rule mapped to [0, c_i] is exact (degree s−1).
+        let lagrange = |j: usize, x: f64| {
+            (0..s)
+                .filter(|&k| k != j)
+                .map(|k| (x - c[k]) / (c[j] - c[k]))
+                .product::<f64>()
+        };
+        let mut a = vec![0.0; s * s];
+        for i in 0..s {
+            for j in 0..s {
+                a[i * s + j] = c[i] * (0..s).map(|k| b[k] * lagrange(j, c[i] * c[k])).sum::<f64>();
+            }
+        }
+        let mut a2 = vec![0.0; s * s];
+        for i in 0..s {
+            for j in 0..s {
+                a2[i * s + j] = (0..s).map(|k| a[i * s + k] * a[k * s + j]).sum();
+            }
+        }
+        let ba = (0..s)
+            .map(|j| (0..s).map(|i| b[i] * a[i * s + j]).sum())
+            .collect();
+        let d = parts.d;
+        Ok(GaussCollocationBaseline {
+            lagrangian,
+            h,
+            s,
+            parts,
+            c,
+            b,
+            a2,
+            ba,
+            evaluations: 0,
+            iterations: 0,
+            v0: vec![0.0; d],
+            z: vec![0.0; s * d],
+            f: vec![0.0; s * d],
+            minv_f: vec![0.0; s * d],
+            stage_q: vec![0.0; d],
+            jac: vec![0.0; d * d],
+        })
+    }
+
+    /// Number of stages s (the order is 2s).
+    pub fn stages(&self) -> usize {
+        self.s
+    }
+
+    /// Total simplified-Newton iterations so far.
+    pub fn iterations(&self) -> usize {
+        self.iterations
+    }
+
+    /// Forces F_i at the current Z, and M⁻¹F_i.
+    fn eval_forces(&mut self, q: &[f64]) {
+        let (d, h) = (self.parts.d, self.h);
+        for i in 0..self.s {
+            for r in 0..d {
+                self.stage_q[r] = q[r] + h * self.c[i] * self.v0[r] + self.z[i * d + r];
+            }
+            self.lagrangian
+                .force(&self.stage_q, &mut self.f[i * d..(i + 1) * d]);
+            let fi = self.f[i * d..(i + 1) * d].to_vec();
+            self.parts
+                .velocity(&fi, &mut self.minv_f[i * d..(i + 1) * d]);
+        }
+        self.evaluations += self.s;
+    }
+}
+
+impl<L: Lagrangian> OneStepMethod for GaussCollocationBaseline<'_, L> {
+    fn name(&self) -> String {
+        format!("gauss-{} (h = {})", self.s, self.h)
+    }
+
+    fn step_size(&self) -> f64 {
+        self.h
+    }
+
+    fn force_evaluations(&self) -> usize {
+        self.evaluations
+    }
+
+    fn step(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        p: &[f64],
+        q_next: &mut [f64],
+        p_next: &mut [f64],
+    ) -> Result<()> {
+        self.parts.check(q, p, q_next, p_next)?;
+        let (d, s, h) = (self.parts.d, self.s, self.h);
+        let mut v0 = std::mem::take(&mut self.v0);
+        self.parts.velocity(p, &mut v0);
+        self.v0 = v0;
+        // Simplified Newton matrix I − h² (A² ⊗ M⁻¹ ∂f(q)).
+        self.lagrangian.force_jacobian(q, &mut self.jac);
+        let minv = &self.parts.inverse_mass;
+        let mut mj = vec![0.0; d * d];
+        for r in 0..d {
+            for c in 0..d {
+                mj[r * d + c] = (0..d).map(|k| minv[(r, k)] * self.jac[k * d + c]).sum();
+            }
+        }
+        let size = s * d;
+        let mut matrix = DMatrix::<f64>::identity(size, size);
+        for i in 0..s {
+            for j in 0..s {
+                let w = h * h * self.a2[i * s + j];
+                for r in 0..d {
+                    for c in 0..d {
+                        matrix[(i * d + r, j * d + c)] -= w * mj[r * d + c];
+                    }
+                }
+            }
+        }
+        let lu = matrix.lu();
+        self.z.iter_mut().for_each(|x| *x = 0.0);
+        let scale = q.iter().fold(1e-300f64, |m, x| m.max(x.abs()));
+        let fail = |residual: f64, iterations: usize, reason: &str| GviError::NewtonFailure {
+            step: (t / h).round().max(0.0) as usize,
+            t,
+            residual,
+            iterations,
+            reason: format!("Gauss collocation (s = {s}): {reason}"),
+        };
+        let mut previous = f64::INFINITY;
+        let mut converged = false;
+        let mut refresh = true;
+        for it in 1..=MAX_ITERATIONS {
+            self.eval_forces(q);
+            self.iterations += 1;
+            // Residual R = h² (A² ⊗ I) M⁻¹F − Z.
+            let mut res = DVector::<f64>::zeros(size);
+            for i in 0..s {
+                for r in 0..d {
+                    let sum: f64 = (0..s)
+                        .map(|j| self.a2[i * s + j] * self.minv_f[j * d + r])
+                        .sum();
+                    res[i * d + r] = h * h * sum - self.z[i * d + r];
+                }
+            }
+            let delta = lu
+                .solve(&res)
+                .ok_or_else(|| fail(res.amax(), it, "singular iteration matrix"))?;
+            let size_delta = delta.amax();
+            if !size_delta.is_finite() {
+                return Err(fail(res.amax(), it, "non-finite iterate"));
+            }
+            for k in 0..size {
+                self.z[k] += delta[k];
+            }
+            // Converged at round-off: the increment is at machine level of q (then the forces of
+            // the last iterate are the converged ones), or it has stopped decreasing while
+            // already small compared with q and Z (then the forces are re-evaluated: Z can be
+            // h² times larger than the forces it carries).
+            let zmax = self.z.iter().fold(scale, |m, x| m.max(x.abs()));
+            let tiny = size_delta <= 1e-15 * scale;
+            if tiny || (size_delta >= previous && size_delta < 1e-10 * zmax) {
+                converged = true;
+                // At machine level the forces of the last iterate are the converged ones.
+                refresh = !tiny && size_delta != 0.0;
+                break;
+            }
+            if it > 8 && size_delta > 2.0 * previous {
+                return Err(fail(res.amax(), it, "iteration diverges"));
+            }
+            previous = size_delta;
+        }
+        if !converged {
+            return Err(fail(previous, MAX_ITERATIONS, "iteration limit"));
+        }
+        if refresh {
+            self.eval_forces(q);
+        }
+        for r in 0..d {
+            let mut dq = 0.0;
+            let mut dp = 0.0;
+            for i in 0..s {
+                dq += self.ba[i] * self.minv_f[i * d + r];
+                dp += self.b[i] * self.f[i * d + r];
+            }
+            q_next[r] = q[r] + h * self.v0[r] + h * h * dq;
+            p_next[r] = p[r] + h * dp;
+        }
+        if q_next.iter().chain(p_next.iter()).any(|x| !x.is_finite()) {
+            return Err(fail(f64::NAN, 0, "non-finite state"));
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,151 @@
+//! `gvi work-precision`, `gvi stability` and `gvi compare-refinement`.
+
+use super::run::{RunArgs, apply_overrides};
+use clap::Args;
+use galerkin_vi::GviError;
+use galerkin_vi::scene::Scene;
+use galerkin_vi::studies::compare_refinement::{CompareConfig, compare_refinement};
+use galerkin_vi::studies::stability::{Class, StabilityConfig, stability};
+use galerkin_vi::studies::work_precision::{WorkPrecisionConfig, work_precision};
+use std::path::PathBuf;
+
+#[derive(Debug, Args)]
+pub struct WorkPrecisionArgs {
+    /// Time span (default: the scene's h · steps). Samples every scene h.
+    #[arg(long)]
+    pub horizon: Option<f64>,
+    /// Timed repetitions per configuration (the median is reported).
+    #[arg(long, default_value_t = 5)]
+    pub repeats: usize,
+    /// A reduced sweep (seconds), for smoke tests.
+    #[arg(long)]
+    pub quick: bool,
+    /// Output directory (default ./out/work-precision).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    #[command(flatten)]
+    pub run: RunArgs,
+}
+
+pub fn run_work_precision(args: WorkPrecisionArgs) -> Result<(), GviError> {
+    let mut scene = Scene::load(&args.run.scene)?;
+    apply_overrides(&mut scene, &args.run)?;
+    let mut config = if args.quick {
+        WorkPrecisionConfig::quick()
+    } else {
+        WorkPrecisionConfig::full()
+    };
+    config.horizon = args.horizon;
+    config.repeats = args.repeats.max(1);
+    let study = work_precision(&scene, &config)?;
+    let dir = args
+        .out
+        .unwrap_or_else(|| PathBuf::from("out/work-precision"));
+    let files = study.write(&dir)?;
+    eprint!("{}", study.summary());
+    for f in files {
+        eprintln!("  wrote {}", f.display());
+    }
+    Ok(())
+}
+
+#[derive(Debug, Args)]
+pub struct StabilityArgs {
+    /// Steps per Galerkin cell.
+    #[arg(long, default_value_t = 100)]
+    pub cell_steps: usize,
+    /// A reduced grid, for smoke tests.
+    #[arg(long)]
+    pub quick: bool,
+    /// Output directory (default ./out/stability).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    #[command(flatten)]
+    pub run: RunArgs,
+}
+
+pub fn run_stability(args: StabilityArgs) -> Result<(), GviError> {
+    let mut scene = Scene::load(&args.run.scene)?;
+    apply_overrides(&mut scene, &args.run)?;
+    let mut config = if args.quick {
+        StabilityConfig::quick()
+    } else {
+        StabilityConfig::full()
+    };
+    config.steps = args.cell_steps;
+    let study = stability(&scene, &config)?;
+    let dir = args.out.unwrap_or_else(|| PathBuf::from("out/stability"));
+    let files = study.write(&dir)?;
+    let counts = study.counts();
+    eprintln!(
+        "{}: {} cells ({} steps each):",
+        study.scene,
+        study.cells.len(),
+        config.steps
+    );
+    for (k, c) in Class::ALL.iter().zip(counts) {
+        eprintln!("  {:<15} {c}", k.as_str());
+    }
+    eprintln!(
+        "largest stable h (bounded energy over {} steps):",
+        config.baseline_steps
+    );
+    for b in &study.baselines {
+        eprintln!(
+            "  {:<15} {:.4} (unstable at {:.4})",
+            b.method, b.largest_stable_h, b.smallest_unstable_h
+        );
+    }
+    for f in files {
+        eprintln!("  wrote {}", f.display());
+    }
+    Ok(())
+}
+
+#[derive(Debug, Args)]
+pub struct CompareRefinementArgs {
+    /// A reduced sweep, for smoke tests.
+    #[arg(long)]
+    pub quick: bool,
+    /// Output directory (default ./out/compare-refinement).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    #[command(flatten)]
+    pub run: RunArgs,
+}
+
+pub fn run_compare_refinement(args: CompareRefinementArgs) -> Result<(), GviError> {
+    let mut scene = Scene::load(&args.run.scene)?;
+    apply_overrides(&mut scene, &args.run)?;
+    let config = if args.quick {
+        CompareConfig::quick()
+    } else {
+        CompareConfig::full()
+    };
+    let study = compare_refinement(&scene, &config)?;
+    let dir = args
+        .out
+        .unwrap_or_else(|| PathBuf::from("out/compare-refinement"));
+    let files = study.write(&dir)?;
+    eprintln!(
+        "{}: T = {}, errors against the {}; cheapest path per target:",
+        study.scene, study.horizon, study.reference
+    );
+    for c in &study.cheapest {
+        let ev = c
+            .by_evaluations
+            .as_ref()
+            .map(|(l, n, h, e)| format!("{l} (n = {n}, h = {h}): {e} evaluations"))
+            .unwrap_or_else(|| "not reached".into());
+        let s = c
+            .by_seconds
+            .as_ref()
+            .map(|(l, n, h, s)| format!("{l} (n = {n}, h = {h}): {s:.3e} s"))
+            .unwrap_or_else(|| "not reached".into());
+        eprintln!("  {:.0e}: {ev}; fastest {s}", c.target);
+    }
+    for f in files {
+        eprintln!("  wrote {}", f.display());
+    }
+    Ok(())
+}
