@@ -30,6 +30,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod ad;
+pub mod adaptive;
 pub mod baselines;
 pub mod basis;
 pub mod error;

@@ -37,6 +37,10 @@ pub struct Trajectory {
     pub coefficients: Vec<Vec<f64>>,
     /// Cost of each step.
     pub stats: Vec<StepStats>,
+    /// Number of basis functions of each step when it varies (tolerance-driven runs);
+    /// empty when every step uses `n`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub step_n: Vec<usize>,
     #[serde(skip)]
     basis_cache: OnceLock<Option<AnyBasis>>,
 }
@@ -66,6 +70,7 @@ impl Trajectory {
             p: Vec::with_capacity(cap + 1),
             coefficients: Vec::with_capacity(cap),
             stats: Vec::with_capacity(cap),
+            step_n: Vec::new(),
             basis_cache: OnceLock::new(),
         }
     }
@@ -73,6 +78,22 @@ impl Trajectory {
     pub(crate) fn push_state(&mut self, q: &[f64], p: &[f64]) {
         self.q.push(q.to_vec());
         self.p.push(p.to_vec());
+    }
+
+    /// Append a step whose curve has `n` basis functions (tolerance-driven runs).
+    pub(crate) fn push_step_with_n(
+        &mut self,
+        n: usize,
+        coeffs: &[f64],
+        q: &[f64],
+        p: &[f64],
+        stats: StepStats,
+    ) {
+        while self.step_n.len() < self.coefficients.len() {
+            self.step_n.push(self.n);
+        }
+        self.step_n.push(n);
+        self.push_step(coeffs, q, p, stats);
     }
 
     pub(crate) fn push_step(&mut self, coeffs: &[f64], q: &[f64], p: &[f64], stats: StepStats) {
@@ -142,14 +163,22 @@ impl Trajectory {
         Ok((k, tau))
     }
 
+    /// Number of basis functions of step k.
+    pub fn n_of_step(&self, k: usize) -> usize {
+        self.step_n.get(k).copied().unwrap_or(self.n)
+    }
+
     /// Galerkin curve position q(t) and velocity q̇(t) at any t in [t0, t_end].
     pub fn state_on_curve(&self, t: f64) -> Result<(Vec<f64>, Vec<f64>)> {
         let (k, tau) = self.locate(t)?;
-        let basis = self.basis()?;
-        let n = self.n;
+        let n = self.n_of_step(k);
         let d = self.dim;
         let (mut phi, mut dphi) = (vec![0.0; n], vec![0.0; n]);
-        basis.eval(tau, &mut phi, &mut dphi);
+        if n == self.n {
+            self.basis()?.eval(tau, &mut phi, &mut dphi);
+        } else {
+            self.basis.build(n)?.eval(tau, &mut phi, &mut dphi);
+        }
         let c = &self.coefficients[k];
         let mut q = vec![0.0; d];
         let mut v = vec![0.0; d];

@@ -75,6 +75,9 @@ pub(crate) struct Tables {
     pub extrapolate: Option<Vec<f64>>,
     /// Interpolation of curve values at the basis's interpolation nodes.
     pub fit: CurveFit,
+    /// Chebyshev coefficients of the Galerkin curve from its basis coefficients (n×n):
+    /// a = C·Q, with q(τ) ≈ Σ_j a_j T_j(2τ − 1) (exact for polynomial bases).
+    pub chebyshev: Vec<f64>,
 }
 
 impl GalerkinIntegrator<ChebyshevLagrange, GaussLegendre> {
@@ -308,6 +311,68 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
     }
 }
 
+/// C (n×n) with a = C·Q the Chebyshev coefficients of the curve Σ Q_i φ_i: values at the n
+/// Chebyshev–Lobatto points, then the discrete Chebyshev transform (DCT-I).
+fn chebyshev_transform<B: Basis + ?Sized>(basis: &B, n: usize) -> Vec<f64> {
+    let nodes = crate::basis::chebyshev_lobatto_points(n);
+    let (mut v, mut dv) = (vec![0.0; n], vec![0.0; n]);
+    // E[k][i] = φ_i(τ_k)
+    let mut e = vec![0.0; n * n];
+    for (k, &x) in nodes.iter().enumerate() {
+        basis.eval(x, &mut v, &mut dv);
+        e[k * n..(k + 1) * n].copy_from_slice(&v);
+    }
+    // τ_k = (1 − cos θ_k)/2 ⇒ x_k = 2τ_k − 1 = −cos θ_k, and T_j(−cos θ) = (−1)^j cos jθ.
+    let m = (n - 1).max(1) as f64;
+    let mut c = vec![0.0; n * n];
+    for j in 0..n {
+        let sign = if j % 2 == 0 { 1.0 } else { -1.0 };
+        let end_j = if j == 0 || j == n - 1 { 0.5 } else { 1.0 };
+        for k in 0..n {
+            let end_k = if k == 0 || k == n - 1 { 0.5 } else { 1.0 };
+            let w =
+                2.0 / m * end_j * end_k * sign * (std::f64::consts::PI * (j * k) as f64 / m).cos();
+            for i in 0..n {
+                c[j * n + i] += w * e[k * n + i];
+            }
+        }
+    }
+    c
+}
+
+impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
+    /// Chebyshev coefficients (n×D, row j = a_j) of a step's Galerkin curve given its basis
+    /// coefficients (n×D). Their decay is the spectral error indicator (chebfun's "happiness").
+    pub fn chebyshev_coefficients(&self, coeffs: &[f64], dim: usize) -> Vec<f64> {
+        let n = self.tables.n;
+        let mut a = vec![0.0; n * dim];
+        crate::linalg::gemm(
+            n,
+            n,
+            dim,
+            1.0,
+            &self.tables.chebyshev,
+            crate::linalg::Strided::rows(0, n),
+            coeffs,
+            crate::linalg::Strided::rows(0, dim),
+            0.0,
+            &mut a,
+            crate::linalg::Strided::rows(0, dim),
+        );
+        a
+    }
+
+    /// The modal error indicator of a step: the max-norm of the last two Chebyshev
+    /// coefficients of its Galerkin curve (two, because odd and even modes alternate).
+    pub fn modal_indicator(&self, coeffs: &[f64], dim: usize) -> f64 {
+        let a = self.chebyshev_coefficients(coeffs, dim);
+        let n = self.tables.n;
+        a[(n.saturating_sub(2)) * dim..]
+            .iter()
+            .fold(0.0f64, |m, x| m.max(x.abs()))
+    }
+}
+
 /// The most steps one `integrate` call accepts (a guard against absurd input).
 pub const MAX_STEPS: usize = 100_000_000;
 
@@ -416,6 +481,7 @@ impl Tables {
             ramp,
             dphi_end: d1,
             extrapolate,
+            chebyshev: chebyshev_transform(basis, n),
             fit,
         })
     }
