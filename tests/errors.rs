@@ -232,9 +232,14 @@ fn cli_run_writes_the_documented_columns() {
 
 #[test]
 fn cli_check_prints_the_geometric_diagnostics() {
-    let (code, out, err) = gvi(&["check", "kepler", "--n", "12", "--h", "0.5", "--steps", "20"]);
+    let (code, out, err) = gvi(&[
+        "check", "kepler", "--n", "12", "--h", "0.5", "--steps", "20",
+    ]);
     assert_eq!(code, 0, "{err}");
     assert!(out.contains("symplecticity defect"), "{out}");
     assert!(out.contains("angular_momentum"), "{out}");
-    assert_clean_failure(&["check", "kepler", "--n", "0"], "invalid number of basis functions");
+    assert_clean_failure(
+        &["check", "kepler", "--n", "0"],
+        "invalid number of basis functions",
+    );
 }

@@ -1,14 +1,17 @@
 //! Classical baselines behind a common one-step interface, as negative and positive controls
 //! for the geometric checks: classical Runge–Kutta 4 (accurate, not symplectic) and
-//! Störmer–Verlet (second order, symplectic), plus an adapter that puts the Galerkin
+//! Störmer–Verlet (second order, symplectic), Gauss collocation (order 2s, symplectic; the
+//! high-accuracy reference of the N-body report), plus an adapter that puts the Galerkin
 //! integrator behind the same interface.
 //!
 //! The classical methods integrate the canonical equations of a mechanical Lagrangian
 //! L = ½ q̇ᵀMq̇ − V(q): q̇ = M⁻¹p, ṗ = −∇V(q) ([`Lagrangian::force`]).
 
+mod gauss;
 mod rk4;
 mod verlet;
 
+pub use gauss::{GaussCollocation, MAX_STAGES as GAUSS_MAX_STAGES};
 pub use rk4::Rk4;
 pub use verlet::StormerVerlet;
 

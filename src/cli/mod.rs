@@ -1,6 +1,7 @@
 //! The `gvi` command-line tool.
 
 mod check;
+mod nbody;
 mod run;
 mod study;
 
@@ -26,6 +27,9 @@ enum Command {
     Refine(Box<study::RefineArgs>),
     /// Regenerate the paper's experiments (charts and summary.md in --out).
     Reproduce(study::ReproduceArgs),
+    /// N-body accuracy report: per-body position errors, energy and momentum errors and
+    /// Mercury's perihelion drift against a Gauss-collocation reference (CSV, SVG, summary).
+    NbodyReport(Box<nbody::NBodyReportArgs>),
     /// List the built-in scenes.
     Scenes,
 }
@@ -37,10 +41,11 @@ pub fn main_with(cli: Cli) -> Result<(), GviError> {
         Command::Check(args) => check::run_check(*args),
         Command::Refine(args) => study::run_refine(*args),
         Command::Reproduce(args) => study::run_reproduce(args),
+        Command::NbodyReport(args) => nbody::run_nbody_report(*args),
         Command::Scenes => {
             for name in galerkin_vi::scene::Scene::builtin_names() {
                 let scene = galerkin_vi::scene::Scene::load(name)?;
-                println!("{name:<12} {}", scene.description);
+                println!("{name:<20} {}", scene.description);
             }
             Ok(())
         }
