@@ -194,3 +194,65 @@ fn paper_solar_system_run() {
         "n = 25: {worst25:e}, n = 15: {worst15:e}"
     );
 }
+
+/// `gvi run SCENE --plot` writes the orbit chart (and for the solar system `<stem>-inner.svg`);
+/// `gvi nbody-report` writes its CSV, charts and summary; a malformed scene file is a clean
+/// scene error.
+#[test]
+fn cli_orbit_plots_and_report() {
+    use std::process::Command;
+    let dir = std::env::temp_dir().join(format!("gvi-nbody-cli-{}", std::process::id()));
+    let gvi = |args: &[&str]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_gvi"))
+            .args(args)
+            .output()
+            .unwrap();
+        (
+            out.status.code().unwrap_or(-1),
+            String::from_utf8_lossy(&out.stdout).to_string(),
+            String::from_utf8_lossy(&out.stderr).to_string(),
+        )
+    };
+    let plot = dir.join("solar.svg");
+    let (code, _, err) = gvi(&[
+        "run",
+        "solar-system",
+        "--n",
+        "10",
+        "--h",
+        "5",
+        "--steps",
+        "4",
+        "--plot",
+        plot.to_str().unwrap(),
+        "--output",
+        dir.join("solar.csv").to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let svg = std::fs::read_to_string(&plot).unwrap();
+    assert!(svg.contains("Mercury") && svg.contains("Pluto"));
+    assert!(dir.join("solar-inner.svg").is_file(), "{err}");
+    let (code, out, err) = gvi(&[
+        "nbody-report",
+        "figure-eight",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("max position error per body"), "{out}");
+    for f in ["errors.csv", "errors.svg", "orbits.svg", "summary.txt"] {
+        assert!(dir.join(format!("figure-eight-{f}")).is_file(), "{f}");
+    }
+    let bad = dir.join("bad.toml");
+    std::fs::write(
+        &bad,
+        "[system]\ntype = \"nbody\"\ndim = 3\n[[system.bodies]]\nname = \"A\"\nmass = 1\n\
+         q = [0, 0]\nv = [0, 0, 0]\n[method]\nn = 8\nh = 1\nsteps = 1\n",
+    )
+    .unwrap();
+    let (code, _, err) = gvi(&["run", bad.to_str().unwrap()]);
+    assert_ne!(code, 0);
+    assert!(err.contains("q and v need 3 components"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
