@@ -39,6 +39,7 @@ pub mod geometry;
 pub mod integrator;
 pub mod lagrangian;
 pub mod linalg;
+pub mod nbody_report;
 pub mod plot;
 pub mod progress;
 pub mod quadrature;
@@ -62,7 +63,7 @@ pub mod prelude {
     pub use crate::integrator::{GalerkinIntegrator, InitialGuess, NewtonOptions};
     pub use crate::lagrangian::{Lagrangian, Mechanical};
     pub use crate::quadrature::{GaussLegendre, Quadrature, QuadratureKind, QuadratureRule};
-    pub use crate::systems::{HarmonicOscillator, Kepler, Pendulum, System};
+    pub use crate::systems::{HarmonicOscillator, Kepler, NBody, Pendulum, System};
     pub use crate::trajectory::Trajectory;
     pub use crate::{DualNum, GviError};
 }

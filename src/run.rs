@@ -27,9 +27,15 @@ pub struct RunResult {
     /// The solver error, if the run stopped early.
     #[serde(serialize_with = "serialize_error")]
     pub failure: Option<GviError>,
-    /// Chart of the run (orbit for 2-D systems, q(t) otherwise), when requested.
+    /// Chart of the run (orbit for 2-D systems, q(t) otherwise; for N-body systems one orbit
+    /// per body, xy projection), when requested.
     #[serde(skip)]
     pub chart: Option<Chart>,
+    /// For N-body runs whose orbits span more than a factor 10 in size (the solar system):
+    /// a zoomed chart of the inner bodies (those whose orbit stays within a tenth of the
+    /// largest), when a chart was requested and at least three bodies qualify.
+    #[serde(skip)]
+    pub inner_chart: Option<Chart>,
 }
 
 fn serialize_error<S: serde::Serializer>(e: &Option<GviError>, s: S) -> Result<S::Ok, S::Error> {
@@ -109,16 +115,23 @@ pub trait SystemVisitor {
 
 /// Build the system a scene names and hand it to `visitor`.
 pub fn visit_system<V: SystemVisitor>(spec: &SystemSpec, visitor: V) -> Result<V::Output> {
-    match *spec {
+    match spec {
         SystemSpec::Harmonic { mass, stiffness } => {
-            visitor.visit(&HarmonicOscillator::new(mass, stiffness)?)
+            visitor.visit(&HarmonicOscillator::new(*mass, *stiffness)?)
         }
-        SystemSpec::Kepler { mu } => visitor.visit(&Kepler::new(mu)?),
+        SystemSpec::Kepler { mu } => visitor.visit(&Kepler::new(*mu)?),
         SystemSpec::Pendulum {
             length,
             gravity,
             mass,
-        } => visitor.visit(&Pendulum::new(length, gravity, mass)?),
+        } => visitor.visit(&Pendulum::new(*length, *gravity, *mass)?),
+        SystemSpec::NBody { .. } => match spec.nbody()? {
+            Some((system, _)) => visitor.visit(&system),
+            None => Err(GviError::Scene {
+                source_name: "[system]".into(),
+                reason: "not an N-body system".into(),
+            }),
+        },
     }
 }
 
@@ -214,10 +227,20 @@ pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> 
         newton_iterations_per_step: trajectory.newton_iterations() as f64 / steps.max(1) as f64,
         seconds,
     };
-    let chart = if options.chart && steps > 0 {
-        Some(run_chart(system, scene, &trajectory, exact.as_ref())?)
+    let (chart, inner_chart) = if options.chart && steps > 0 {
+        match system.body_names() {
+            Some(names) => {
+                let (all, inner) =
+                    crate::nbody_report::orbit_charts(&names, &scene.name, &trajectory)?;
+                (Some(all), inner)
+            }
+            None => (
+                Some(run_chart(system, scene, &trajectory, exact.as_ref())?),
+                None,
+            ),
+        }
     } else {
-        None
+        (None, None)
     };
     Ok(RunResult {
         scene: scene.clone(),
@@ -227,6 +250,7 @@ pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> 
         trajectory: Some(trajectory),
         failure,
         chart,
+        inner_chart,
     })
 }
 

@@ -1,6 +1,7 @@
 //! Scenes: small TOML files naming a system, its parameters, an initial state and a method.
 //!
-//! Built-in scenes (`harmonic`, `kepler`, `pendulum`) are compiled into the crate from the
+//! Built-in scenes (`harmonic`, `kepler`, `pendulum`, and the N-body scenes `solar-system`,
+//! `outer-solar-system`, `two-body`, `figure-eight`) are compiled into the crate from the
 //! `scenes/` directory; any other argument is read as a path to a user's TOML file. Unknown
 //! keys are rejected so that a typo is an error, not a silently ignored setting.
 //!
@@ -29,10 +30,17 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 /// The built-in scenes: (name, TOML text).
-pub const BUILTIN_SCENES: [(&str, &str); 3] = [
+pub const BUILTIN_SCENES: [(&str, &str); 7] = [
     ("harmonic", include_str!("../scenes/harmonic.toml")),
     ("kepler", include_str!("../scenes/kepler.toml")),
     ("pendulum", include_str!("../scenes/pendulum.toml")),
+    ("solar-system", include_str!("../scenes/solar-system.toml")),
+    (
+        "outer-solar-system",
+        include_str!("../scenes/outer-solar-system.toml"),
+    ),
+    ("two-body", include_str!("../scenes/two-body.toml")),
+    ("figure-eight", include_str!("../scenes/figure-eight.toml")),
 ];
 
 /// A complete experiment: system, initial state and method.
@@ -50,7 +58,10 @@ pub struct Scene {
     pub source: String,
     /// The mechanical system.
     pub system: SystemSpec,
-    /// Initial state.
+    /// Initial state. May be omitted for N-body scenes, whose state comes from the bodies
+    /// (filled in by [`Scene::from_toml_str`]); an explicit `[initial]` with `q` and `p`
+    /// overrides the bodies' state.
+    #[serde(default)]
     pub initial: InitialState,
     /// Integration method.
     pub method: MethodSpec,
@@ -75,6 +86,40 @@ pub enum SystemSpec {
         #[serde(default = "one")]
         mu: f64,
     },
+    /// [`NBody`](crate::systems::NBody): point masses under Newtonian gravity, one
+    /// `[[system.bodies]]` table per body (see [`Body`]). Example:
+    ///
+    /// ```toml
+    /// [system]
+    /// type = "nbody"
+    /// dim = 2
+    /// g = 1.0
+    /// barycentric = true
+    /// [[system.bodies]]
+    /// name = "A"
+    /// mass = 1.0
+    /// q = [1.0, 0.0]
+    /// v = [0.0, 0.5]
+    /// ```
+    #[serde(rename = "nbody")]
+    NBody {
+        /// Dimension of each body: 2 or 3.
+        dim: usize,
+        /// Gravitational constant G (default 1). Must be omitted when the bodies give `gm`.
+        #[serde(default)]
+        g: Option<f64>,
+        /// Names of bodies to merge into one point mass at their barycentre, with their total
+        /// mass and momentum, placed where the first of them was (as the paper aggregates the
+        /// inner solar system for its outer-system run). Named by joining the names with `+`.
+        #[serde(default)]
+        aggregate: Option<Vec<String>>,
+        /// Move to the barycentric frame (subtract the centre-of-mass position and velocity)
+        /// after aggregation.
+        #[serde(default)]
+        barycentric: bool,
+        /// The bodies, in the order of the configuration vector (body-major flattening).
+        bodies: Vec<Body>,
+    },
     /// [`Pendulum`](crate::systems::Pendulum).
     Pendulum {
         /// Length l.
@@ -93,16 +138,39 @@ fn one() -> f64 {
     1.0
 }
 
-/// Initial time and state.
+/// One body of an N-body scene: a name, exactly one of `mass` (with the system's G) or `gm`
+/// (gravitational parameter; then G = 1 and GM is used as the mass, see
+/// [`NBody::from_gm`](crate::systems::NBody::from_gm)), position `q` and velocity `v`
+/// (not momentum: p = m v is formed when the scene is loaded).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Body {
+    /// Name, unique within the scene (e.g. `"Mercury"`).
+    pub name: String,
+    /// Mass (with the system's G).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mass: Option<f64>,
+    /// Gravitational parameter GM (G = 1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gm: Option<f64>,
+    /// Position (length `dim`).
+    pub q: Vec<f64>,
+    /// Velocity (length `dim`).
+    pub v: Vec<f64>,
+}
+
+/// Initial time and state.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct InitialState {
     /// Initial time.
     #[serde(default)]
     pub t0: f64,
-    /// Initial position.
+    /// Initial position (required unless the system is an N-body system).
+    #[serde(default)]
     pub q: Vec<f64>,
-    /// Initial momentum.
+    /// Initial momentum (required unless the system is an N-body system).
+    #[serde(default)]
     pub p: Vec<f64>,
 }
 
@@ -137,6 +205,28 @@ impl Scene {
         if scene.name.is_empty() {
             scene.name = origin.to_string();
         }
+        let missing = scene.initial.q.is_empty() && scene.initial.p.is_empty();
+        match scene.system.nbody() {
+            Ok(Some((_, init))) if missing => {
+                scene.initial.q = init.q;
+                scene.initial.p = init.p;
+            }
+            Ok(Some(_)) => {}
+            Ok(None) if scene.initial.q.is_empty() || scene.initial.p.is_empty() => {
+                return Err(GviError::Scene {
+                    source_name: origin.to_string(),
+                    reason: "missing [initial] q and p".into(),
+                });
+            }
+            Ok(None) => {}
+            Err(GviError::Scene { reason, .. }) => {
+                return Err(GviError::Scene {
+                    source_name: origin.to_string(),
+                    reason,
+                });
+            }
+            Err(e) => return Err(e),
+        }
         Ok(scene)
     }
 
@@ -165,6 +255,31 @@ impl Scene {
     /// Names of the built-in scenes.
     pub fn builtin_names() -> Vec<&'static str> {
         BUILTIN_SCENES.iter().map(|(n, _)| *n).collect()
+    }
+}
+
+impl SystemSpec {
+    /// For an N-body spec: the system (with body names) and the initial state built from the
+    /// bodies (aggregated, then moved to the barycentre if asked; p = m v). `Ok(None)` for
+    /// other systems; malformed bodies are [`GviError::Scene`].
+    pub fn nbody(&self) -> Result<Option<(crate::systems::NBody, InitialState)>> {
+        match self {
+            SystemSpec::NBody {
+                dim,
+                g,
+                aggregate,
+                barycentric,
+                bodies,
+            } => crate::systems::nbody_scene::build(
+                *dim,
+                *g,
+                aggregate.as_deref(),
+                *barycentric,
+                bodies,
+            )
+            .map(Some),
+            _ => Ok(None),
+        }
     }
 }
 
@@ -201,5 +316,53 @@ mod tests {
             Scene::load("/no/such/scene.toml"),
             Err(GviError::Scene { .. })
         ));
+    }
+
+    #[test]
+    fn nbody_scenes_derive_their_initial_state() {
+        let s = Scene::load("solar-system").unwrap();
+        assert_eq!((s.initial.q.len(), s.initial.p.len()), (30, 30));
+        // p = GM v (barycentric correction of the data is below 1e-8 of the Sun's velocity).
+        let mercury_vx = 2.137_177_411_241_642e-2;
+        assert!((s.initial.p[3] / 0.4912547451450812e-10 - mercury_vx).abs() < 1e-7);
+        let two = Scene::load("two-body").unwrap();
+        assert_eq!(two.initial.q, [-0.2, 0.0, 0.2, 0.0]);
+        assert_eq!(two.initial.p, [0.0, -0.5, 0.0, 0.5]);
+    }
+
+    #[test]
+    fn malformed_nbody_scenes_are_scene_errors() {
+        let method = "[method]\nn = 8\nh = 1\nsteps = 1\n";
+        let head = "[system]\ntype = \"nbody\"\ndim = 2\n";
+        let bad = [
+            // no bodies
+            format!("{head}bodies = []\n{method}"),
+            // missing q
+            format!("{head}[[system.bodies]]\nname = \"A\"\nmass = 1\nv = [0, 0]\n{method}"),
+            // unknown key in a body
+            format!(
+                "{head}[[system.bodies]]\nname = \"A\"\nmass = 1\nq = [0, 0]\nv = [0, 0]\n\
+                 colour = \"red\"\n{method}"
+            ),
+            // wrong length
+            format!(
+                "{head}[[system.bodies]]\nname = \"A\"\nmass = 1\nq = [0]\nv = [0, 0]\n{method}"
+            ),
+            // gm together with g
+            format!(
+                "[system]\ntype = \"nbody\"\ndim = 2\ng = 2.0\n[[system.bodies]]\nname = \"A\"\n\
+                 gm = 1\nq = [0, 0]\nv = [0, 0]\n{method}"
+            ),
+            // missing dim
+            format!("[system]\ntype = \"nbody\"\nbodies = []\n{method}"),
+            // a non-N-body scene without [initial]
+            format!("[system]\ntype = \"kepler\"\n{method}"),
+        ];
+        for text in bad {
+            match Scene::from_toml_str("t", &text) {
+                Err(GviError::Scene { .. }) => {}
+                other => panic!("expected a scene error for {text:?}, got {other:?}"),
+            }
+        }
     }
 }

@@ -1,9 +1,11 @@
 //! Classical baselines behind a common one-step interface, as negative and positive controls
 //! for the geometric checks and as peers in the work–precision and stability studies:
 //! classical Runge–Kutta 4 (accurate, not symplectic), Störmer–Verlet (second order,
-//! symplectic), s-stage Gauss–Legendre collocation (order 2s, symplectic), Yoshida-6 and
-//! Kahan–Li-8 compositions of Störmer–Verlet, DOP853 (external, cargo feature `dop853`), plus
-//! an adapter that puts the Galerkin integrator behind the same interface.
+//! symplectic), s-stage Gauss–Legendre collocation (order 2s, symplectic; two solvers: a
+//! simplified-Newton one for the studies and a fixed-point one with compensated summation that
+//! serves as the high-accuracy reference of the N-body report), Yoshida-6 and Kahan–Li-8
+//! compositions of Störmer–Verlet, DOP853 (external, cargo feature `dop853`), plus an adapter
+//! that puts the Galerkin integrator behind the same interface.
 //!
 //! The classical methods integrate the canonical equations of a mechanical Lagrangian
 //! L = ½ q̇ᵀMq̇ − V(q): q̇ = M⁻¹p, ṗ = −∇V(q) ([`Lagrangian::force`]).
@@ -11,6 +13,7 @@
 mod composition;
 #[cfg(feature = "dop853")]
 mod dop853;
+mod gauss;
 mod gauss_collocation;
 mod rk4;
 mod verlet;
@@ -18,6 +21,7 @@ mod verlet;
 pub use composition::{Composition, CompositionScheme};
 #[cfg(feature = "dop853")]
 pub use dop853::Dop853Baseline;
+pub use gauss::{GaussCollocation, MAX_STAGES as GAUSS_MAX_STAGES};
 pub use gauss_collocation::{GaussCollocationBaseline, MAX_GAUSS_STAGES};
 pub use rk4::Rk4;
 pub use verlet::StormerVerlet;

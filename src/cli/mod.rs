@@ -1,6 +1,7 @@
 //! The `gvi` command-line tool.
 
 mod check;
+mod nbody;
 mod run;
 mod study;
 mod study2;
@@ -39,6 +40,9 @@ enum Command {
     /// n-refinement at fixed h against h-refinement at fixed n: error against force
     /// evaluations and seconds (CSV, JSON, SVG).
     CompareRefinement(Box<study2::CompareRefinementArgs>),
+    /// N-body accuracy report: per-body position errors, energy and momentum errors and
+    /// Mercury's perihelion drift against a Gauss-collocation reference (CSV, SVG, summary).
+    NbodyReport(Box<nbody::NBodyReportArgs>),
     /// List the built-in scenes.
     Scenes,
 }
@@ -54,10 +58,11 @@ pub fn main_with(cli: Cli) -> Result<(), GviError> {
         Command::WorkPrecision(args) => study2::run_work_precision(*args),
         Command::Stability(args) => study2::run_stability(*args),
         Command::CompareRefinement(args) => study2::run_compare_refinement(*args),
+        Command::NbodyReport(args) => nbody::run_nbody_report(*args),
         Command::Scenes => {
             for name in galerkin_vi::scene::Scene::builtin_names() {
                 let scene = galerkin_vi::scene::Scene::load(name)?;
-                println!("{name:<12} {}", scene.description);
+                println!("{name:<20} {}", scene.description);
             }
             Ok(())
         }

@@ -15,7 +15,7 @@ pub enum Format {
 
 #[derive(Debug, Args)]
 pub struct RunArgs {
-    /// Built-in scene name (harmonic, kepler, pendulum) or path to a TOML scene file.
+    /// Built-in scene name (see `gvi scenes`) or path to a TOML scene file.
     pub scene: String,
     /// Basis: chebyshev (others as they are available).
     #[arg(long)]
@@ -47,7 +47,9 @@ pub struct RunArgs {
     /// Output file (default: stdout).
     #[arg(long, short)]
     pub output: Option<PathBuf>,
-    /// Also write an SVG chart of the run (orbit for 2-D systems, q(t) otherwise).
+    /// Also write an SVG chart of the run (orbit for 2-D systems, q(t) otherwise; N-body: one
+    /// orbit per body, xy projection, and for the solar system a zoom on the inner planets
+    /// written next to it as `<stem>-inner.svg`).
     #[arg(long)]
     pub plot: Option<PathBuf>,
 }
@@ -99,6 +101,18 @@ pub fn run(args: RunArgs) -> Result<(), GviError> {
             .save_svg(path)
             .map_err(|e| GviError::Plot(e.to_string()))?;
         eprintln!("chart written to {}", path.display());
+        if let Some(inner) = &result.inner_chart {
+            let inner_path = path.with_file_name(format!(
+                "{}-inner.svg",
+                path.file_stem()
+                    .and_then(|s| s.to_str())
+                    .unwrap_or("orbits")
+            ));
+            inner
+                .save_svg(&inner_path)
+                .map_err(|e| GviError::Plot(e.to_string()))?;
+            eprintln!("inner-bodies chart written to {}", inner_path.display());
+        }
     }
     eprintln!("{}", result.summary);
     match result.failure {

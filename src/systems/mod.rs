@@ -1,5 +1,6 @@
 //! Built-in mechanical systems: the harmonic oscillator and the planar Kepler problem of the
-//! paper's §5 (with exact solutions), and the simple pendulum.
+//! paper's §5 (with exact solutions), the gravitational N-body problem of its §5.2.2, and the
+//! simple pendulum.
 //!
 //! Each implements [`Mechanical`](crate::Mechanical) with hand-written gradient and Hessian
 //! (the AD defaults are checked against them in tests) and [`System`], which adds the
@@ -8,10 +9,13 @@
 mod harmonic;
 mod kepler;
 pub mod kepler_orbit;
+mod nbody;
+pub(crate) mod nbody_scene;
 mod pendulum;
 
 pub use harmonic::HarmonicOscillator;
 pub use kepler::Kepler;
+pub use nbody::NBody;
 pub use pendulum::Pendulum;
 
 use crate::error::Result;
@@ -34,6 +38,12 @@ pub trait System: Lagrangian {
     /// integrator conserves them at step ends). Default: none.
     fn symmetries(&self) -> Vec<crate::geometry::NamedMomentumMap> {
         Vec::new()
+    }
+
+    /// For systems of point masses: the body names, in the order of the (body-major)
+    /// configuration vector. Charts draw one orbit per body. Default: `None`.
+    fn body_names(&self) -> Option<Vec<String>> {
+        None
     }
 
     /// The exact solution through (q0, p0) at t0, if this system has one in closed form.
