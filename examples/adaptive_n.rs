@@ -27,7 +27,8 @@ fn main() -> Result<(), GviError> {
         let exact = kepler
             .exact_solution(0.0, &q0, &p0)?
             .ok_or_else(|| GviError::Unsupported("exact".into()))?;
-        let (h, steps) = (1.0, 100);
+        // e = 0.9 needs a shorter step near periapsis (r = 0.1): h = 0.25.
+        let (h, steps) = if e < 0.8 { (1.0, 100) } else { (0.25, 100) };
         for tol in [1e-6, 1e-8, 1e-10, 1e-12] {
             let opts =
                 AdaptiveOptions::new(tol, BasisKind::Legendre, QuadratureKind::GaussLegendre, h);

@@ -35,6 +35,10 @@ use serde::{Deserialize, Serialize};
 /// the module docs): the per-step indicator tolerance is (tol / steps)^(1/α).
 pub const INDICATOR_EXPONENT: f64 = 1.7;
 
+/// Safety factor on the tolerance: the per-step indicator tolerance is
+/// (SAFETY · tol / steps)^(1/α).
+pub const SAFETY: f64 = 0.1;
+
 /// The default ladder of n.
 pub const DEFAULT_LADDER: [usize; 14] = [4, 6, 8, 10, 12, 14, 16, 20, 24, 28, 32, 40, 48, 64];
 
@@ -129,7 +133,7 @@ pub fn integrate_adaptive<L: Lagrangian>(
     crate::error::ensure_len("initial momentum p0", d, p0.len())?;
     crate::error::ensure_finite("initial position q0", q0)?;
     crate::error::ensure_finite("initial momentum p0", p0)?;
-    let local_tol = (opts.tol / steps as f64).powf(1.0 / INDICATOR_EXPONENT);
+    let local_tol = (SAFETY * opts.tol / steps as f64).powf(1.0 / INDICATOR_EXPONENT);
     let mut traj = Trajectory::new(
         opts.basis,
         opts.ladder[0],

@@ -1,6 +1,7 @@
 //! Running a scene: build the system and the integrator, integrate, and tabulate the states,
 //! invariants and (where an exact solution exists) errors. This is what `gvi run` does.
 
+use crate::adaptive::{AdaptiveOptions, integrate_adaptive};
 use crate::error::{GviError, Result};
 use crate::integrator::GalerkinIntegrator;
 use crate::plot::{Chart, Series};
@@ -36,6 +37,9 @@ pub struct RunResult {
     /// largest), when a chart was requested and at least three bodies qualify.
     #[serde(skip)]
     pub inner_chart: Option<Chart>,
+    /// n against time, for tolerance-driven runs with a chart.
+    #[serde(skip)]
+    pub n_chart: Option<Chart>,
 }
 
 fn serialize_error<S: serde::Serializer>(e: &Option<GviError>, s: S) -> Result<S::Ok, S::Error> {
@@ -64,6 +68,10 @@ pub struct RunSummary {
     pub newton_iterations_per_step: f64,
     /// Wall-clock seconds of the integration.
     pub seconds: f64,
+    /// Force (first-derivative) evaluations, including rejected attempts of `--tol` runs.
+    pub force_evaluations: usize,
+    /// Warnings (e.g. a tolerance not met at the largest n: best effort kept).
+    pub warnings: Vec<String>,
 }
 
 impl std::fmt::Display for RunSummary {
@@ -80,9 +88,13 @@ impl std::fmt::Display for RunSummary {
         }
         write!(
             f,
-            "  Newton iterations per step: {:.2}; integration time: {:.3} s",
-            self.newton_iterations_per_step, self.seconds
-        )
+            "  Newton iterations per step: {:.2}; force evaluations: {}; integration time: {:.3} s",
+            self.newton_iterations_per_step, self.force_evaluations, self.seconds
+        )?;
+        for w in &self.warnings {
+            write!(f, "\n  warning: {w}")?;
+        }
+        Ok(())
     }
 }
 
@@ -158,7 +170,21 @@ pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> 
     crate::error::ensure_len("initial p (system dimension)", d, init.p.len())?;
     let exact = system.exact_solution(init.t0, &init.q, &init.p)?;
     let start = Instant::now();
-    let (trajectory, failure) = match gvi.integrate(system, init.t0, &init.q, &init.p, m.steps) {
+    let mut adaptive: Option<(Vec<f64>, Vec<String>, usize)> = None;
+    let outcome = match m.tol {
+        None => gvi.integrate(system, init.t0, &init.q, &init.p, m.steps),
+        Some(tol) => {
+            let mut opts = AdaptiveOptions::new(tol, m.basis, m.quadrature, m.h);
+            if let Some(l) = &m.ladder {
+                opts.ladder = l.clone();
+            }
+            integrate_adaptive(system, &opts, init.t0, &init.q, &init.p, m.steps).map(|run| {
+                adaptive = Some((run.indicators, run.warnings, run.gradient_evaluations));
+                run.trajectory
+            })
+        }
+    };
+    let (trajectory, failure) = match outcome {
         Ok(t) => (t, None),
         Err(f) => match f.partial {
             Some(partial) => (*partial, Some(f.error)),
@@ -174,6 +200,10 @@ pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> 
     columns.extend(names.iter().map(|s| s.to_string()));
     if exact.is_some() {
         columns.push("position_error".into());
+    }
+    if m.tol.is_some() {
+        columns.push("n".into());
+        columns.push("indicator".into());
     }
     let mut inv0 = vec![0.0; names.len()];
     system.invariants(&init.q, &init.p, &mut inv0);
@@ -197,6 +227,18 @@ pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> 
             max_pos = max_pos.map(|m| m.max(e));
             row.push(e);
         }
+        if let Some((ind, _, _)) = &adaptive {
+            // Row k is the state at t_k: report the n and indicator of the step that led there.
+            let (n, i) = match k {
+                0 => (f64::NAN, f64::NAN),
+                _ => (
+                    trajectory.n_of_step(k - 1) as f64,
+                    ind.get(k - 1).copied().unwrap_or(f64::NAN),
+                ),
+            };
+            row.push(n);
+            row.push(i);
+        }
         rows.push(row);
     }
     let max_curve_error = match (&exact, options.curve_samples_per_step) {
@@ -210,9 +252,17 @@ pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> 
         _ => None,
     };
     let steps = trajectory.steps();
-    let summary = RunSummary {
-        system: system.name().to_string(),
-        method: format!(
+    let n_range = (!trajectory.step_n.is_empty()).then(|| {
+        let lo = trajectory.step_n.iter().copied().min().unwrap_or(0);
+        let hi = trajectory.step_n.iter().copied().max().unwrap_or(0);
+        (lo, hi)
+    });
+    let method = match (m.tol, n_range) {
+        (Some(tol), Some((lo, hi))) => format!(
+            "{} basis, n chosen per step in {lo}…{hi} for tol = {tol:e}, {} (default points), h = {}",
+            m.basis, m.quadrature, m.h
+        ),
+        _ => format!(
             "{} basis n = {}, {} with {} points, h = {}",
             m.basis,
             m.n,
@@ -220,6 +270,16 @@ pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> 
             gvi.rule().len(),
             m.h
         ),
+    };
+    let (warnings, force_evaluations) = match &adaptive {
+        Some((_, w, e)) => (w.clone(), *e),
+        None => (Vec::new(), trajectory.gradient_evaluations()),
+    };
+    let summary = RunSummary {
+        system: system.name().to_string(),
+        method,
+        warnings,
+        force_evaluations,
         steps,
         max_position_error: max_pos,
         max_curve_error,
@@ -242,7 +302,28 @@ pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> 
     } else {
         (None, None)
     };
+    let n_chart = (options.chart && !trajectory.step_n.is_empty()).then(|| {
+        let pts: Vec<(f64, f64)> = (0..trajectory.steps())
+            .map(|k| {
+                (
+                    trajectory.time(k) + 0.5 * trajectory.h,
+                    trajectory.n_of_step(k) as f64,
+                )
+            })
+            .collect();
+        Chart::new(
+            format!(
+                "{}: n chosen per step (tol = {:e})",
+                scene.name,
+                m.tol.unwrap_or(f64::NAN)
+            ),
+            "t (step midpoint)",
+            "n",
+        )
+        .with_series(Series::line_markers("n", pts))
+    });
     Ok(RunResult {
+        n_chart,
         scene: scene.clone(),
         columns,
         rows,
@@ -304,7 +385,11 @@ impl RunResult {
                 .iter()
                 .enumerate()
                 .map(|(i, x)| {
-                    if i == 0 {
+                    let integer =
+                        matches!(self.columns.get(i).map(String::as_str), Some("step" | "n"));
+                    if x.is_nan() {
+                        String::new()
+                    } else if integer {
                         format!("{}", *x as u64)
                     } else {
                         format!("{x:e}")

@@ -193,6 +193,14 @@ pub struct MethodSpec {
     pub h: f64,
     /// Number of steps.
     pub steps: usize,
+    /// Tolerance on the max position error: choose n per step from `ladder` (see
+    /// [`crate::adaptive`]); `n` is then ignored.
+    #[serde(default)]
+    pub tol: Option<f64>,
+    /// The values of n a tolerance-driven run chooses from (default
+    /// [`crate::adaptive::DEFAULT_LADDER`]).
+    #[serde(default)]
+    pub ladder: Option<Vec<usize>>,
 }
 
 impl Scene {

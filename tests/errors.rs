@@ -242,3 +242,24 @@ fn cli_check_prints_the_geometric_diagnostics() {
         "invalid number of basis functions",
     );
 }
+
+#[test]
+fn cli_tol_adds_the_n_column_and_rejects_bad_tolerances() {
+    let (code, out, err) = gvi(&[
+        "run", "kepler", "--tol", "1e-8", "--h", "1", "--steps", "10",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let header = out.lines().next().unwrap();
+    assert!(header.ends_with(",position_error,n,indicator"), "{header}");
+    let row: Vec<&str> = out.lines().nth(1 + 5).unwrap().split(',').collect();
+    let n: usize = row[row.len() - 2].parse().unwrap();
+    assert!((4..=64).contains(&n));
+    assert_clean_failure(&["run", "kepler", "--tol", "-1"], "tol");
+    assert_clean_failure(
+        &["run", "kepler", "--tol", "1e-8", "--ladder", "8,4"],
+        "ladder",
+    );
+    let (code, _, err) = gvi(&["run", "kepler", "--tol", "1e-30", "--steps", "2"]);
+    assert_eq!(code, 0);
+    assert!(err.contains("warning"), "{err}");
+}

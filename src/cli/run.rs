@@ -41,6 +41,13 @@ pub struct RunArgs {
     /// Initial momentum, comma-separated.
     #[arg(long, allow_hyphen_values = true)]
     pub p0: Option<String>,
+    /// Tolerance on the max position error: choose n per step (adds the CSV columns `n` and
+    /// `indicator`; with --plot also writes <stem>-n.svg).
+    #[arg(long, allow_hyphen_values = true)]
+    pub tol: Option<f64>,
+    /// Values of n a --tol run may use, comma-separated (default 4,6,…,64).
+    #[arg(long)]
+    pub ladder: Option<String>,
     /// Output format.
     #[arg(long, value_enum, default_value_t = Format::Csv)]
     pub format: Format,
@@ -77,6 +84,23 @@ pub fn apply_overrides(scene: &mut Scene, a: &RunArgs) -> Result<(), GviError> {
     if let Some(q) = &a.q0 {
         scene.initial.q = parse_vector("--q0", q)?;
     }
+    if a.tol.is_some() {
+        scene.method.tol = a.tol;
+    }
+    if let Some(l) = &a.ladder {
+        let values = parse_vector("--ladder", l)?;
+        let mut ladder = Vec::with_capacity(values.len());
+        for v in values {
+            if !(v.is_finite() && v >= 2.0 && v.fract() == 0.0) {
+                return Err(GviError::InvalidArgument {
+                    name: "--ladder".into(),
+                    reason: format!("{v} is not a whole number of basis functions ≥ 2"),
+                });
+            }
+            ladder.push(v as usize);
+        }
+        scene.method.ladder = Some(ladder);
+    }
     if let Some(p) = &a.p0 {
         scene.initial.p = parse_vector("--p0", p)?;
     }
@@ -112,6 +136,15 @@ pub fn run(args: RunArgs) -> Result<(), GviError> {
                 .save_svg(&inner_path)
                 .map_err(|e| GviError::Plot(e.to_string()))?;
             eprintln!("inner-bodies chart written to {}", inner_path.display());
+        }
+        if let Some(nc) = &result.n_chart {
+            let n_path = path.with_file_name(format!(
+                "{}-n.svg",
+                path.file_stem().and_then(|s| s.to_str()).unwrap_or("run")
+            ));
+            nc.save_svg(&n_path)
+                .map_err(|e| GviError::Plot(e.to_string()))?;
+            eprintln!("n-against-time chart written to {}", n_path.display());
         }
     }
     eprintln!("{}", result.summary);
