@@ -1,9 +1,9 @@
 //! Classical baselines behind a common one-step interface, as negative and positive controls
 //! for the geometric checks and as peers in the work–precision and stability studies:
 //! classical Runge–Kutta 4 (accurate, not symplectic), Störmer–Verlet (second order,
-//! symplectic), s-stage Gauss–Legendre collocation (order 2s, symplectic; two solvers: a
-//! simplified-Newton one for the studies and a fixed-point one with compensated summation that
-//! serves as the high-accuracy reference of the N-body report), Yoshida-6 and Kahan–Li-8
+//! symplectic), s-stage Gauss–Legendre collocation (order 2s, symplectic, simplified Newton;
+//! with compensated summation it is the high-accuracy reference of the N-body report),
+//! Yoshida-6 and Kahan–Li-8
 //! compositions of Störmer–Verlet, DOP853 (external, cargo feature `dop853`), plus an adapter
 //! that puts the Galerkin integrator behind the same interface.
 //!
@@ -13,7 +13,6 @@
 mod composition;
 #[cfg(feature = "dop853")]
 mod dop853;
-mod gauss;
 mod gauss_collocation;
 mod rk4;
 mod verlet;
@@ -21,7 +20,6 @@ mod verlet;
 pub use composition::{Composition, CompositionScheme};
 #[cfg(feature = "dop853")]
 pub use dop853::Dop853Baseline;
-pub use gauss::{GaussCollocation, MAX_STAGES as GAUSS_MAX_STAGES};
 pub use gauss_collocation::{GaussCollocationBaseline, MAX_GAUSS_STAGES};
 pub use rk4::Rk4;
 pub use verlet::StormerVerlet;

@@ -1,7 +1,7 @@
 //! Accuracy of N-body runs against an independent high-accuracy reference of the same
 //! Newtonian point-mass model: what `gvi nbody-report SCENE` writes.
 //!
-//! The reference is Gauss collocation ([`GaussCollocation`]) with s = 6 stages (order 12),
+//! The reference is Gauss collocation ([`GaussCollocationBaseline`]) with s = 6 stages (order 12),
 //! fixed-point iteration and compensated summation, at a step h/K that divides the Galerkin
 //! step (K chosen so that the shortest two-body orbital period of the initial state spans at
 //! least 256 reference steps); a second reference at step h/(2K) estimates its error
@@ -33,7 +33,7 @@ mod elements;
 pub use charts::{ORBIT_SAMPLES_PER_STEP, orbit_charts};
 pub use elements::{longitude_of_perihelion, wrap};
 
-use crate::baselines::{GaussCollocation, OneStepMethod};
+use crate::baselines::{GaussCollocationBaseline, OneStepMethod};
 use crate::error::{GviError, Result};
 use crate::integrator::GalerkinIntegrator;
 use crate::lagrangian::Lagrangian;
@@ -138,10 +138,11 @@ pub fn nbody_report(scene: &Scene, options: ReportOptions) -> Result<NBodyReport
         .substeps
         .unwrap_or_else(|| auto_substeps(&system, &init.q, &init.p, m.h));
     let start = Instant::now();
-    let mut gauss = GaussCollocation::new(&system, options.stages, m.h / k as f64)?;
+    let mut gauss = GaussCollocationBaseline::new(&system, options.stages, m.h / k as f64)?;
     let (rq, rp) = gauss.integrate_compensated(&init.q, &init.p, m.steps * k, k)?;
     let reference_uncertainty = if options.cross_check {
-        let mut fine = GaussCollocation::new(&system, options.stages, m.h / (2 * k) as f64)?;
+        let mut fine =
+            GaussCollocationBaseline::new(&system, options.stages, m.h / (2 * k) as f64)?;
         let (fq, _) = fine.integrate_compensated(&init.q, &init.p, m.steps * 2 * k, 2 * k)?;
         Some(
             rq.iter()
