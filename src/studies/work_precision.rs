@@ -382,27 +382,31 @@ impl WorkPrecisionStudy {
             "max position error",
         )
         .log_x()
-        .log_y();
+        .log_y()
+        .size(1000, 720);
+        // One series per method: the Galerkin bases as markers over all (n, h) — their
+        // envelope is the point — and the baselines as lines over their step or tolerance.
         let mut keys: Vec<String> = Vec::new();
-        let key = |p: &WorkPoint| match (p.n, p.h) {
-            (Some(_), Some(h)) => format!("{} h = {h}", p.method),
-            _ => p.method.clone(),
-        };
         for p in &self.points {
-            if !keys.contains(&key(p)) {
-                keys.push(key(p));
+            if !keys.contains(&p.method) {
+                keys.push(p.method.clone());
             }
         }
         for k in keys {
             let pts: Vec<(f64, f64)> = self
                 .points
                 .iter()
-                .filter(|p| key(p) == k && p.failure.is_none() && p.error > 0.0)
+                .filter(|p| p.method == k && p.failure.is_none() && p.error > 0.0)
                 .map(|p| (p.seconds, p.error))
                 .collect();
-            if !pts.is_empty() {
-                chart.push(Series::line_markers(k, pts));
+            if pts.is_empty() {
+                continue;
             }
+            chart.push(if k.starts_with("galerkin") {
+                Series::markers(format!("{k} (all n, h)"), pts)
+            } else {
+                Series::line_markers(k, pts)
+            });
         }
         let front: Vec<(f64, f64)> = self
             .pareto_front()
