@@ -233,7 +233,7 @@ pub struct CurveFit {
 }
 
 impl CurveFit {
-    /// Factorise the collocation matrix A[k][i] = φ_i(x_k) of `basis`.
+    /// Factorise the collocation matrix A_ki = φ_i(x_k) of `basis`.
     pub fn new<B: Basis + ?Sized>(basis: &B) -> Result<Self> {
         let n = basis.len();
         let nodes = basis.interpolation_nodes();

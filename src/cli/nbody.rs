@@ -10,7 +10,7 @@ use std::path::PathBuf;
 pub struct NBodyReportArgs {
     /// N-body scene: solar-system, outer-solar-system, two-body, figure-eight, or a TOML path.
     pub scene: String,
-    /// Output directory for <scene>-errors.csv/.svg, <scene>-orbits.svg and <scene>-summary.txt.
+    /// Output directory for SCENE-errors.csv/.svg, SCENE-orbits.svg and SCENE-summary.txt.
     #[arg(long, default_value = "out")]
     pub out: PathBuf,
     /// Number of basis functions n (default: the scene's).

@@ -42,7 +42,7 @@ pub struct RunArgs {
     #[arg(long, allow_hyphen_values = true)]
     pub p0: Option<String>,
     /// Tolerance on the max position error: choose n per step (adds the CSV columns `n` and
-    /// `indicator`; with --plot also writes <stem>-n.svg).
+    /// `indicator`; with --plot also writes STEM-n.svg).
     #[arg(long, allow_hyphen_values = true)]
     pub tol: Option<f64>,
     /// Values of n a --tol run may use, comma-separated (default 4,6,…,64).

@@ -46,7 +46,7 @@ struct NodeHessians {
 
 impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
     /// Perform one step from (q, p) and return its exact Jacobian (implicit function theorem
-    /// on the stage equations, see the [module docs](self)) with the new state.
+    /// on the stage equations, see the module docs of `integrator::tangent`) with the new state.
     ///
     /// ```
     /// use galerkin_vi::prelude::*;

@@ -215,22 +215,10 @@ pub fn nbody_report(scene: &Scene, options: ReportOptions) -> Result<NBodyReport
 
 /// Reference steps per Galerkin step: the shortest two-body period 2π√(r³/G(mᵢ+mⱼ)) of the
 /// initial state over 256, divided into h.
-fn auto_substeps(system: &NBody, q: &[f64], _p: &[f64], h: f64) -> usize {
-    let (nb, k) = (system.bodies(), system.body_dim());
-    let ms = system.masses();
-    let mut shortest = f64::INFINITY;
-    for i in 0..nb {
-        for j in i + 1..nb {
-            let r2: f64 = (0..k).map(|c| (q[i * k + c] - q[j * k + c]).powi(2)).sum();
-            let period =
-                std::f64::consts::TAU * (r2 * r2.sqrt() / (system.g() * (ms[i] + ms[j]))).sqrt();
-            shortest = shortest.min(period);
-        }
-    }
-    if shortest.is_finite() && shortest > 0.0 {
-        ((h * 256.0 / shortest).ceil() as usize).clamp(1, 100_000)
-    } else {
-        64
+fn auto_substeps(system: &NBody, q: &[f64], p: &[f64], h: f64) -> usize {
+    match system.shortest_time_scale(q, p) {
+        Some(shortest) => ((h * 256.0 / shortest).ceil() as usize).clamp(1, 100_000),
+        None => 64,
     }
 }
 

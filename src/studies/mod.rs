@@ -14,6 +14,7 @@ pub mod reproduce;
 pub mod stability;
 pub mod work_precision;
 
+use crate::baselines::GaussCollocationBaseline;
 use crate::error::{GviError, Result};
 use crate::integrator::GalerkinIntegrator;
 use crate::scene::{InitialState, MethodSpec};
@@ -29,6 +30,16 @@ pub enum Reference {
     Exact(ExactSolution),
     /// A high-resolution numerical solution (dense output).
     Numerical(Box<Trajectory>),
+    /// Positions sampled every `dt` from `t0` (a Gauss-collocation reference for systems with
+    /// many degrees of freedom); only sample times have values.
+    Sampled {
+        /// First sample time.
+        t0: f64,
+        /// Sample spacing.
+        dt: f64,
+        /// Positions at t0 + k dt.
+        q: Vec<Vec<f64>>,
+    },
 }
 
 impl Reference {
@@ -37,6 +48,16 @@ impl Reference {
         match self {
             Reference::Exact(e) => Ok(e.position(t)),
             Reference::Numerical(tr) => tr.position_at(t),
+            Reference::Sampled { t0, dt, q } => {
+                let x = (t - t0) / dt;
+                let k = x.round();
+                if (x - k).abs() > 1e-6 || k < 0.0 || k as usize >= q.len() {
+                    return Err(GviError::Unsupported(format!(
+                        "the reference is sampled every {dt} from {t0}; no value at t = {t}"
+                    )));
+                }
+                Ok(q[k as usize].clone())
+            }
         }
     }
 
@@ -51,6 +72,23 @@ impl Reference {
         if let Some(e) = system.exact_solution(initial.t0, &initial.q, &initial.p)? {
             return Ok(Reference::Exact(e));
         }
+        if let (Some(tau), true) = (
+            system.shortest_time_scale(&initial.q, &initial.p),
+            system.dim() > 4,
+        ) {
+            // Many degrees of freedom: Gauss collocation (s = 6, order 12) with compensated
+            // summation, ≥ 256 steps per shortest period, sampled 16 times per step h.
+            let per = 16 * ((h * 256.0 / tau / 16.0).ceil() as usize).clamp(1, 10_000);
+            let steps = (horizon / h).ceil().max(1.0) as usize;
+            let mut gauss = GaussCollocationBaseline::new(system, 6, h / per as f64)?;
+            let (q, _) =
+                gauss.integrate_compensated(&initial.q, &initial.p, steps * per, per / 16)?;
+            return Ok(Reference::Sampled {
+                t0: initial.t0,
+                dt: h / 16.0,
+                q,
+            });
+        }
         let href = (h / 4.0).min(1.0);
         let steps = (horizon / href).ceil().max(1.0) as usize;
         let gvi = GalerkinIntegrator::spectral(48, href)?;
@@ -63,6 +101,9 @@ impl Reference {
         match self {
             Reference::Exact(_) => "exact solution",
             Reference::Numerical(_) => "spectral reference run (n = 48, h/4)",
+            Reference::Sampled { .. } => {
+                "Gauss collocation reference (s = 6, compensated, ≥ 256 steps per shortest period)"
+            }
         }
     }
 }

@@ -46,6 +46,13 @@ pub trait System: Lagrangian {
         None
     }
 
+    /// The shortest dynamical time scale at (q, p) — for N bodies the shortest two-body
+    /// period — used to choose the step of numerical reference solutions. Default: unknown.
+    fn shortest_time_scale(&self, q: &[f64], p: &[f64]) -> Option<f64> {
+        let _ = (q, p);
+        None
+    }
+
     /// The exact solution through (q0, p0) at t0, if this system has one in closed form.
     /// `Ok(None)` when none is known for this system or this initial state.
     fn exact_solution(&self, t0: f64, q0: &[f64], p0: &[f64]) -> Result<Option<ExactSolution>> {

@@ -272,6 +272,21 @@ const NAMES_2D: [&str; 4] = ["energy", "px", "py", "angular_momentum"];
 const NAMES_3D: [&str; 7] = ["energy", "px", "py", "pz", "lx", "ly", "lz"];
 
 impl System for NBody {
+    fn shortest_time_scale(&self, q: &[f64], _p: &[f64]) -> Option<f64> {
+        let (nb, k) = (self.bodies(), self.body_dim());
+        let ms = self.masses();
+        let mut shortest = f64::INFINITY;
+        for i in 0..nb {
+            for j in i + 1..nb {
+                let r2: f64 = (0..k).map(|c| (q[i * k + c] - q[j * k + c]).powi(2)).sum();
+                let period =
+                    std::f64::consts::TAU * (r2 * r2.sqrt() / (self.g() * (ms[i] + ms[j]))).sqrt();
+                shortest = shortest.min(period);
+            }
+        }
+        (shortest.is_finite() && shortest > 0.0).then_some(shortest)
+    }
+
     fn name(&self) -> &'static str {
         "nbody"
     }
