@@ -11,6 +11,8 @@ use crate::lagrangian::Lagrangian;
 use crate::quadrature::QuadratureRule;
 use crate::trajectory::Trajectory;
 
+/// Round-off floor warning: tol below FLOOR_FACTOR · ε · max|q0| · steps.
+const FLOOR_FACTOR: f64 = 1000.0;
 /// Step down one rung when the estimate is below this fraction of the budget.
 const DOWN: f64 = 0.05;
 /// [`ErrorControl::Calibrated`]: a check is forced when the indicator grows by this factor
@@ -169,6 +171,18 @@ pub fn integrate_adaptive<L: Lagrangian>(
         gradient_evaluations: 0,
         warnings: Vec::new(),
     };
+    // Round-off floor of the accumulated step-end positions: the per-step estimates cannot
+    // see it (measured: outer solar system, h = 1825 days, no n reaches below 2.3e-10 AU,
+    // while the estimates met a 1e-10 budget: a silent 49× miss without this warning).
+    let scale = q0.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let floor = FLOOR_FACTOR * f64::EPSILON * scale * steps as f64;
+    if opts.tol < floor {
+        run.warnings.push(format!(
+            "tol = {:e} is below {FLOOR_FACTOR}·ε·max|q0|·steps = {floor:.1e}: round-off in the \
+             step-end positions may keep the achieved error above tol",
+            opts.tol
+        ));
+    }
     let (mut q, mut p) = (q0.to_vec(), p0.to_vec());
     let mut idx = 0usize;
     let mut ctl = Calibration::new(ladder.rungs.len());
