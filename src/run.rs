@@ -160,6 +160,14 @@ pub fn run_scene(scene: &Scene, options: RunOptions) -> Result<RunResult> {
     visit_system(&scene.system, Run(scene, options))
 }
 
+/// Per-step outputs of a tolerance-driven run for the table.
+struct AdaptiveColumns {
+    indicators: Vec<f64>,
+    estimates: Vec<Option<f64>>,
+    warnings: Vec<String>,
+    evaluations: usize,
+}
+
 /// Run a scene's initial state and method on any [`System`].
 pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> Result<RunResult> {
     let m = &scene.method;
@@ -170,7 +178,7 @@ pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> 
     crate::error::ensure_len("initial p (system dimension)", d, init.p.len())?;
     let exact = system.exact_solution(init.t0, &init.q, &init.p)?;
     let start = Instant::now();
-    let mut adaptive: Option<(Vec<f64>, Vec<String>, usize)> = None;
+    let mut adaptive: Option<AdaptiveColumns> = None;
     let outcome = match m.tol {
         None => gvi.integrate(system, init.t0, &init.q, &init.p, m.steps),
         Some(tol) => {
@@ -178,8 +186,16 @@ pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> 
             if let Some(l) = &m.ladder {
                 opts.ladder = l.clone();
             }
+            if let Some(c) = m.control {
+                opts.control = c;
+            }
             integrate_adaptive(system, &opts, init.t0, &init.q, &init.p, m.steps).map(|run| {
-                adaptive = Some((run.indicators, run.warnings, run.gradient_evaluations));
+                adaptive = Some(AdaptiveColumns {
+                    indicators: run.indicators,
+                    estimates: run.estimates,
+                    warnings: run.warnings,
+                    evaluations: run.gradient_evaluations,
+                });
                 run.trajectory
             })
         }
@@ -204,6 +220,7 @@ pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> 
     if m.tol.is_some() {
         columns.push("n".into());
         columns.push("indicator".into());
+        columns.push("estimate".into());
     }
     let mut inv0 = vec![0.0; names.len()];
     system.invariants(&init.q, &init.p, &mut inv0);
@@ -227,17 +244,24 @@ pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> 
             max_pos = max_pos.map(|m| m.max(e));
             row.push(e);
         }
-        if let Some((ind, _, _)) = &adaptive {
-            // Row k is the state at t_k: report the n and indicator of the step that led there.
-            let (n, i) = match k {
-                0 => (f64::NAN, f64::NAN),
+        if let Some(a) = &adaptive {
+            // Row k is the state at t_k: report the n, indicator and embedded estimate (NaN:
+            // not checked) of the step that led there.
+            let (n, i, e) = match k {
+                0 => (f64::NAN, f64::NAN, f64::NAN),
                 _ => (
                     trajectory.n_of_step(k - 1) as f64,
-                    ind.get(k - 1).copied().unwrap_or(f64::NAN),
+                    a.indicators.get(k - 1).copied().unwrap_or(f64::NAN),
+                    a.estimates
+                        .get(k - 1)
+                        .copied()
+                        .flatten()
+                        .unwrap_or(f64::NAN),
                 ),
             };
             row.push(n);
             row.push(i);
+            row.push(e);
         }
         rows.push(row);
     }
@@ -272,7 +296,7 @@ pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> 
         ),
     };
     let (warnings, force_evaluations) = match &adaptive {
-        Some((_, w, e)) => (w.clone(), *e),
+        Some(a) => (a.warnings.clone(), a.evaluations),
         None => (Vec::new(), trajectory.gradient_evaluations()),
     };
     let summary = RunSummary {

@@ -201,6 +201,10 @@ pub struct MethodSpec {
     /// [`crate::adaptive::DEFAULT_LADDER`]).
     #[serde(default)]
     pub ladder: Option<Vec<usize>>,
+    /// Error control of a tolerance-driven run (`embedded`, `indicator` or `calibrated`;
+    /// default [`crate::adaptive::ErrorControl::Embedded`]).
+    #[serde(default)]
+    pub control: Option<crate::adaptive::ErrorControl>,
 }
 
 impl Scene {

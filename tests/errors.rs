@@ -250,9 +250,15 @@ fn cli_tol_adds_the_n_column_and_rejects_bad_tolerances() {
     ]);
     assert_eq!(code, 0, "{err}");
     let header = out.lines().next().unwrap();
-    assert!(header.ends_with(",position_error,n,indicator"), "{header}");
+    assert!(
+        header.ends_with(",position_error,n,indicator,estimate"),
+        "{header}"
+    );
     let row: Vec<&str> = out.lines().nth(1 + 5).unwrap().split(',').collect();
-    let n: usize = row[row.len() - 2].parse().unwrap();
+    let n: usize = row[row.len() - 3].parse().unwrap();
+    // The default (embedded) control checks every step: the estimate is a number.
+    let estimate: f64 = row[row.len() - 1].parse().unwrap();
+    assert!(estimate.is_finite() && estimate >= 0.0, "{estimate}");
     assert!((4..=64).contains(&n));
     assert_clean_failure(&["run", "kepler", "--tol", "-1"], "tol");
     assert_clean_failure(
@@ -262,4 +268,36 @@ fn cli_tol_adds_the_n_column_and_rejects_bad_tolerances() {
     let (code, _, err) = gvi(&["run", "kepler", "--tol", "1e-30", "--steps", "2"]);
     assert_eq!(code, 0);
     assert!(err.contains("warning"), "{err}");
+    assert_clean_failure(
+        &["run", "kepler", "--tol", "1e-8", "--control", "magic"],
+        "control",
+    );
+}
+
+#[test]
+fn cli_tolerance_study_writes_table_csv_and_charts() {
+    let dir = std::env::temp_dir().join(format!("gvi-tolstudy-{}", std::process::id()));
+    let (code, out, err) = gvi(&[
+        "tolerance-study",
+        "harmonic",
+        "--tols",
+        "1e-6:1e-7",
+        "--h",
+        "1",
+        "--steps",
+        "10",
+        "--ladder",
+        "4,6,8,10,12",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("| 1e-6 | embedded |"), "{out}");
+    for f in ["csv", "md"] {
+        assert!(dir.join(format!("harmonic-tolerance.{f}")).exists());
+    }
+    assert!(dir.join("harmonic-tolerance-error.svg").exists());
+    assert!(dir.join("harmonic-tolerance-cost.svg").exists());
+    std::fs::remove_dir_all(&dir).ok();
+    assert_clean_failure(&["tolerance-study", "harmonic", "--tols", "0:1e-6"], "tols");
 }

@@ -5,6 +5,7 @@ mod nbody;
 mod run;
 mod study;
 mod study2;
+mod tolerance;
 
 use clap::{Parser, Subcommand};
 use galerkin_vi::GviError;
@@ -43,6 +44,9 @@ enum Command {
     /// N-body accuracy report: per-body position errors, energy and momentum errors and
     /// Mercury's perihelion drift against a Gauss-collocation reference (CSV, SVG, summary).
     NbodyReport(Box<nbody::NBodyReportArgs>),
+    /// Tolerance-driven n against the cheapest fixed n meeting each tolerance: achieved
+    /// error and force evaluations against tol (CSV, Markdown, SVG in --out).
+    ToleranceStudy(Box<tolerance::ToleranceArgs>),
     /// List the built-in scenes.
     Scenes,
 }
@@ -59,6 +63,7 @@ pub fn main_with(cli: Cli) -> Result<(), GviError> {
         Command::Stability(args) => study2::run_stability(*args),
         Command::CompareRefinement(args) => study2::run_compare_refinement(*args),
         Command::NbodyReport(args) => nbody::run_nbody_report(*args),
+        Command::ToleranceStudy(args) => tolerance::run_tolerance_study(*args),
         Command::Scenes => {
             for name in galerkin_vi::scene::Scene::builtin_names() {
                 let scene = galerkin_vi::scene::Scene::load(name)?;

@@ -45,6 +45,10 @@ pub struct RunArgs {
     /// `indicator`; with --plot also writes STEM-n.svg).
     #[arg(long, allow_hyphen_values = true)]
     pub tol: Option<f64>,
+    /// Error control of a --tol run: embedded (default; every step also solved at the next n,
+    /// CSV column `estimate`), indicator, or calibrated (experimental).
+    #[arg(long)]
+    pub control: Option<String>,
     /// Values of n a --tol run may use, comma-separated (default 4,6,…,64).
     #[arg(long)]
     pub ladder: Option<String>,
@@ -86,6 +90,9 @@ pub fn apply_overrides(scene: &mut Scene, a: &RunArgs) -> Result<(), GviError> {
     }
     if a.tol.is_some() {
         scene.method.tol = a.tol;
+    }
+    if let Some(c) = &a.control {
+        scene.method.control = Some(c.parse()?);
     }
     if let Some(l) = &a.ladder {
         let values = parse_vector("--ladder", l)?;

@@ -12,6 +12,7 @@ pub mod peers;
 pub mod refine;
 pub mod reproduce;
 pub mod stability;
+pub mod tolerance;
 pub mod work_precision;
 
 use crate::baselines::GaussCollocationBaseline;
