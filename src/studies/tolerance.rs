@@ -13,7 +13,7 @@
 
 use super::{Reference, max_norm_diff, write_file};
 use crate::adaptive::{AdaptiveOptions, DEFAULT_LADDER, ErrorControl, integrate_adaptive};
-use crate::baselines::GaussCollocation;
+use crate::baselines::GaussCollocationBaseline;
 use crate::error::Result;
 use crate::integrator::GalerkinIntegrator;
 use crate::plot::{Chart, Series};
@@ -105,7 +105,7 @@ fn step_end_reference<S: System>(system: &S, scene: &Scene) -> Result<(Vec<Vec<f
     let (m, init) = (&scene.method, &scene.initial);
     if let Some((nbody, _)) = scene.system.nbody()? {
         let k = gauss_substeps(&nbody, &init.q, m.h);
-        let mut gauss = GaussCollocation::new(&nbody, 6, m.h / k as f64)?;
+        let mut gauss = GaussCollocationBaseline::new(&nbody, 6, m.h / k as f64)?;
         let (rq, _) = gauss.integrate_compensated(&init.q, &init.p, m.steps * k, k)?;
         return Ok((rq, format!("Gauss collocation s = 6, h/{k}")));
     }
