@@ -301,3 +301,14 @@ fn cli_tolerance_study_writes_table_csv_and_charts() {
     std::fs::remove_dir_all(&dir).ok();
     assert_clean_failure(&["tolerance-study", "harmonic", "--tols", "0:1e-6"], "tols");
 }
+
+#[test]
+fn cli_economical_quadrature_uses_three_halves_n_points() {
+    let (code, _, err) = gvi(&["run", "kepler", "--n", "32", "--steps", "3", "--economical"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("gauss-legendre with 48 points"), "{err}");
+    assert_eq!(
+        galerkin_vi::quadrature::QuadratureKind::GaussLegendre.economical_points(7),
+        11
+    );
+}

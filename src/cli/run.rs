@@ -29,6 +29,10 @@ pub struct RunArgs {
     /// Number of quadrature points (default: the rule's default for n; 2n Gauss points).
     #[arg(long)]
     pub quad_points: Option<usize>,
+    /// Use the economical number of quadrature points (⌈3n/2⌉ for Gauss–Legendre: the
+    /// paper's accuracy with 25 % fewer force evaluations) unless --quad-points is given.
+    #[arg(long)]
+    pub economical: bool,
     /// Step size h.
     #[arg(long, allow_hyphen_values = true)]
     pub h: Option<f64>,
@@ -78,6 +82,9 @@ pub fn apply_overrides(scene: &mut Scene, a: &RunArgs) -> Result<(), GviError> {
     }
     if a.quad_points.is_some() {
         scene.method.quad_points = a.quad_points;
+    }
+    if a.economical && a.quad_points.is_none() {
+        scene.method.quad_points = Some(scene.method.quadrature.economical_points(scene.method.n));
     }
     if let Some(h) = a.h {
         scene.method.h = h;
