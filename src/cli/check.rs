@@ -1,6 +1,6 @@
 //! `gvi check SCENE`: symplecticity, energy and momentum-map diagnostics of a run.
 
-use super::run::{RunArgs, apply_overrides};
+use super::run::{RunArgs, load_scene};
 use galerkin_vi::GviError;
 use galerkin_vi::geometry::{CheckReport, check_report};
 use galerkin_vi::integrator::GalerkinIntegrator;
@@ -9,8 +9,7 @@ use galerkin_vi::scene::Scene;
 use galerkin_vi::systems::System;
 
 pub fn run_check(args: RunArgs) -> Result<(), GviError> {
-    let mut scene = Scene::load(&args.scene)?;
-    apply_overrides(&mut scene, &args)?;
+    let scene = load_scene(&args)?;
     struct Check<'a>(&'a Scene);
     impl SystemVisitor for Check<'_> {
         type Output = CheckReport;

@@ -69,6 +69,13 @@ pub struct RunArgs {
     pub plot: Option<PathBuf>,
 }
 
+/// Load the scene named on the command line and apply the flag overrides.
+pub fn load_scene(a: &RunArgs) -> Result<Scene, GviError> {
+    let mut scene = Scene::load(&a.scene)?;
+    apply_overrides(&mut scene, a)?;
+    Ok(scene)
+}
+
 /// Apply command-line overrides to a scene.
 pub fn apply_overrides(scene: &mut Scene, a: &RunArgs) -> Result<(), GviError> {
     if let Some(b) = &a.basis {
@@ -122,8 +129,7 @@ pub fn apply_overrides(scene: &mut Scene, a: &RunArgs) -> Result<(), GviError> {
 }
 
 pub fn run(args: RunArgs) -> Result<(), GviError> {
-    let mut scene = Scene::load(&args.scene)?;
-    apply_overrides(&mut scene, &args)?;
+    let scene = load_scene(&args)?;
     let options = RunOptions {
         chart: args.plot.is_some(),
         ..RunOptions::default()

@@ -1,9 +1,8 @@
 //! `gvi refine` and `gvi reproduce`.
 
-use super::run::{RunArgs, apply_overrides};
+use super::run::{RunArgs, load_scene};
 use clap::{Args, ValueEnum};
 use galerkin_vi::GviError;
-use galerkin_vi::scene::Scene;
 use galerkin_vi::studies::refine::{Vary, parse_range, refine};
 use galerkin_vi::studies::reproduce::{Size, reproduce};
 use std::path::PathBuf;
@@ -34,8 +33,7 @@ pub struct RefineArgs {
 }
 
 pub fn run_refine(args: RefineArgs) -> Result<(), GviError> {
-    let mut scene = Scene::load(&args.run.scene)?;
-    apply_overrides(&mut scene, &args.run)?;
+    let scene = load_scene(&args.run)?;
     let values = parse_range(&args.range)?;
     let vary = match args.vary {
         VaryArg::N => Vary::N,
@@ -96,8 +94,7 @@ pub struct CompareBasesArgs {
 
 pub fn run_compare_bases(args: CompareBasesArgs) -> Result<(), GviError> {
     use galerkin_vi::quadrature::QuadratureKind;
-    let mut scene = Scene::load(&args.run.scene)?;
-    apply_overrides(&mut scene, &args.run)?;
+    let scene = load_scene(&args.run)?;
     let ns: Vec<usize> = parse_range(&args.range)?
         .into_iter()
         .map(|x| x.round() as usize)

@@ -1,9 +1,8 @@
 //! `gvi work-precision`, `gvi stability` and `gvi compare-refinement`.
 
-use super::run::{RunArgs, apply_overrides};
+use super::run::{RunArgs, load_scene};
 use clap::Args;
 use galerkin_vi::GviError;
-use galerkin_vi::scene::Scene;
 use galerkin_vi::studies::compare_refinement::{CompareConfig, compare_refinement};
 use galerkin_vi::studies::stability::{Class, StabilityConfig, stability};
 use galerkin_vi::studies::work_precision::{WorkPrecisionConfig, work_precision};
@@ -28,8 +27,7 @@ pub struct WorkPrecisionArgs {
 }
 
 pub fn run_work_precision(args: WorkPrecisionArgs) -> Result<(), GviError> {
-    let mut scene = Scene::load(&args.run.scene)?;
-    apply_overrides(&mut scene, &args.run)?;
+    let scene = load_scene(&args.run)?;
     let mut config = if args.quick {
         WorkPrecisionConfig::quick()
     } else {
@@ -65,8 +63,7 @@ pub struct StabilityArgs {
 }
 
 pub fn run_stability(args: StabilityArgs) -> Result<(), GviError> {
-    let mut scene = Scene::load(&args.run.scene)?;
-    apply_overrides(&mut scene, &args.run)?;
+    let scene = load_scene(&args.run)?;
     let mut config = if args.quick {
         StabilityConfig::quick()
     } else {
@@ -115,8 +112,7 @@ pub struct CompareRefinementArgs {
 }
 
 pub fn run_compare_refinement(args: CompareRefinementArgs) -> Result<(), GviError> {
-    let mut scene = Scene::load(&args.run.scene)?;
-    apply_overrides(&mut scene, &args.run)?;
+    let scene = load_scene(&args.run)?;
     let config = if args.quick {
         CompareConfig::quick()
     } else {

@@ -1,7 +1,7 @@
 //! Clenshaw–Curtis quadrature: interpolatory at the Chebyshev extrema (DESIGN.md §2).
 
 use super::{Quadrature, QuadratureKind, QuadratureRule};
-use crate::error::{GviError, Result};
+use crate::error::Result;
 
 /// Clenshaw–Curtis quadrature with m points on [0, 1].
 ///
@@ -31,14 +31,7 @@ impl ClenshawCurtis {
 
     /// The rule with 1 ≤ m ≤ [`MAX_POINTS`](ClenshawCurtis::MAX_POINTS) points.
     pub fn new(points: usize) -> Result<Self> {
-        if !(1..=Self::MAX_POINTS).contains(&points) {
-            return Err(GviError::InvalidQuadrature {
-                reason: format!(
-                    "Clenshaw–Curtis needs 1 ≤ points ≤ {}, got {points}",
-                    Self::MAX_POINTS
-                ),
-            });
-        }
+        super::check_points("Clenshaw–Curtis", points, 1, Self::MAX_POINTS)?;
         Ok(ClenshawCurtis { points })
     }
 }

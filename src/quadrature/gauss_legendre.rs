@@ -26,15 +26,12 @@ impl GaussLegendre {
 
     /// The rule with m ≥ 1 points.
     pub fn new(points: usize) -> Result<Self> {
-        match NonZeroUsize::new(points) {
-            Some(p) if points <= Self::MAX_POINTS => Ok(GaussLegendre { points: p }),
-            _ => Err(GviError::InvalidQuadrature {
-                reason: format!(
-                    "Gauss–Legendre needs 1 ≤ points ≤ {}, got {points}",
-                    Self::MAX_POINTS
-                ),
-            }),
-        }
+        super::check_points("Gauss–Legendre", points, 1, Self::MAX_POINTS)?;
+        NonZeroUsize::new(points)
+            .map(|p| GaussLegendre { points: p })
+            .ok_or_else(|| GviError::InvalidQuadrature {
+                reason: "Gauss–Legendre needs at least one point".into(),
+            })
     }
 }
 

@@ -41,14 +41,7 @@ impl GaussLobatto {
 
     /// The rule with 2 ≤ m ≤ [`MAX_POINTS`](GaussLobatto::MAX_POINTS) points.
     pub fn new(points: usize) -> Result<Self> {
-        if !(2..=Self::MAX_POINTS).contains(&points) {
-            return Err(GviError::InvalidQuadrature {
-                reason: format!(
-                    "Gauss–Lobatto needs 2 ≤ points ≤ {}, got {points}",
-                    Self::MAX_POINTS
-                ),
-            });
-        }
+        super::check_points("Gauss–Lobatto", points, 2, Self::MAX_POINTS)?;
         Ok(GaussLobatto { points })
     }
 }

@@ -32,6 +32,17 @@ pub trait Quadrature {
     fn rule(&self) -> Result<QuadratureRule>;
 }
 
+/// Check `min ≤ points ≤ max` for a rule's constructor (the common validation of every rule).
+pub(crate) fn check_points(rule: &str, points: usize, min: usize, max: usize) -> Result<()> {
+    if (min..=max).contains(&points) {
+        Ok(())
+    } else {
+        Err(GviError::InvalidQuadrature {
+            reason: format!("{rule} needs {min} ≤ points ≤ {max}, got {points}"),
+        })
+    }
+}
+
 /// Nodes c_j ∈ [0, 1] and weights b_j (Σ b_j = 1) with the rule's degree of exactness.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct QuadratureRule {

@@ -2,7 +2,7 @@
 //! periodic integrands.
 
 use super::{Quadrature, QuadratureKind, QuadratureRule};
-use crate::error::{GviError, Result};
+use crate::error::Result;
 
 /// The composite trapezoid rule with m ≥ 2 equally spaced points τ_j = j/(m − 1) on [0, 1]
 /// (both ends included): weights 1/(m − 1), halved at the ends. Exact only to degree 1, so the
@@ -27,14 +27,7 @@ impl Trapezoid {
 
     /// The rule with 2 ≤ m ≤ [`MAX_POINTS`](Trapezoid::MAX_POINTS) points.
     pub fn new(points: usize) -> Result<Self> {
-        if !(2..=Self::MAX_POINTS).contains(&points) {
-            return Err(GviError::InvalidQuadrature {
-                reason: format!(
-                    "the trapezoid rule needs 2 ≤ points ≤ {}, got {points}",
-                    Self::MAX_POINTS
-                ),
-            });
-        }
+        super::check_points("the trapezoid rule", points, 2, Self::MAX_POINTS)?;
         Ok(Trapezoid { points })
     }
 }
