@@ -27,6 +27,9 @@ pub enum InitialGuess {
     /// extrapolation can be worse than a constant guess, so it is measured, not assumed).
     #[default]
     BestResidual,
+    /// Coefficients supplied for one step by [`Workspace::warm_start`] (reported in
+    /// [`StepStats::guess`]; as an option it behaves like `BestResidual`).
+    Warm,
 }
 
 /// Newton iteration settings.
@@ -465,7 +468,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let t = self.tables();
         let (n, d, h) = (t.n, ws.d, self.step_size());
         match g {
-            InitialGuess::Constant | InitialGuess::BestResidual => {
+            InitialGuess::Constant | InitialGuess::BestResidual | InitialGuess::Warm => {
                 for i in 0..n {
                     for r in 0..d {
                         ws.cand[i * d + r] = t.unit[i] * q[r];
@@ -524,8 +527,14 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         q: &[f64],
         p: &[f64],
     ) -> (InitialGuess, usize) {
+        if ws.has_warm {
+            ws.has_warm = false;
+            ws.coeffs.copy_from_slice(&ws.warm);
+            ws.coeffs[..ws.d].copy_from_slice(q);
+            return (InitialGuess::Warm, 0);
+        }
         let choice = self.options().initial_guess;
-        if choice != InitialGuess::BestResidual {
+        if !matches!(choice, InitialGuess::BestResidual | InitialGuess::Warm) {
             let g = if self.make_guess(lag, ws, choice, q, p) {
                 choice
             } else {

@@ -22,6 +22,10 @@ pub struct Workspace {
     /// Previous step's coefficients and whether they are valid.
     pub(crate) prev: Vec<f64>,
     pub(crate) has_prev: bool,
+    /// A caller-supplied start for the next step's Newton iteration (absolute coefficients,
+    /// n×D) and whether it is pending; see [`Workspace::warm_start`].
+    pub(crate) warm: Vec<f64>,
+    pub(crate) has_warm: bool,
     /// Candidate guess and the best one so far.
     pub(crate) cand: Vec<f64>,
     pub(crate) best: Vec<f64>,
@@ -144,6 +148,8 @@ impl Workspace {
             coeffs: vec![0.0; n * d],
             prev: vec![0.0; n * d],
             has_prev: false,
+            warm: vec![0.0; n * d],
+            has_warm: false,
             cand: vec![0.0; n * d],
             best: vec![0.0; n * d],
             qj: vec![0.0; m * d],
@@ -185,10 +191,31 @@ impl Workspace {
         &self.coeffs
     }
 
-    /// Forget the previous step's curve (the next guess will not extrapolate).
+    /// Forget the previous step's curve (the next guess will not extrapolate) and any pending
+    /// warm start.
     pub fn reset(&mut self) {
         self.has_prev = false;
+        self.has_warm = false;
         self.lu_valid = false;
+    }
+
+    /// Start the next step's Newton iteration from the given Galerkin coefficients (n×D, row
+    /// i = Q_i, in this integrator's basis) instead of choosing among the built-in guesses —
+    /// e.g. a curve solved at a lower n and refitted, when an error estimate re-solves the
+    /// same step at a higher n. The first row is replaced by the step's q_k. Used by one step
+    /// only; if Newton fails from it, the built-in guesses are tried as usual.
+    ///
+    /// Errors: wrong length or non-finite entries.
+    pub fn warm_start(&mut self, coefficients: &[f64]) -> Result<()> {
+        crate::error::ensure_len(
+            "warm-start coefficients",
+            self.n * self.d,
+            coefficients.len(),
+        )?;
+        crate::error::ensure_finite("warm-start coefficients", coefficients)?;
+        self.warm.copy_from_slice(coefficients);
+        self.has_warm = true;
+        Ok(())
     }
 
     /// Dimension D.
