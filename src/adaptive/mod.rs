@@ -107,6 +107,12 @@ pub struct AdaptiveOptions {
     /// many steps (default [`CHECK_EVERY`]).
     #[serde(default = "default_check_every")]
     pub check_every: usize,
+    /// Start each solve's Newton iteration from a curve already at hand instead of the
+    /// integrator's guess competition (default true): the first solve of a step from the last
+    /// accepted curve continued over the step, a solve at a higher rung from the lower rung's
+    /// curve of the same step. Changes only where Newton starts, not the map it solves.
+    #[serde(default = "default_true")]
+    pub warm_start: bool,
 }
 
 fn default_true() -> bool {
@@ -173,6 +179,7 @@ impl AdaptiveOptions {
             control: ErrorControl::default(),
             extrapolate: true,
             check_every: CHECK_EVERY,
+            warm_start: true,
         }
     }
 
