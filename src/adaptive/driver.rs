@@ -264,7 +264,7 @@ impl Ladder {
                 .fold(0.0f64, |m, x| m.max(x.abs()))
                 .max(f64::MIN_POSITIVE);
             if let Ok(stats) = &result {
-                if !(stats.residual <= WARM_RESIDUAL * pscale) {
+                if stats.residual.is_nan() || stats.residual > WARM_RESIDUAL * pscale {
                     self.evaluations += stats.gradient_evaluations;
                     r.ws.reset();
                     result = gvi.step(lag, &mut r.ws, q, p, &mut r.q, &mut r.p);
