@@ -16,7 +16,8 @@ const FLOOR_FACTOR: f64 = 1000.0;
 /// [`ErrorControl::Embedded`]: an unchecked step is allowed while the indicator is at most
 /// this factor above that of the last check.
 const GROWTH: f64 = 1.0;
-/// Step down one rung when the estimate is below this fraction of the budget.
+/// Step down one rung per factor DOWN that the estimate lies below the budget (at most
+/// [`MAX_DOWN`]), unless staying is predicted cheaper ([`Ladder::next_rung`]).
 const DOWN: f64 = 0.05;
 /// A continued start keeps the Chebyshev modes j with |a_j| T_j(3) ≤ this fraction of the
 /// curve's size (|a_0| + |a_1|), up to the first that exceeds it.
