@@ -233,15 +233,44 @@ fn max_error_kepler(run_q: &Trajectory, exact: &galerkin_vi::systems::ExactSolut
         .fold(0.0, f64::max)
 }
 
+/// The cheapest fixed n in `ns` (scanned upwards: the cost grows with n) whose max position
+/// error over the run meets tol: its force evaluations.
+fn cheapest_fixed_cost(
+    kepler: &Kepler,
+    exact: &ExactSolution,
+    q0: &[f64],
+    p0: &[f64],
+    h: f64,
+    tol: f64,
+    ns: std::ops::RangeInclusive<usize>,
+) -> usize {
+    ns.into_iter()
+        .find_map(|n| {
+            let gvi = GalerkinIntegrator::from_kinds(
+                BasisKind::Legendre,
+                n,
+                QuadratureKind::GaussLegendre,
+                None,
+                h,
+            )
+            .ok()?;
+            let t = gvi.integrate(kepler, 0.0, q0, p0, 100).ok()?;
+            (max_error_kepler(&t, exact) <= tol).then(|| t.gradient_evaluations())
+        })
+        .expect("some fixed n in the range meets tol")
+}
+
 #[test]
-fn embedded_control_meets_tolerance_on_kepler_06_and_09() {
-    // The default control (ErrorControl::Embedded, local extrapolation). Measured with
-    // `gvi tolerance-study kepler --eccentricity E --basis legendre` (100 steps, h = 1 for
-    // e = 0.6, h = 0.25 for e = 0.9): achieved / tol ≤ 0.17 (e = 0.6) and ≤ 1.8 (e = 0.9) for
-    // tol = 1e-6…1e-10; on e = 0.9 the cost is 1.21–1.32× lower than the cheapest fixed n
-    // meeting tol. Asserted: ≤ 3× tol, and cheaper than the fixed n on e = 0.9.
+fn embedded_control_meets_tolerance_and_beats_fixed_n_on_kepler_06_and_09() {
+    // The default control (ErrorControl::Embedded: warm-started pairs, unchecked steps, local
+    // extrapolation). Measured with `gvi tolerance-study kepler --eccentricity E --basis
+    // legendre --controls embedded` (100 steps, h = 1 for e = 0.6, h = 0.25 for e = 0.9), at
+    // tol = 1e-6 and 1e-9: achieved / tol 0.48, 0.03 (e = 0.6) and 1.79, 0.02 (e = 0.9); cost
+    // (force evaluations) / cheapest fixed n meeting tol 0.88, 0.88 (e = 0.6) and 0.30, 0.32
+    // (e = 0.9); 60–70 of the 100 steps checked. Asserted: ≤ 2.2× tol (the stated factor),
+    // cost ≤ 0.95 (e = 0.6) and ≤ 0.5 (e = 0.9) of the fixed n, some steps unchecked.
     let kepler = Kepler::new(1.0).unwrap();
-    for (e, h) in [(0.6, 1.0), (0.9, 0.25)] {
+    for (e, h, max_ratio, fixed_from) in [(0.6, 1.0, 0.95, 10), (0.9, 0.25, 0.5, 30)] {
         let (q0, p0) = kepler_state(e);
         let exact = kepler.exact_solution(0.0, &q0, &p0).unwrap().unwrap();
         for tol in [1e-6, 1e-9] {
@@ -249,10 +278,17 @@ fn embedded_control_meets_tolerance_on_kepler_06_and_09() {
                 AdaptiveOptions::new(tol, BasisKind::Legendre, QuadratureKind::GaussLegendre, h);
             let run = integrate_adaptive(&kepler, &opts, 0.0, &q0, &p0, 100).unwrap();
             assert_eq!(run.control, ErrorControl::Embedded);
-            assert_eq!(run.checks, 100);
-            assert!(run.estimates.iter().all(|x| x.is_some()));
+            assert!(
+                (30..100).contains(&run.checks),
+                "e = {e}, tol {tol:e}: {} checks",
+                run.checks
+            );
+            assert_eq!(
+                run.estimates.iter().filter(|x| x.is_some()).count(),
+                run.checks
+            );
             let err = max_error_kepler(&run.trajectory, &exact);
-            assert!(err <= 3.0 * tol, "e = {e}, tol {tol:e}: achieved {err:e}");
+            assert!(err <= 2.2 * tol, "e = {e}, tol {tol:e}: achieved {err:e}");
             // At e = 0.9, tol = 1e-9 the per-step budget 5e-12 is not reached at n = 64 on two
             // periapsis steps: warned (best effort), never silent.
             assert_eq!(
@@ -261,30 +297,97 @@ fn embedded_control_meets_tolerance_on_kepler_06_and_09() {
                 "{:?}",
                 run.warnings
             );
-            if e > 0.8 {
-                // Cheapest fixed n meeting tol, scanning n upwards (cost grows with n).
-                let fixed = (20..=64)
-                    .find_map(|n| {
-                        let gvi = GalerkinIntegrator::from_kinds(
-                            BasisKind::Legendre,
-                            n,
-                            QuadratureKind::GaussLegendre,
-                            None,
-                            h,
-                        )
-                        .ok()?;
-                        let t = gvi.integrate(&kepler, 0.0, &q0, &p0, 100).ok()?;
-                        (max_error_kepler(&t, &exact) <= tol).then(|| t.gradient_evaluations())
-                    })
-                    .expect("some fixed n ≤ 64 meets tol");
-                assert!(
-                    (run.gradient_evaluations as f64) < fixed as f64,
-                    "tol {tol:e}: adaptive {} vs fixed {fixed}",
-                    run.gradient_evaluations
-                );
-            }
+            let fixed = cheapest_fixed_cost(&kepler, &exact, &q0, &p0, h, tol, fixed_from..=64);
+            let ratio = run.gradient_evaluations as f64 / fixed as f64;
+            assert!(
+                ratio <= max_ratio,
+                "e = {e}, tol {tol:e}: adaptive {} vs fixed {fixed} ({ratio:.3})",
+                run.gradient_evaluations
+            );
         }
     }
+}
+
+#[test]
+fn warm_starts_and_unchecked_steps_each_cut_the_cost() {
+    // Kepler e = 0.6, h = 1, tol = 1e-8, 100 steps. Measured force evaluations: 26 752 with
+    // the defaults, 41 900 without warm starts (every solve from the integrator's guess
+    // competition), 35 300 checking every step (check_every = 1); achieved / tol 0.14, 0.14
+    // and 0.12. Asserted: the defaults cost ≤ 0.8 and ≤ 0.9 of those, all within 2.2× tol.
+    let kepler = Kepler::new(1.0).unwrap();
+    let (q0, p0) = kepler_state(0.6);
+    let exact = kepler.exact_solution(0.0, &q0, &p0).unwrap().unwrap();
+    let tol = 1e-8;
+    let base = AdaptiveOptions::new(tol, BasisKind::Legendre, QuadratureKind::GaussLegendre, 1.0);
+    let run = |opts: &AdaptiveOptions| {
+        let r = integrate_adaptive(&kepler, opts, 0.0, &q0, &p0, 100).unwrap();
+        let err = max_error_kepler(&r.trajectory, &exact);
+        assert!(err <= 2.2 * tol, "{opts:?}: achieved {err:e}");
+        r
+    };
+    let default = run(&base);
+    let cold = run(&AdaptiveOptions {
+        warm_start: false,
+        ..base.clone()
+    });
+    let every = run(&AdaptiveOptions {
+        check_every: 1,
+        ..base.clone()
+    });
+    assert_eq!(every.checks, 100);
+    let c = |r: &galerkin_vi::adaptive::AdaptiveRun| r.gradient_evaluations as f64;
+    assert!(
+        c(&default) <= 0.8 * c(&cold),
+        "{} vs {} without warm starts",
+        c(&default),
+        c(&cold)
+    );
+    assert!(
+        c(&default) <= 0.9 * c(&every),
+        "{} vs {} checking every step",
+        c(&default),
+        c(&every)
+    );
+    // Warm starts are used, and only the first steps' or rejected warm starts run the
+    // integrator's own guesses.
+    let warm = default
+        .trajectory
+        .stats
+        .iter()
+        .filter(|s| s.guess == InitialGuess::Warm)
+        .count();
+    assert!(warm >= 80, "{warm} warm-started kept steps");
+    assert!(
+        cold.trajectory
+            .stats
+            .iter()
+            .all(|s| s.guess != InitialGuess::Warm)
+    );
+}
+
+#[test]
+fn kept_steps_are_solved_to_round_off() {
+    // The lower member of an embedded pair is solved with a Newton tolerance loosened to the
+    // error budget and never kept: every kept step's stage residual is at round-off
+    // (measured worst 1.6e-15 on Kepler e = 0.9 at tol = 1e-6; keeping the loosely solved
+    // lower member instead was measured at 8.6e-9). Asserted: ≤ 1e-13.
+    let kepler = Kepler::new(1.0).unwrap();
+    let (q0, p0) = kepler_state(0.9);
+    let opts = AdaptiveOptions::new(
+        1e-6,
+        BasisKind::Legendre,
+        QuadratureKind::GaussLegendre,
+        0.25,
+    );
+    let run = integrate_adaptive(&kepler, &opts, 0.0, &q0, &p0, 100).unwrap();
+    let worst = run
+        .trajectory
+        .stats
+        .iter()
+        .map(|s| s.residual)
+        .fold(0.0f64, f64::max);
+    eprintln!("worst kept residual {worst:e}");
+    assert!(worst <= 1e-13, "worst kept residual {worst:e}");
 }
 
 #[test]

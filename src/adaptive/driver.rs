@@ -2,7 +2,7 @@
 //! its own workspace and step-end buffers, and the three error controls.
 
 use super::{AdaptiveOptions, AdaptiveRun, ErrorControl, INDICATOR_EXPONENT};
-use crate::basis::AnyBasis;
+use crate::basis::{AnyBasis, Basis};
 use crate::error::GviError;
 use crate::integrator::{
     GalerkinIntegrator, IntegrationFailure, StepFailure, StepStats, Workspace,
@@ -13,8 +13,31 @@ use crate::trajectory::Trajectory;
 
 /// Round-off floor warning: tol below FLOOR_FACTOR · ε · max|q0| · steps.
 const FLOOR_FACTOR: f64 = 1000.0;
-/// Step down one rung when the estimate is below this fraction of the budget.
+/// [`ErrorControl::Embedded`]: an unchecked step is allowed while the indicator is at most
+/// this factor above that of the last check.
+const GROWTH: f64 = 1.0;
+/// Step down one rung per factor DOWN that the estimate lies below the budget (at most
+/// [`MAX_DOWN`]), unless staying is predicted cheaper ([`Ladder::next_rung`]).
 const DOWN: f64 = 0.05;
+/// A continued start keeps the Chebyshev modes j with |a_j| T_j(3) ≤ this fraction of the
+/// curve's size (|a_0| + |a_1|), up to the first that exceeds it.
+const CONTINUE_TRUNCATION: f64 = 1.0;
+/// Ratio of the decay rate (per unit n) of the embedded estimate to that of the Chebyshev
+/// coefficients of the curve, measured 1.5–1.7 on Kepler e = 0.6 (h = 1, n = 4…24).
+const DECAY_RATIO: f64 = 1.5;
+/// Newton tolerance of the lower member of an embedded pair (never kept): this fraction of
+/// the per-step budget, relative to max|q0| (but never tighter than the default).
+const LOOSE_NEWTON: f64 = 0.1;
+/// A warm-started solve to be kept is redone cold when its stage residual exceeds this
+/// fraction of max|p_k| (converged solves measured at 1e-16 relative on Kepler, 1e-14 on
+/// the outer solar system).
+const WARM_RESIDUAL: f64 = 1e-8;
+/// Weight of the latest first solve in the moving averages of [`Ladder::first_start`].
+const START_EMA: f64 = 0.25;
+/// [`Ladder::first_start`] tries the start not chosen at least every this many steps.
+const START_RETRY: usize = 8;
+/// At most this many rungs down from one step to the next.
+const MAX_DOWN: usize = 5;
 /// [`ErrorControl::Calibrated`]: a check is forced when the indicator grows by this factor
 /// from one step to the next.
 const JUMP: f64 = 10.0;
@@ -27,6 +50,11 @@ const UNCALIBRATED_RATIO: f64 = 4.0;
 
 struct Rung {
     gvi: GalerkinIntegrator<AnyBasis, QuadratureRule>,
+    /// The same integrator with a Newton tolerance loosened to the error budget, for solves
+    /// that only serve as the lower member of an embedded pair (never kept).
+    loose: GalerkinIntegrator<AnyBasis, QuadratureRule>,
+    /// The current step's solution came from `loose`.
+    is_loose: bool,
     ws: Workspace,
     q: Vec<f64>,
     p: Vec<f64>,
@@ -41,21 +69,237 @@ struct Ladder {
     evaluations: usize,
     last_failure: Option<StepFailure>,
     d: usize,
+    /// Warm-start the solves (see [`Start`]); off: every solve chooses its own guess.
+    warm: bool,
+    /// Solve the lower member of an embedded pair with the loose Newton tolerance (only when
+    /// the upper one is kept: [`ErrorControl::Embedded`] with local extrapolation).
+    loose_ok: bool,
+    transfers: Transfers,
+    /// The last accepted step's curve (coefficients of rung `prev_rung`).
+    prev: Vec<f64>,
+    prev_rung: Option<usize>,
+    /// Force evaluations and quadrature nodes of the solves so far, by start: first solves of
+    /// a step (continued or cold) and refitted ones.
+    first_cost: (usize, usize),
+    refit_cost: (usize, usize),
+    /// Recent force evaluations per quadrature node of first solves started cold and
+    /// continued (exponential moving averages; NaN: not measured yet), and the steps since
+    /// the start not chosen was last tried.
+    start_cost: [f64; 2],
+    since_other: usize,
+    /// Warm-start coefficients being assembled (max n × D), Chebyshev coefficients of the
+    /// last accepted curve (max n × D) and scratch for fitting (2 max n).
+    buf: Vec<f64>,
+    cheb: Vec<f64>,
+    fit_scratch: Vec<f64>,
+}
+
+/// Where a solve's Newton iteration starts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Start {
+    /// The integrator's own guesses (best residual of predictor, extrapolation, line, constant).
+    Cold,
+    /// The curve of another rung solved at this step, refitted at this rung's nodes.
+    Refit(usize),
+    /// The last accepted step's curve continued over this step, fitted at this rung's nodes.
+    Continue,
+}
+
+/// Lazily built matrices between the rungs (n_to × n_from each, built on first use of a pair:
+/// the only allocations of the stepping loop). `refit`: the curve Σ_l Q_l φ_l^{from}(τ) of
+/// one step fitted at rung `to`'s interpolation nodes (coefficients to coefficients).
+/// `cheb`: T_j(1 + 2x_k), the Chebyshev polynomial j continued to the next step's
+/// interpolation node x_k of rung `to` (τ = 1 + x_k, i.e. 2τ − 1 = 1 + 2x_k).
+struct Transfers {
+    rungs: usize,
+    refit: Vec<Option<Vec<f64>>>,
+    cheb: Vec<Option<Vec<f64>>>,
+}
+
+impl Transfers {
+    fn new(rungs: usize) -> Self {
+        Transfers {
+            rungs,
+            refit: vec![None; rungs * rungs],
+            cheb: vec![None; rungs * rungs],
+        }
+    }
+
+    fn refit(&mut self, rungs: &[Rung], from: usize, to: usize) -> &[f64] {
+        self.refit[from * self.rungs + to].get_or_insert_with(|| {
+            let (src, dst) = (&rungs[from].gvi, &rungs[to].gvi);
+            let nf = src.n();
+            let fit = &dst.tables().fit;
+            let mut t = vec![0.0; dst.n() * nf];
+            let (mut v, mut dv) = (vec![0.0; nf], vec![0.0; nf]);
+            for (k, &x) in fit.nodes().iter().enumerate() {
+                src.basis().eval(x, &mut v, &mut dv);
+                t[k * nf..(k + 1) * nf].copy_from_slice(&v);
+            }
+            fit.values_to_coefficients(&mut t, nf);
+            t
+        })
+    }
+
+    fn cheb(&mut self, rungs: &[Rung], from: usize, to: usize) -> &[f64] {
+        self.cheb[from * self.rungs + to].get_or_insert_with(|| {
+            let nf = rungs[from].gvi.n();
+            let nodes = rungs[to].gvi.tables().fit.nodes();
+            let mut t = vec![0.0; nodes.len() * nf];
+            for (k, &x) in nodes.iter().enumerate() {
+                let y = 1.0 + 2.0 * x;
+                let (mut a, mut b) = (1.0, y);
+                for j in 0..nf {
+                    t[k * nf + j] = a;
+                    (a, b) = (b, 2.0 * y * b - a);
+                }
+            }
+            t
+        })
+    }
 }
 
 impl Ladder {
-    /// Solve the current step at rung i (once per step); whether it converged.
-    fn solve<L: Lagrangian>(&mut self, lag: &L, i: usize, q: &[f64], p: &[f64]) -> bool {
+    /// Set rung i's next Newton start from `start`; false if that start is unavailable.
+    fn warm_start(&mut self, i: usize, start: Start) -> bool {
         let d = self.d;
-        let r = &mut self.rungs[i];
-        if let Some(ok) = r.solved {
+        let nt = self.rungs[i].gvi.n();
+        match start {
+            Start::Cold => return false,
+            Start::Refit(j) => {
+                if self.rungs[j].solved != Some(true) {
+                    return false;
+                }
+                let nf = self.rungs[j].gvi.n();
+                let t = self.transfers.refit(&self.rungs, j, i);
+                let src = self.rungs[j].ws.coefficients();
+                let out = &mut self.buf[..nt * d];
+                for (k, row) in t.chunks_exact(nf).enumerate() {
+                    for r in 0..d {
+                        out[k * d + r] = row
+                            .iter()
+                            .zip(src.chunks_exact(d))
+                            .map(|(a, q)| a * q[r])
+                            .sum();
+                    }
+                }
+            }
+            Start::Continue => {
+                let Some(j) = self.prev_rung else {
+                    return false;
+                };
+                let nf = self.rungs[j].gvi.n();
+                // Chebyshev coefficients a of the last accepted curve.
+                let c = &self.rungs[j].gvi.tables().chebyshev;
+                let a = &mut self.cheb[..nf * d];
+                for (jj, row) in c.chunks_exact(nf).enumerate() {
+                    for r in 0..d {
+                        a[jj * d + r] = row
+                            .iter()
+                            .zip(self.prev.chunks_exact(d))
+                            .map(|(w, q)| w * q[r])
+                            .sum();
+                    }
+                }
+                // Continue only the modes whose continuation stays small: |a_j| T_j(3) grows
+                // like |a_j| 5.83^j, so the round-off tail of a long curve would swamp it.
+                let mode = |jj: usize| {
+                    a[jj * d..(jj + 1) * d]
+                        .iter()
+                        .fold(0.0f64, |m, x| m.max(x.abs()))
+                };
+                let scale = (mode(0) + if nf > 1 { mode(1) } else { 0.0 }).max(f64::MIN_POSITIVE);
+                let (mut t_prev, mut t_j) = (1.0, 3.0);
+                let mut keep = nf.min(2);
+                for jj in 2..nf {
+                    (t_prev, t_j) = (t_j, 6.0 * t_j - t_prev);
+                    if mode(jj) * t_j > CONTINUE_TRUNCATION * scale {
+                        break;
+                    }
+                    keep = jj + 1;
+                }
+                let t = self.transfers.cheb(&self.rungs, j, i);
+                let out = &mut self.buf[..nt * d];
+                for (k, row) in t.chunks_exact(nf).enumerate() {
+                    for r in 0..d {
+                        out[k * d + r] = (0..keep).map(|jj| row[jj] * a[jj * d + r]).sum();
+                    }
+                }
+                let (col, scratch) = self.fit_scratch.split_at_mut(nt);
+                self.rungs[i].gvi.tables().fit.values_to_coefficients_with(
+                    out,
+                    d,
+                    col,
+                    &mut scratch[..nt],
+                );
+            }
+        }
+        self.rungs[i].ws.warm_start(&self.buf[..nt * d]).is_ok()
+    }
+
+    /// Solve the current step at rung i (once per step) starting Newton from `start`;
+    /// whether it converged.
+    fn solve<L: Lagrangian>(
+        &mut self,
+        lag: &L,
+        i: usize,
+        start: Start,
+        loose: bool,
+        q: &[f64],
+        p: &[f64],
+    ) -> bool {
+        if let Some(ok) = self.rungs[i].solved {
             return ok;
         }
-        let ok = match r.gvi.step(lag, &mut r.ws, q, p, &mut r.q, &mut r.p) {
+        let warmed = self.warm && self.warm_start(i, start);
+        let d = self.d;
+        let r = &mut self.rungs[i];
+        let gvi = if loose { &r.loose } else { &r.gvi };
+        let mut result = gvi.step(lag, &mut r.ws, q, p, &mut r.q, &mut r.p);
+        if warmed && !loose {
+            // Guard: a warm start must not yield a kept step that is not solved to round-off
+            // (Newton's increment test is relative to the size of the iterate, which a poor
+            // start can inflate). Redo it from the integrator's own guesses.
+            let pscale = p
+                .iter()
+                .fold(0.0f64, |m, x| m.max(x.abs()))
+                .max(f64::MIN_POSITIVE);
+            if let Ok(stats) = &result {
+                if stats.residual.is_nan() || stats.residual > WARM_RESIDUAL * pscale {
+                    self.evaluations += stats.gradient_evaluations;
+                    r.ws.reset();
+                    result = gvi.step(lag, &mut r.ws, q, p, &mut r.q, &mut r.p);
+                }
+            }
+        }
+        let ok = match result {
             Ok(stats) => {
                 self.evaluations += stats.gradient_evaluations;
+                let m = r.gvi.rule().nodes.len();
+                let c = if matches!(start, Start::Refit(_)) {
+                    &mut self.refit_cost
+                } else {
+                    &mut self.first_cost
+                };
+                c.0 += stats.gradient_evaluations;
+                c.1 += m;
+                let slot = match start {
+                    Start::Cold => Some(0),
+                    Start::Continue => Some(1),
+                    Start::Refit(_) => None,
+                };
+                if let Some(s) = slot {
+                    let x = stats.gradient_evaluations as f64 / m as f64;
+                    let e = &mut self.start_cost[s];
+                    *e = if e.is_nan() {
+                        x
+                    } else {
+                        *e + START_EMA * (x - *e)
+                    };
+                }
                 r.stats = stats;
                 r.ind = r.gvi.modal_indicator(r.ws.coefficients(), d);
+                r.is_loose = loose;
                 true
             }
             Err(f) => {
@@ -68,9 +312,16 @@ impl Ladder {
     }
 
     /// Embedded estimate of rung i's error: |q_i − q_{i+1}|∞ (infinite if either failed).
-    fn estimate<L: Lagrangian>(&mut self, lag: &L, i: usize, q: &[f64], p: &[f64]) -> f64 {
-        let a = self.solve(lag, i, q, p);
-        let b = self.solve(lag, i + 1, q, p);
+    fn estimate<L: Lagrangian>(
+        &mut self,
+        lag: &L,
+        i: usize,
+        start: Start,
+        q: &[f64],
+        p: &[f64],
+    ) -> f64 {
+        let a = self.solve(lag, i, start, self.loose_ok, q, p);
+        let b = self.solve(lag, i + 1, Start::Refit(i), false, q, p);
         if !(a && b) {
             return f64::INFINITY;
         }
@@ -79,6 +330,62 @@ impl Ladder {
             .zip(y)
             .map(|(u, v)| (u - v).abs())
             .fold(0.0, f64::max)
+    }
+
+    /// How to start the first solve of a step: continued from the last accepted curve or cold
+    /// (the integrator's guess competition), whichever has recently cost fewer force
+    /// evaluations per node; each is tried at least every [`START_RETRY`] steps.
+    fn first_start(&mut self) -> Start {
+        if !self.warm || self.prev_rung.is_none() {
+            return Start::Cold;
+        }
+        let [cold, cont] = self.start_cost;
+        let best = if cont.is_nan() || cont <= cold {
+            Start::Continue
+        } else {
+            Start::Cold
+        };
+        self.since_other += 1;
+        if self.since_other >= START_RETRY {
+            self.since_other = 0;
+            return if best == Start::Continue {
+                Start::Cold
+            } else {
+                Start::Continue
+            };
+        }
+        best
+    }
+
+    /// The rung to start the next step from after rung `lo` was accepted with the estimated
+    /// error `e`: [`rungs_down`] rungs lower, unless solving rung `lo` alone (an unchecked step,
+    /// possible while the indicator does not grow) is expected to cost less than a checked
+    /// step lower down (first solve at j, refitted solve at j + 1), by the measured force
+    /// evaluations per quadrature node of first and refitted solves.
+    fn next_rung(&self, lo: usize, e: f64, budget: f64) -> usize {
+        let j = lo.saturating_sub(rungs_down(e, budget));
+        if j == lo {
+            return j;
+        }
+        let per_node = |c: (usize, usize)| c.0 as f64 / c.1.max(1) as f64;
+        let (first, refit) = (per_node(self.first_cost), per_node(self.refit_cost));
+        let m = |i: usize| self.rungs[i].gvi.rule().nodes.len() as f64;
+        if first * m(lo) <= first * m(j) + refit * m(j + 1) {
+            lo
+        } else {
+            j
+        }
+    }
+
+    /// Re-solve rung i to round-off if its solution of this step came from the loose solver
+    /// (before it is kept), starting from that solution; whether it converged.
+    fn tighten<L: Lagrangian>(&mut self, lag: &L, i: usize, q: &[f64], p: &[f64]) -> bool {
+        if !(self.ok(i) && self.rungs[i].is_loose) {
+            return self.ok(i);
+        }
+        self.warm_start(i, Start::Refit(i));
+        self.rungs[i].solved = None;
+        self.solve(lag, i, Start::Refit(i), false, q, p)
     }
 
     fn ok(&self, i: usize) -> bool {
@@ -124,12 +431,33 @@ pub fn integrate_adaptive<L: Lagrangian>(
         evaluations: 0,
         last_failure: None,
         d,
+        warm: opts.warm_start,
+        loose_ok: opts.extrapolate && opts.control == ErrorControl::Embedded,
+        transfers: Transfers::new(opts.ladder.len()),
+        prev: vec![0.0; opts.ladder.last().copied().unwrap_or(0) * d],
+        prev_rung: None,
+        first_cost: (0, 0),
+        refit_cost: (0, 0),
+        start_cost: [f64::NAN; 2],
+        since_other: 0,
+        buf: vec![0.0; opts.ladder.last().copied().unwrap_or(0) * d],
+        cheb: vec![0.0; opts.ladder.last().copied().unwrap_or(0) * d],
+        fit_scratch: vec![0.0; 2 * opts.ladder.last().copied().unwrap_or(0)],
     };
     for &n in &opts.ladder {
         let gvi = GalerkinIntegrator::from_kinds(opts.basis, n, opts.quadrature, None, opts.h)?;
         let ws = gvi.workspace(lag)?;
+        let mut o = *gvi.options();
+        let scale = q0
+            .iter()
+            .fold(0.0f64, |m, x| m.max(x.abs()))
+            .max(f64::MIN_POSITIVE);
+        o.tolerance = (LOOSE_NEWTON * opts.step_budget(steps) / scale).clamp(o.tolerance, 1e-6);
+        let loose = gvi.clone().with_options(o);
         ladder.rungs.push(Rung {
             gvi,
+            loose,
+            is_loose: false,
             ws,
             q: vec![0.0; d],
             p: vec![0.0; d],
@@ -186,6 +514,7 @@ pub fn integrate_adaptive<L: Lagrangian>(
     let (mut q, mut p) = (q0.to_vec(), p0.to_vec());
     let mut idx = 0usize;
     let mut ctl = Calibration::new(ladder.rungs.len());
+    let mut last_check = None;
     for k in 0..steps {
         let t = t0 + k as f64 * opts.h;
         for r in ladder.rungs.iter_mut() {
@@ -193,7 +522,17 @@ pub fn integrate_adaptive<L: Lagrangian>(
         }
         let acc = match control {
             ErrorControl::Indicator => indicator_step(&mut ladder, lag, idx, &q, &p, local_tol),
-            ErrorControl::Embedded => embedded_step(&mut ladder, lag, idx, &q, &p, budget, opts),
+            ErrorControl::Embedded => embedded_step(
+                &mut ladder,
+                &mut last_check,
+                lag,
+                idx,
+                k,
+                &q,
+                &p,
+                budget,
+                opts,
+            ),
             ErrorControl::Calibrated => {
                 calibrated_step(&mut ladder, &mut ctl, lag, idx, k, &q, &p, budget, opts)
             }
@@ -246,6 +585,9 @@ pub fn integrate_adaptive<L: Lagrangian>(
         run.estimates.push(acc.estimate);
         q.copy_from_slice(&r.q);
         p.copy_from_slice(&r.p);
+        let c = r.ws.coefficients();
+        ladder.prev[..c.len()].copy_from_slice(c);
+        ladder.prev_rung = Some(acc.keep);
         // Rungs not solved at this step remember a stale curve.
         for r in ladder.rungs.iter_mut() {
             if r.solved != Some(true) {
@@ -275,8 +617,9 @@ fn indicator_step<L: Lagrangian>(
     ind_tol: f64,
 ) -> Option<Accepted> {
     let top = ladder.rungs.len() - 1;
+    let mut start = ladder.first_start();
     loop {
-        if ladder.solve(lag, idx, q, p) {
+        if ladder.solve(lag, idx, start, false, q, p) {
             let ind = ladder.rungs[idx].ind;
             if ind <= ind_tol || idx == top {
                 let next = if idx > 0 && ind < 1e-2 * ind_tol {
@@ -294,15 +637,32 @@ fn indicator_step<L: Lagrangian>(
         } else if idx == top {
             return None;
         }
+        start = Start::Refit(idx);
         idx += 1;
     }
 }
 
+/// The last embedded check of [`ErrorControl::Embedded`]: at step `step`, rung `rung` had
+/// the estimate `est` and the indicator `ind`.
+#[derive(Debug, Clone, Copy)]
+struct LastCheck {
+    rung: usize,
+    est: f64,
+    ind: f64,
+    step: usize,
+}
+
 /// The embedded control from rung `lo`: climb until |q_lo − q_{lo+1}| meets the budget.
+/// Within [`AdaptiveOptions::check_every`] steps of a check at the same rung, a step whose
+/// indicator has not grown since that check is solved at that rung alone, its error predicted
+/// as est · ind / ind_check (see the module docs).
+#[allow(clippy::too_many_arguments)]
 fn embedded_step<L: Lagrangian>(
     ladder: &mut Ladder,
+    last: &mut Option<LastCheck>,
     lag: &L,
     lo: usize,
+    k: usize,
     q: &[f64],
     p: &[f64],
     budget: f64,
@@ -310,8 +670,24 @@ fn embedded_step<L: Lagrangian>(
 ) -> Option<Accepted> {
     let top = ladder.rungs.len() - 1;
     let mut lo = lo.min(top - 1);
+    let mut start = ladder.first_start();
+    if let Some(c) = last.filter(|c| c.rung == lo && k < c.step + opts.check_every) {
+        if ladder.solve(lag, lo, start, false, q, p) {
+            let ind = ladder.rungs[lo].ind;
+            let predicted = c.est * ind / c.ind;
+            if ind <= GROWTH * c.ind && predicted <= budget {
+                let next = ladder.next_rung(lo, predicted, budget);
+                return Some(Accepted {
+                    keep: lo,
+                    next,
+                    estimate: None,
+                    missed: None,
+                });
+            }
+        }
+    }
     let (est, crit) = loop {
-        let est = ladder.estimate(lag, lo, q, p);
+        let est = ladder.estimate(lag, lo, start, q, p);
         // The criterion is the measured difference itself. Measured and rejected: scaling it
         // by ind_{lo+1}/ind_lo to predict the kept rung's error saved 10–15 % but missed
         // tol by up to 18× on Kepler e = 0.9.
@@ -319,25 +695,54 @@ fn embedded_step<L: Lagrangian>(
         if crit <= budget || lo + 1 == top {
             break (est, crit);
         }
-        lo += 1;
+        start = Start::Refit(lo + 1);
+        lo = jump(ladder, lo, est, budget);
     };
     let keep = match (opts.extrapolate, ladder.ok(lo), ladder.ok(lo + 1)) {
-        (_, _, false) if ladder.ok(lo) => lo,
+        (_, _, false) if ladder.tighten(lag, lo, q, p) => lo,
         (_, _, false) => return None,
         (true, _, true) | (false, false, true) => lo + 1,
         (false, true, true) => lo,
     };
-    let next = if lo > 0 && crit < DOWN * budget {
-        lo - 1
-    } else {
-        lo
-    };
+    let next = ladder.next_rung(lo, crit, budget);
+    let ind = ladder.rungs[lo].ind;
+    *last = (est.is_finite() && est <= budget && ind > 0.0).then_some(LastCheck {
+        rung: lo,
+        est,
+        ind,
+        step: k,
+    });
     Some(Accepted {
         keep,
         next,
         estimate: est.is_finite().then_some(est),
         missed: (crit > budget).then_some(crit),
     })
+}
+
+/// The next rung to try after rung `lo` missed the budget with the estimate `est`: the
+/// smallest rung j > lo, below the top, with est · exp(−κσ (n_j − n_lo)) ≤ budget, where σ
+/// is the geometric decay rate of the Chebyshev coefficients of rung lo + 1's curve and κ =
+/// [`DECAY_RATIO`] the measured ratio of the estimate's decay rate to σ.
+fn jump(ladder: &Ladder, lo: usize, est: f64, budget: f64) -> usize {
+    let top = ladder.rungs.len() - 1;
+    let sigma = DECAY_RATIO * decay_rate(&ladder.rungs[lo + 1], ladder.d);
+    let n0 = ladder.rungs[lo].gvi.n() as f64;
+    (lo + 1..top)
+        .find(|&j| est * (-sigma * (ladder.rungs[j].gvi.n() as f64 - n0)).exp() <= budget)
+        .unwrap_or(top - 1)
+}
+
+/// How many rungs to step down after an estimate `e`: one per factor [`DOWN`] below the
+/// budget, at most [`MAX_DOWN`].
+fn rungs_down(e: f64, budget: f64) -> usize {
+    let mut k = 0;
+    let mut level = DOWN * budget;
+    while e < level && k < MAX_DOWN {
+        k += 1;
+        level *= DOWN;
+    }
+    k
 }
 
 /// State of the online calibration: per rung, the latest measured ratios
@@ -440,8 +845,9 @@ fn calibrated_step<L: Lagrangian>(
     let top = ladder.rungs.len() - 1;
     let mut i = idx;
     let mut estimate = None;
+    let mut start = ladder.first_start();
     let keep = loop {
-        let ok = ladder.solve(lag, i, q, p);
+        let ok = ladder.solve(lag, i, start, false, q, p);
         if !ok {
             if i == top {
                 return None;
@@ -453,7 +859,7 @@ fn calibrated_step<L: Lagrangian>(
         let check = i < top
             && (!ctl.measured(i) || ctl.stale(i, k, opts.check_every) || ind > JUMP * ctl.last_ind);
         if check {
-            let est = ladder.estimate(lag, i, q, p);
+            let est = ladder.estimate(lag, i, Start::Continue, q, p);
             ctl.record(i, est, ind, k);
             if est <= budget {
                 estimate = Some(est);
@@ -473,12 +879,13 @@ fn calibrated_step<L: Lagrangian>(
             estimate = None;
             break top;
         }
+        start = Start::Refit(i);
         i = predict(ladder, ctl, i, i + 1, budget);
     };
     // Calibrate on every other pair of neighbouring rungs solved at this step.
     for j in 0..top {
         if ladder.ok(j) && ladder.ok(j + 1) && ctl.measured_at[j] != Some(k) {
-            let est = ladder.estimate(lag, j, q, p);
+            let est = ladder.estimate(lag, j, Start::Continue, q, p);
             ctl.record(j, est, ladder.rungs[j].ind, k);
         }
     }

@@ -7,29 +7,55 @@
 //! [`integrate_adaptive`] chooses n per step from a ladder under one of three
 //! [`ErrorControl`]s:
 //!
-//! * **Embedded** (default): every step is solved at its rung n_i and at the next rung
-//!   n_{i+1}; e = |q_i − q_{i+1}|∞ estimates rung i's one-step position error (measured against
-//!   the exact one-step error on Kepler and the oscillator: 0.96–1.00 of it, test
+//! * **Embedded** (default): a step is solved at its rung n_i and at the next rung n_{i+1};
+//!   e = |q_i − q_{i+1}|∞ estimates rung i's one-step position error (measured against the
+//!   exact one-step error on Kepler and the oscillator: 0.96–1.00 of it, test
 //!   `embedded_estimate_tracks_the_one_step_error_across_n`). The lowest rung with
 //!   e ≤ [`ESTIMATE_SAFETY`]·tol/steps is taken, and with [`AdaptiveOptions::extrapolate`] the
-//!   rung-(i+1) solution is kept (local extrapolation). The next step starts one rung lower
-//!   when e < 0.05 of the budget. Measured (`gvi tolerance-study`, 100 steps, Legendre):
-//!   Kepler e = 0.6 (h = 1) achieved/tol 0.003–1.4, cost 2.0–2.2× *more* than the cheapest
-//!   fixed n (the needed n varies too little along this orbit to pay for two solves per
-//!   step); Kepler e = 0.9 (h = 0.25) achieved/tol 0.03–2.2, cost 1.2–1.4× *less*.
+//!   rung-(i+1) solution is kept (local extrapolation). What makes it cheap (cost = force
+//!   evaluations, [`AdaptiveRun::gradient_evaluations`]):
+//!   - *Warm starts* ([`AdaptiveOptions::warm_start`], via
+//!     [`Workspace::warm_start`](crate::integrator::Workspace::warm_start)): the solve at
+//!     n_{i+1} starts from rung i's curve of the same step, refitted at rung (i+1)'s nodes
+//!     (2 Newton iterations, 3 force evaluations per quadrature node, against ≈ 7 for a solve
+//!     from the integrator's guess competition); a step's first solve starts from the last
+//!     accepted curve continued over the step (its Chebyshev series truncated where
+//!     |a_j|·T_j(3) outgrows the curve: continuing round-off modes gave starts from which
+//!     Newton stopped at residuals of 1e-4) or cold, whichever has recently cost less per
+//!     node (on the outer solar system, h = 5 years, continuation is the worse start).
+//!   - *Loose lower member*: the never-kept rung-i solve of a pair stops Newton at 0.1 of the
+//!     budget (kept steps are always solved to round-off; test `kept_steps_are_solved_to_round_off`).
+//!   - *Jumps*: a rung that misses the budget is followed by the smallest rung predicted to
+//!     meet it from e·exp(−1.5σΔn), σ the geometric decay rate of the Chebyshev coefficients
+//!     (the estimate was measured to decay 1.5–1.7× as fast as the coefficients); after a
+//!     step the next starts up to 5 rungs lower (one per factor 20 below the budget).
+//!   - *Unchecked steps*: within [`AdaptiveOptions::check_every`] steps of a check at the same
+//!     rung, a step whose modal indicator has not grown since that check is solved at that rung
+//!     alone (error predicted as e·ind/ind_check, kept without extrapolation); a step that may
+//!     go down stays at its rung unchecked when that is predicted cheaper than a checked step
+//!     lower down.
+//!
+//!   Measured (`gvi tolerance-study`, 100 steps, Legendre, tol = 1e-6…1e-12, see the README):
+//!   Kepler e = 0.6 (h = 1) achieved/tol 0.03–0.78, cost 0.85–0.88 of the cheapest fixed n
+//!   meeting tol for 1e-6…1e-11 (1.01 at 1e-12, at the round-off floor, one warning); Kepler e = 0.9 (h = 0.25) achieved/tol
+//!   0.02–1.79 (4.0 at 1e-12 with warnings: n = 64 is not enough at periapsis, nor is any
+//!   fixed n ≤ 64), cost 0.28–0.32 of the fixed n; the outer solar system: see the README
+//!   (the needed n hardly varies along near-circular orbits, so the checks do not pay off).
+//!   Without warm starts e = 0.6 cost 1.30–1.54× the fixed n, checking every step 1.13–1.85×.
 //! * **Indicator**: the indicator alone, with a fixed relation error ≈ indicator^α
 //!   ([`INDICATOR_EXPONENT`], calibrated on Kepler e = 0.6). One solve per step; on e = 0.6
-//!   achieved/tol 0.7–7.8 at 0.88–0.91× the cost of the cheapest fixed n, but on e = 0.9
-//!   achieved/tol 58–1115: the calibration does not transfer (near periapsis the step is
+//!   achieved/tol 0.7–4.4 at 0.77–0.86× the cost of the cheapest fixed n, but on e = 0.9
+//!   achieved/tol 55–1115: the calibration does not transfer (near periapsis the step is
 //!   under-resolved and the error is of the size of the indicator, not its 1.7th power).
 //! * **Calibrated** (experimental): the indicator scaled by ratios error/indicator measured
 //!   online per rung by embedded checks (first use of a rung, every
 //!   [`AdaptiveOptions::check_every`] steps, when the indicator jumps 10×), with the next
 //!   rung predicted from the geometric decay rate of the Chebyshev coefficients. Measured not
 //!   robust: the ratio at a given n depends on where on the orbit it was measured (tiny
-//!   where the orbit is slow), and on e = 0.9 achieved/tol reached 17–7.7e5; on e = 0.6 it
-//!   cost 1.5–2× more than fixed n. Also measured and rejected: predicting the kept rung's
-//!   error as e·ind_{i+1}/ind_i (10–15 % cheaper, but achieved/tol up to 18 on e = 0.9).
+//!   where the orbit is slow), and on e = 0.9 achieved/tol reached up to 7.7e5; on e = 0.6 it
+//!   cost 1.2–2.2× the fixed n. Also measured and rejected: predicting the kept rung's
+//!   error as e·ind_{i+1}/ind_i (10–15 % cheaper, but achieved/tol up to 18 on e = 0.9), and
+//!   predicting the next step's rung from the trend of the estimates (costlier on e = 0.6).
 //!
 //! The per-step budget tol/steps (times a safety factor) bounds the sum of the local errors,
 //! which bounds the phase error that dominates long runs. A budget that the largest rung
@@ -52,7 +78,9 @@
 //!
 //! **Local extrapolation and structure.** Keeping the higher rung's solution does not mix the
 //! two: the accepted step is the exact discrete flow of L_d^{(n_{i+1})} alone, so everything
-//! said above holds for it; the lower rung serves only as the error estimate.
+//! said above holds for it; the lower rung serves only as the error estimate. Warm starts
+//! change only where Newton starts, not the equations it solves; a warm-started solve to be
+//! kept whose stage residual is not at round-off (above 1e-8·max|p|) is redone cold.
 
 mod driver;
 
@@ -76,7 +104,8 @@ pub const SAFETY: f64 = 0.1;
 /// ESTIMATE_SAFETY · tol / steps.
 pub const ESTIMATE_SAFETY: f64 = 0.5;
 
-/// Default spacing of the embedded checks of [`ErrorControl::Calibrated`].
+/// Default spacing of the embedded checks: at least every this many steps
+/// ([`ErrorControl::Embedded`] and [`ErrorControl::Calibrated`]).
 pub const CHECK_EVERY: usize = 8;
 
 /// The default ladder of n.
@@ -103,10 +132,16 @@ pub struct AdaptiveOptions {
     /// of the discrete Lagrangian of its own n.
     #[serde(default = "default_true")]
     pub extrapolate: bool,
-    /// [`ErrorControl::Calibrated`]: solve at the next rung as a check at least every this
-    /// many steps (default [`CHECK_EVERY`]).
+    /// Solve at the next rung as a check at least every this many steps (default
+    /// [`CHECK_EVERY`]; 1: check every step).
     #[serde(default = "default_check_every")]
     pub check_every: usize,
+    /// Start each solve's Newton iteration from a curve already at hand instead of the
+    /// integrator's guess competition (default true): the first solve of a step from the last
+    /// accepted curve continued over the step, a solve at a higher rung from the lower rung's
+    /// curve of the same step. Changes only where Newton starts, not the map it solves.
+    #[serde(default = "default_true")]
+    pub warm_start: bool,
 }
 
 fn default_true() -> bool {
@@ -125,8 +160,10 @@ pub enum ErrorControl {
     /// ([`INDICATOR_EXPONENT`], calibrated on Kepler e = 0.6; does not transfer, see the
     /// module docs). One solve per step.
     Indicator,
-    /// Every step is solved at its rung and at the next one; the difference of the step-end
-    /// positions is the error estimate of the lower rung. Two solves per step.
+    /// A step is solved at its rung and at the next one; the difference of the step-end
+    /// positions is the error estimate of the lower rung. Two solves per checked step (the
+    /// second warm-started); between checks, steps whose indicator does not grow are solved
+    /// once (see the module docs).
     #[default]
     Embedded,
     /// The indicator, scaled by a ratio (error / indicator) measured online by embedded checks:
@@ -173,6 +210,7 @@ impl AdaptiveOptions {
             control: ErrorControl::default(),
             extrapolate: true,
             check_every: CHECK_EVERY,
+            warm_start: true,
         }
     }
 

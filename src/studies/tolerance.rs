@@ -68,6 +68,10 @@ pub struct ToleranceRow {
     pub fixed: Option<(usize, f64, usize)>,
     /// fixed cost / adaptive cost (> 1: the adaptive run is cheaper).
     pub saving: Option<f64>,
+    /// Wall time of the adaptive run, seconds (secondary to the deterministic cost).
+    pub seconds: f64,
+    /// Wall time of the cheapest fixed-n run meeting tol, seconds.
+    pub fixed_seconds: Option<f64>,
 }
 
 /// The study of one scene.
@@ -83,6 +87,8 @@ pub struct ToleranceStudy {
     pub reference: String,
     /// Every fixed n run: (n, error, cost); error NaN for a failed run.
     pub fixed: Vec<(usize, f64, usize)>,
+    /// Wall time of every fixed n run, seconds (same order as `fixed`).
+    pub fixed_seconds: Vec<f64>,
     /// One row per tolerance and control.
     pub rows: Vec<ToleranceRow>,
 }
@@ -157,9 +163,13 @@ fn study_system<S: System>(
     let lo = config.ladder.first().copied().unwrap_or(4);
     let hi = config.ladder.last().copied().unwrap_or(64);
     let mut fixed = Vec::new();
+    let mut fixed_seconds = Vec::new();
     for n in lo..=hi {
         let gvi = GalerkinIntegrator::from_kinds(m.basis, n, m.quadrature, None, m.h)?;
-        let (err, cost) = match gvi.integrate(system, init.t0, &init.q, &init.p, m.steps) {
+        let clock = std::time::Instant::now();
+        let result = gvi.integrate(system, init.t0, &init.q, &init.p, m.steps);
+        fixed_seconds.push(clock.elapsed().as_secs_f64());
+        let (err, cost) = match result {
             Ok(t) => (max_error(&t, reference), t.gradient_evaluations()),
             Err(_) => (f64::NAN, 0),
         };
@@ -167,16 +177,22 @@ fn study_system<S: System>(
     }
     let mut rows = Vec::new();
     for &tol in &config.tols {
-        let cheapest = fixed
+        let cheapest_at = fixed
             .iter()
-            .filter(|f| f.1 <= tol)
-            .min_by_key(|f| f.2)
-            .copied();
+            .enumerate()
+            .filter(|(_, f)| f.1 <= tol)
+            .min_by_key(|(_, f)| f.2)
+            .map(|(i, _)| i);
+        let cheapest = cheapest_at.map(|i| fixed[i]);
+        let cheapest_seconds = cheapest_at.map(|i| fixed_seconds[i]);
         for &control in &config.controls {
             let mut opts = AdaptiveOptions::new(tol, m.basis, m.quadrature, m.h);
             opts.ladder = config.ladder.clone();
             opts.control = control;
-            let row = match integrate_adaptive(system, &opts, init.t0, &init.q, &init.p, m.steps) {
+            let clock = std::time::Instant::now();
+            let result = integrate_adaptive(system, &opts, init.t0, &init.q, &init.p, m.steps);
+            let seconds = clock.elapsed().as_secs_f64();
+            let row = match result {
                 Ok(run) => {
                     let t = &run.trajectory;
                     let error = max_error(t, reference);
@@ -193,6 +209,8 @@ fn study_system<S: System>(
                         warnings: run.warnings.len(),
                         fixed: cheapest,
                         saving: cheapest.map(|f| f.2 as f64 / run.gradient_evaluations as f64),
+                        seconds,
+                        fixed_seconds: cheapest_seconds,
                     }
                 }
                 Err(_) => ToleranceRow {
@@ -206,6 +224,8 @@ fn study_system<S: System>(
                     warnings: 1,
                     fixed: cheapest,
                     saving: None,
+                    seconds,
+                    fixed_seconds: cheapest_seconds,
                 },
             };
             rows.push(row);
@@ -217,6 +237,7 @@ fn study_system<S: System>(
         steps: m.steps,
         reference: label,
         fixed,
+        fixed_seconds,
         rows,
     })
 }
@@ -226,7 +247,7 @@ impl ToleranceStudy {
     pub fn to_csv(&self) -> String {
         let mut out = String::from(
             "scene,tol,control,error,factor,cost,n_min,n_max,checks,warnings,fixed_n,\
-             fixed_error,fixed_cost,saving\n",
+             fixed_error,fixed_cost,saving,seconds,fixed_seconds\n",
         );
         for r in &self.rows {
             let (fname, ferr, fcost) = match r.fixed {
@@ -234,7 +255,7 @@ impl ToleranceStudy {
                 None => Default::default(),
             };
             out.push_str(&format!(
-                "{},{:e},{},{:e},{:.3},{},{},{},{},{},{},{},{},{}\n",
+                "{},{:e},{},{:e},{:.3},{},{},{},{},{},{},{},{},{},{:.4},{}\n",
                 self.scene,
                 r.tol,
                 r.control,
@@ -248,7 +269,11 @@ impl ToleranceStudy {
                 fname,
                 ferr,
                 fcost,
-                r.saving.map(|s| format!("{s:.3}")).unwrap_or_default()
+                r.saving.map(|s| format!("{s:.3}")).unwrap_or_default(),
+                r.seconds,
+                r.fixed_seconds
+                    .map(|s| format!("{s:.4}"))
+                    .unwrap_or_default()
             ));
         }
         out
@@ -258,8 +283,8 @@ impl ToleranceStudy {
     pub fn to_markdown(&self) -> String {
         let mut out = format!(
             "{} (h = {}, {} steps; reference: {})\n\n| tol | control | achieved | ×tol | cost | n | \
-             checks | cheapest fixed n | its error | its cost | saving |\n|---|---|---|---|---|---|\
-             ---|---|---|---|---|\n",
+             checks | cheapest fixed n | its error | its cost | saving | time (ms) | fixed time (ms) |\n\
+             |---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
             self.scene, self.h, self.steps, self.reference
         );
         for r in &self.rows {
@@ -268,7 +293,7 @@ impl ToleranceStudy {
                 None => "none ≤ ladder max | – | –".into(),
             };
             out.push_str(&format!(
-                "| {:.0e} | {} | {:.1e} | {:.2} | {} | {}–{} | {} | {} |{}\n",
+                "| {:.0e} | {} | {:.1e} | {:.2} | {} | {}–{} | {} | {} |{} | {:.1} | {} |\n",
                 r.tol,
                 r.control,
                 r.error,
@@ -279,6 +304,10 @@ impl ToleranceStudy {
                 r.checks,
                 fixed,
                 r.saving.map(|s| format!(" {s:.2}×")).unwrap_or(" –".into()),
+                1e3 * r.seconds,
+                r.fixed_seconds
+                    .map(|s| format!("{:.1}", 1e3 * s))
+                    .unwrap_or("–".into()),
             ));
         }
         out
