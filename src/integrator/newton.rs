@@ -39,16 +39,14 @@ pub struct NewtonOptions {
     pub max_iterations: usize,
     /// Stop when the estimated remaining error of the Newton unknowns (the increments
     /// ΔQ_i = Q_i − u_i q_k) is below `tolerance · max|ΔQ|` (error estimated from the
-    /// contraction of successive Newton increments). The default 1e-15 is the fast choice; a
-    /// tolerance below ε (e.g. 1e-18) runs Newton to the round-off floor (stopped by
-    /// `floor_tolerance` or a zero increment), which long runs need: a tolerance near ε leaves
-    /// a deterministic, state-dependent solve error that turns into a linear energy drift.
-    /// Kepler e = 0.6, Legendre n = 32, h = 1, T = 4000, compensated: dH/dt = −5.2e-17 and
-    /// position error 2.2e-9 with 1e-15 (2.00 iterations per step), 2.2e-18 and 2.5e-10 with
-    /// 1e-18 (2.18 iterations per step); `examples/roundoff.rs` with `GVI_TOL`.
+    /// contraction of successive Newton increments). The default 1e-16 is just below ε: with
+    /// 1e-15 the Hermite and Chebyshev flows of `tests/bases.rs` drift apart by 1.1e-10 in
+    /// 10 steps at n = 22 (the solve error, not the basis); 1e-16 costs 2.96 linear solves per
+    /// step at n = 32, h = 2 (2.49 with 1e-15; `tests/counts.rs`). The long-run target of
+    /// `tests/roundoff.rs` is met with either (7.9e-10 at T = 20,000).
     pub tolerance: f64,
     /// Also stop, as converged at the round-off floor, once increments below
-    /// `floor_tolerance · max|Q|` stop shrinking (iterating further only stirs noise).
+    /// `floor_tolerance · max|ΔQ|` stop shrinking (iterating further only stirs noise).
     pub floor_tolerance: f64,
     /// How each step's iteration starts.
     pub initial_guess: InitialGuess,
@@ -79,7 +77,7 @@ impl Default for NewtonOptions {
     fn default() -> Self {
         NewtonOptions {
             max_iterations: 40,
-            tolerance: 1e-17,
+            tolerance: 1e-16,
             floor_tolerance: 1e-10,
             initial_guess: InitialGuess::BestResidual,
             predictor_substeps: None,
@@ -144,6 +142,34 @@ fn two_sum(a: f64, b: f64) -> (f64, f64) {
     let s = a + b;
     let bb = s - a;
     (s, (a - (s - bb)) + (b - bb))
+}
+
+/// hi + lo += a·b with the product exact (FMA) and the sum compensated (TwoSum).
+#[inline]
+fn dd_acc(hi: &mut f64, lo: &mut f64, a: f64, b: f64) {
+    let prod = a * b;
+    let low = a.mul_add(b, -prod);
+    let (s, e) = two_sum(*hi, prod);
+    *hi = s;
+    *lo += e + low;
+}
+
+/// (a_hi + a_lo) + (b_hi + b_lo) as a normalised hi + lo pair (double-double addition):
+/// unlike Kahan's `two_sum(a, b + a_lo)`, the low parts are not rounded away when the
+/// increment is as large as the sum (steps of a large-h spectral method).
+#[inline]
+fn dd_add(a_hi: f64, a_lo: f64, b_hi: f64, b_lo: f64) -> (f64, f64) {
+    let (s, e) = two_sum(a_hi, b_hi);
+    let (t, f) = two_sum(a_lo, b_lo);
+    let (s, e) = fast_two_sum(s, e + t);
+    fast_two_sum(s, e + f)
+}
+
+/// Dekker's Fast2Sum for |a| ≥ |b|.
+#[inline]
+fn fast_two_sum(a: f64, b: f64) -> (f64, f64) {
+    let s = a + b;
+    (s, b - (s - a))
 }
 
 fn max_abs(x: &[f64]) -> f64 {
@@ -229,6 +255,23 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 &mut ws.grad,
                 rd,
             );
+            if !cand {
+                // The low part of ΔQ_{n−1} in every kinetic row (the Legendre-transform row and
+                // the curve see it too), so that all equations see the same unknown.
+                for r in 0..d {
+                    let mut s = 0.0;
+                    for c in 0..d {
+                        s += sep.mass[r * d + c] * ws.last_lo[c];
+                    }
+                    ws.small_rhs[r] = s / h;
+                }
+                for a in 0..n {
+                    let k = t.kinetic[a * n + n - 1];
+                    for r in 0..d {
+                        ws.grad[a * d + r] += k * ws.small_rhs[r];
+                    }
+                }
+            }
             for j in 0..m {
                 lag.force(&ws.qj[j * d..(j + 1) * d], &mut ws.lq[j * d..(j + 1) * d]);
                 let w = t.weights[j] * h;
@@ -279,6 +322,71 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         m
     }
 
+    /// The Legendre-transform rows of the initial-value residual into `ws.rhs[..D]`, and the
+    /// step's total impulse h Σ_j b_j L_q(c_j) into `ws.impulse` + `ws.impulse_lo`.
+    ///
+    /// The rows are p_k + impulse − ∂S/∂ΔQ_{n−1} = 0, the form that makes
+    /// p_{k+1} = p_k + impulse exactly D₂L_d of the discrete Lagrangian the tables define (q_k
+    /// enters every node with coefficient exactly 1 and the velocities not at all); in exact
+    /// arithmetic it is p_k + Σ_{a<n−1} u_a ∂S/∂Q_a = 0, the paper's eq. (3.2) plus
+    /// u-weighted stage equations.
+    ///
+    /// Round-off (DESIGN.md §4): the terms p_k, the impulse, and both parts of ∂S/∂ΔQ_{n−1}
+    /// are O(|p|) each (near periapsis of an eccentric orbit the impulse of a large step is as
+    /// large as p) and cancel to O(ε). Rounding them in working precision leaves an error
+    /// ε|p| in the row, i.e. in q_{k+1}, every step — and, measured, not a random one: it
+    /// made the energy drift linearly (Kepler e = 0.6, Legendre n = 24, h = 0.5:
+    /// ΔE = −4e-14 at T = 2000 and −7e-14 at T = 4000, every realisation the same sign; the
+    /// harmonic oscillator likewise). So for separable Lagrangians the whole row is summed in
+    /// double-double: products exact by FMA, sums by TwoSum, including the low parts of the
+    /// state (p_err) and of ΔQ_{n−1}. The drift fell below the random walk (`tests/roundoff.rs`).
+    fn legendre_transform_rows(&self, ws: &mut Workspace, p_k: &[f64]) {
+        let (t, h) = (self.tables(), self.step_size());
+        let (d, n) = (ws.d, ws.n);
+        let last = (n - 1) * d;
+        for r in 0..d {
+            let (mut hi, mut lo) = (0.0, 0.0);
+            for j in 0..t.m {
+                dd_acc(&mut hi, &mut lo, h * t.weights[j], ws.lq[j * d + r]);
+            }
+            (ws.impulse[r], ws.impulse_lo[r]) = two_sum(hi, lo);
+            ws.rhs[r] = (p_k[r] - ws.grad[last + r]) + (ws.impulse[r] + ws.p_err[r]);
+        }
+        let Some(sep) = &ws.separable else {
+            return;
+        };
+        let x = if ws.curve_from_cand {
+            &ws.cand
+        } else {
+            &ws.coeffs
+        };
+        let nd = n * d;
+        for r in 0..d {
+            // p_k + impulse …
+            let (mut s, mut e) = two_sum(p_k[r], ws.impulse[r]);
+            e += ws.p_err[r] + ws.impulse_lo[r];
+            // … − Σ_j φ_{n−1}(c_j) h b_j L_q(c_j) …
+            for j in 0..t.m {
+                let (w, f) = (h * t.weights[j], ws.lq[j * d + r]);
+                let g = w * f;
+                let phi = t.phi[j * n + n - 1];
+                dd_acc(&mut s, &mut e, -phi, g);
+                e -= phi * w.mul_add(f, -g);
+            }
+            // … − (1/h) Σ_b K_{n−1,b} M ΔQ_b.
+            let kinetic = &sep.kinetic_last[r * nd..(r + 1) * nd];
+            for (c, v) in kinetic.iter().zip(x) {
+                dd_acc(&mut s, &mut e, -c, *v);
+            }
+            if !ws.curve_from_cand {
+                for (c, lo) in kinetic[last..].iter().zip(&ws.last_lo) {
+                    e -= c * lo;
+                }
+            }
+            ws.rhs[r] = s + e;
+        }
+    }
+
     /// Residual of the stage equations for `mode` into `ws.rhs` (negated, ready for the
     /// Newton solve); returns its max-norm.
     fn residual(&self, ws: &mut Workspace, mode: Mode, p_k: &[f64]) -> f64 {
@@ -287,64 +395,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let off = mode.row_offset() * d;
         let mut norm = 0.0f64;
         if mode == Mode::InitialValue {
-            // The Legendre-transform rows, in the form that makes p_{k+1} = p_k + impulse the
-            // exact D₂L_d of the discrete Lagrangian the tables define (q_k enters the curve
-            // with coefficient exactly 1 and the velocity not at all):
-            // p_k + h Σ_j b_j L_q(c_j) − ∂S/∂ΔQ_{n−1} = 0. In exact arithmetic this is
-            // p_k + Σ_{a<n−1} u_a ∂S/∂Q_a = 0, i.e. row 0 plus u-weighted interior rows.
-            let (t, h) = (self.tables(), self.step_size());
-            let last = (n - 1) * d;
-            for r in 0..d {
-                // h Σ_j b_j L_q(c_j) as an unevaluated sum hi + lo (TwoProd/TwoSum): near
-                // periapsis of an eccentric orbit the impulse of a large step is as large as p
-                // itself, and its rounding would be the largest round-off of the step.
-                let (mut hi, mut lo) = (0.0, 0.0);
-                for j in 0..t.m {
-                    let w = h * t.weights[j];
-                    let x = ws.lq[j * d + r];
-                    let prod = w * x;
-                    let (s, err) = two_sum(hi, prod);
-                    hi = s;
-                    lo += err + w.mul_add(x, -prod);
-                }
-                (ws.impulse[r], ws.impulse_lo[r]) = two_sum(hi, lo);
-                ws.rhs[r] = (p_k[r] - ws.grad[last + r]) + (ws.impulse[r] + ws.p_err[r]);
-            }
-            if let Some(sep) = &ws.separable {
-                // The row is a difference of O(|p|) terms that cancel to O(h|L_q|): p_k and the
-                // kinetic part of ∂S/∂ΔQ_{n−1}. Evaluated naively it carries an error ε|p| that
-                // moves q_{k+1} by h ε |M⁻¹p| each step — the dominant round-off of long runs.
-                // So this part is summed exactly (TwoProd/TwoSum, a compensated dot product)
-                // and only the O(h|L_q|) terms are rounded.
-                let x = if ws.curve_from_cand {
-                    &ws.cand
-                } else {
-                    &ws.coeffs
-                };
-                let nd = n * d;
-                for r in 0..d {
-                    let mut potential = 0.0;
-                    for j in 0..t.m {
-                        potential += t.phi[j * n + n - 1] * ws.scaled[j * d + r];
-                    }
-                    let (mut s, mut e) = two_sum(p_k[r], ws.impulse[r]);
-                    e += (ws.p_err[r] + ws.impulse_lo[r]) - potential;
-                    for (c, v) in sep.kinetic_last[r * nd..(r + 1) * nd].iter().zip(x) {
-                        let prod = c * v;
-                        let low = c.mul_add(*v, -prod);
-                        let (s1, err) = two_sum(s, -prod);
-                        s = s1;
-                        e += err - low;
-                    }
-                    if !ws.curve_from_cand {
-                        let c = &sep.kinetic_last[r * nd + (n - 1) * d..(r + 1) * nd];
-                        for (c, lo) in c.iter().zip(&ws.last_lo) {
-                            e -= c * lo;
-                        }
-                    }
-                    ws.rhs[r] = s + e;
-                }
-            }
+            self.legendre_transform_rows(ws, p_k);
         }
         for i in 0..rows {
             let r = if mode == Mode::InitialValue && i < d {
@@ -791,7 +842,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             let last = (n - 1) * d;
             for i in 0..size {
                 let k = u0 + i;
-                if k >= last {
+                if k >= last && ws.separable.is_some() {
                     let (s, e) = two_sum(ws.coeffs[k], ws.rhs[i]);
                     ws.coeffs[k] = s;
                     ws.last_lo[k - last] += e;
@@ -856,8 +907,9 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let d = ws.d;
         let last = (ws.n - 1) * d;
         for r in 0..d {
-            q_next[r] = q[r] + ws.coeffs[last + r];
-            p_next[r] = p[r] + ws.impulse[r];
+            // Correctly rounded sums of the state and the double-double increments.
+            q_next[r] = dd_add(q[r], 0.0, ws.coeffs[last + r], ws.last_lo[r]).0;
+            p_next[r] = dd_add(p[r], 0.0, ws.impulse[r], ws.impulse_lo[r]).0;
         }
         self.finish_step(ws, q_next);
         Ok(stats)
@@ -888,8 +940,8 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let d = ws.d;
         let last = (ws.n - 1) * d;
         for r in 0..d {
-            (q[r], q_err[r]) = two_sum(q[r], ws.coeffs[last + r] + (ws.last_lo[r] + q_err[r]));
-            (p[r], p_err[r]) = two_sum(p[r], ws.impulse[r] + (ws.impulse_lo[r] + p_err[r]));
+            (q[r], q_err[r]) = dd_add(q[r], q_err[r], ws.coeffs[last + r], ws.last_lo[r]);
+            (p[r], p_err[r]) = dd_add(p[r], p_err[r], ws.impulse[r], ws.impulse_lo[r]);
         }
         self.finish_step(ws, q);
         Ok(stats)
