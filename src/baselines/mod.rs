@@ -150,6 +150,12 @@ pub struct GalerkinMethod<'a, L: Lagrangian, B: Basis, Q: Quadrature> {
     lagrangian: &'a L,
     workspace: Workspace,
     evaluations: usize,
+    /// Compensation terms of the last returned state, and that state: they are used when the
+    /// next call continues from exactly that state (the usual loop), and dropped otherwise.
+    q_err: Vec<f64>,
+    p_err: Vec<f64>,
+    last_q: Vec<f64>,
+    last_p: Vec<f64>,
 }
 
 impl<'a, L: Lagrangian, B: Basis, Q: Quadrature> GalerkinMethod<'a, L, B, Q> {
@@ -160,6 +166,10 @@ impl<'a, L: Lagrangian, B: Basis, Q: Quadrature> GalerkinMethod<'a, L, B, Q> {
             lagrangian,
             workspace: integrator.workspace(lagrangian)?,
             evaluations: 0,
+            q_err: vec![0.0; lagrangian.dim()],
+            p_err: vec![0.0; lagrangian.dim()],
+            last_q: vec![f64::NAN; lagrangian.dim()],
+            last_p: vec![f64::NAN; lagrangian.dim()],
         })
     }
 }
@@ -196,8 +206,32 @@ impl<L: Lagrangian, B: Basis, Q: Quadrature> OneStepMethod for GalerkinMethod<'_
         ensure_len("p", d, p.len())?;
         ensure_len("q_next", d, q_next.len())?;
         ensure_len("p_next", d, p_next.len())?;
-        self.integrator
-            .step(self.lagrangian, &mut self.workspace, q, p, q_next, p_next)
+        let result = if self.integrator.options().compensated {
+            // Continue the compensated sums only when called with the state returned last.
+            if q != self.last_q.as_slice() || p != self.last_p.as_slice() {
+                self.q_err.iter_mut().for_each(|x| *x = 0.0);
+                self.p_err.iter_mut().for_each(|x| *x = 0.0);
+            }
+            q_next.copy_from_slice(q);
+            p_next.copy_from_slice(p);
+            let r = self.integrator.step_compensated(
+                self.lagrangian,
+                &mut self.workspace,
+                q_next,
+                &mut self.q_err,
+                p_next,
+                &mut self.p_err,
+            );
+            if r.is_ok() {
+                self.last_q.copy_from_slice(q_next);
+                self.last_p.copy_from_slice(p_next);
+            }
+            r
+        } else {
+            self.integrator
+                .step(self.lagrangian, &mut self.workspace, q, p, q_next, p_next)
+        };
+        result
             .map(|stats| self.evaluations += stats.gradient_evaluations)
             .map_err(|f| GviError::NewtonFailure {
                 step: (t / self.integrator.step_size()).round().max(0.0) as usize,

@@ -11,6 +11,19 @@
 //! p_k + ∂S/∂Q_0 = 0 (the discrete Legendre transform, paper eq. (3.2)) and ∂S/∂Q_i = 0,
 //! i = 1 … n−2 (the internal stage equations (3.1)) for Q_1 … Q_{n−1} by Newton's method with the
 //! exact Jacobian; then q_{k+1} = Q_{n−1} and p_{k+1} = ∂S/∂Q_{n−1}.
+//!
+//! # Round-off
+//!
+//! Round-off sets the floor of a spectral method (DESIGN.md §4), so the step is formulated
+//! for it. The Newton unknowns are the increments ΔQ_i = Q_i − u_i q_k (u: the coefficients
+//! of the constant curve, Σ u_i φ_i ≡ 1): the curve at the nodes is q_k + Φ ΔQ, its velocity
+//! Φ' ΔQ / h, the kinetic residual (1/h) K M ΔQ, and q_{k+1} = q_k + ΔQ_{n−1}, an increment
+//! known to full relative accuracy. p_{k+1} = p_k + h Σ_j b_j L_q(c_j), the total impulse.
+//! [`integrate`](GalerkinIntegrator::integrate) (and the
+//! [`GalerkinMethod`](crate::baselines::GalerkinMethod) adapter) then add the increments with
+//! compensated summation ([`step_compensated`](GalerkinIntegrator::step_compensated)), unless
+//! [`NewtonOptions::compensated`] is off. The public coefficients
+//! ([`Workspace::coefficients`], `Trajectory::coefficients`) stay absolute Q.
 
 mod newton;
 mod tangent;
@@ -285,13 +298,23 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let mut p = p0.to_vec();
         let mut q_next = vec![0.0; d];
         let mut p_next = vec![0.0; d];
+        // Compensation terms of the running sums q and p (DESIGN.md §4), kept across steps.
+        let (mut q_err, mut p_err) = (vec![0.0; d], vec![0.0; d]);
+        let compensated = self.options.compensated;
         for k in 0..steps {
             let t = t0 + k as f64 * self.h;
-            match self.step(lagrangian, &mut ws, &q, &p, &mut q_next, &mut p_next) {
+            let result = if compensated {
+                self.step_compensated(lagrangian, &mut ws, &mut q, &mut q_err, &mut p, &mut p_err)
+            } else {
+                self.step(lagrangian, &mut ws, &q, &p, &mut q_next, &mut p_next)
+                    .inspect(|_| {
+                        std::mem::swap(&mut q, &mut q_next);
+                        std::mem::swap(&mut p, &mut p_next);
+                    })
+            };
+            match result {
                 Ok(stats) => {
-                    traj.push_step(ws.coefficients(), &q_next, &p_next, stats);
-                    std::mem::swap(&mut q, &mut q_next);
-                    std::mem::swap(&mut p, &mut p_next);
+                    traj.push_step(ws.coefficients(), &q, &p, stats);
                 }
                 Err(failure) => {
                     return Err(IntegrationFailure {
@@ -433,9 +456,15 @@ impl Tables {
             let row = &dphi[j * n..(j + 1) * n];
             for a in 0..n {
                 let wa = w * row[a];
-                for b in 0..n {
+                for b in a..n {
                     kinetic[a * n + b] += wa * row[b];
                 }
+            }
+        }
+        // Exactly symmetric (a variational residual needs a symmetric kinetic form).
+        for a in 0..n {
+            for b in 0..a {
+                kinetic[a * n + b] = kinetic[b * n + a];
             }
         }
         let fit = CurveFit::new(basis)?;

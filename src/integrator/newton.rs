@@ -37,11 +37,16 @@ pub enum InitialGuess {
 pub struct NewtonOptions {
     /// Iteration limit per step.
     pub max_iterations: usize,
-    /// Stop when the estimated remaining error of the coefficients is below
-    /// `tolerance · max|Q|` (error estimated from the contraction of successive increments).
+    /// Stop when the estimated remaining error of the Newton unknowns (the increments
+    /// ΔQ_i = Q_i − u_i q_k) is below `tolerance · max|ΔQ|` (error estimated from the
+    /// contraction of successive Newton increments). The default 1e-16 is just below ε: with
+    /// 1e-15 the Hermite and Chebyshev flows of `tests/bases.rs` drift apart by 1.1e-10 in
+    /// 10 steps at n = 22 (the solve error, not the basis); 1e-16 costs 2.96 linear solves per
+    /// step at n = 32, h = 2 (2.49 with 1e-15; `tests/counts.rs`). The long-run target of
+    /// `tests/roundoff.rs` is met with either (7.9e-10 at T = 20,000).
     pub tolerance: f64,
     /// Also stop, as converged at the round-off floor, once increments below
-    /// `floor_tolerance · max|Q|` stop shrinking (iterating further only stirs noise).
+    /// `floor_tolerance · max|ΔQ|` stop shrinking (iterating further only stirs noise).
     pub floor_tolerance: f64,
     /// How each step's iteration starts.
     pub initial_guess: InitialGuess,
@@ -55,19 +60,31 @@ pub struct NewtonOptions {
     /// Also start each step with the previous step's factorisation (pays off when h is small
     /// compared with the time scale, so that the Newton matrix changes little per step).
     pub reuse_across_steps: bool,
+    /// Accumulate q and p across steps with compensated (Kahan–Babuška/TwoSum) summation of
+    /// the step increments, in [`integrate`](GalerkinIntegrator::integrate) and the
+    /// [`GalerkinMethod`](crate::baselines::GalerkinMethod) adapter (DESIGN.md §4). Costs 2D
+    /// extra additions per step; removes the O(√N ε) (or O(N ε)) round-off drift of the
+    /// naive sums over N steps.
+    #[serde(default = "default_compensated")]
+    pub compensated: bool,
+}
+
+fn default_compensated() -> bool {
+    true
 }
 
 impl Default for NewtonOptions {
     fn default() -> Self {
         NewtonOptions {
             max_iterations: 40,
-            tolerance: 1e-15,
+            tolerance: 1e-16,
             floor_tolerance: 1e-10,
             initial_guess: InitialGuess::BestResidual,
             predictor_substeps: None,
             reuse_jacobian: true,
             reuse_contraction: 0.1,
             reuse_across_steps: false,
+            compensated: true,
         }
     }
 }
@@ -119,13 +136,50 @@ impl Mode {
     }
 }
 
+/// Knuth's TwoSum: s = fl(a + b) and the exact rounding error e, a + b = s + e.
+#[inline]
+fn two_sum(a: f64, b: f64) -> (f64, f64) {
+    let s = a + b;
+    let bb = s - a;
+    (s, (a - (s - bb)) + (b - bb))
+}
+
+/// hi + lo += a·b with the product exact (FMA) and the sum compensated (TwoSum).
+#[inline]
+fn dd_acc(hi: &mut f64, lo: &mut f64, a: f64, b: f64) {
+    let prod = a * b;
+    let low = a.mul_add(b, -prod);
+    let (s, e) = two_sum(*hi, prod);
+    *hi = s;
+    *lo += e + low;
+}
+
+/// (a_hi + a_lo) + (b_hi + b_lo) as a normalised hi + lo pair (double-double addition):
+/// unlike Kahan's `two_sum(a, b + a_lo)`, the low parts are not rounded away when the
+/// increment is as large as the sum (steps of a large-h spectral method).
+#[inline]
+fn dd_add(a_hi: f64, a_lo: f64, b_hi: f64, b_lo: f64) -> (f64, f64) {
+    let (s, e) = two_sum(a_hi, b_hi);
+    let (t, f) = two_sum(a_lo, b_lo);
+    let (s, e) = fast_two_sum(s, e + t);
+    fast_two_sum(s, e + f)
+}
+
+/// Dekker's Fast2Sum for |a| ≥ |b|.
+#[inline]
+fn fast_two_sum(a: f64, b: f64) -> (f64, f64) {
+    let s = a + b;
+    (s, b - (s - a))
+}
+
 fn max_abs(x: &[f64]) -> f64 {
     x.iter().fold(0.0f64, |m, v| m.max(v.abs()))
 }
 
 impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
-    /// Curve values q(c_j) and velocities q̇(c_j) at every quadrature node from `coeffs`:
-    /// q = Φ Q and q̇ = Φ' Q / h as two matrix products.
+    /// Curve values q(c_j) and velocities q̇(c_j) at every quadrature node from the increments
+    /// ΔQ in `coeffs` (or `cand`): q = q_k + Φ ΔQ and q̇ = Φ' ΔQ / h as two matrix products
+    /// (Σ u_i φ_i ≡ 1 and Σ u_i φ_i' ≡ 0, so the constant part is added, not multiplied).
     fn evaluate_curve(&self, ws: &mut Workspace, coeffs_from_cand: bool) {
         let t = self.tables();
         let (n, m, d, h) = (t.n, t.m, ws.d, self.step_size());
@@ -134,8 +188,24 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         } else {
             &ws.coeffs
         };
+        ws.curve_from_cand = coeffs_from_cand;
         let (rn, rd) = (Strided::rows(0, n), Strided::rows(0, d));
-        gemm(m, n, d, 1.0, &t.phi, rn, coeffs, rd, 0.0, &mut ws.qj, rd);
+        // q_k + (Φ ΔQ + δq_k): the small parts first, then the large one.
+        for (j, row) in ws.qj.chunks_exact_mut(d).enumerate() {
+            row.copy_from_slice(&ws.base_err);
+            if !coeffs_from_cand {
+                let phi_last = t.phi[j * n + n - 1];
+                for (x, lo) in row.iter_mut().zip(&ws.last_lo) {
+                    *x += phi_last * lo;
+                }
+            }
+        }
+        gemm(m, n, d, 1.0, &t.phi, rn, coeffs, rd, 1.0, &mut ws.qj, rd);
+        for row in ws.qj.chunks_exact_mut(d) {
+            for (x, b) in row.iter_mut().zip(&ws.base) {
+                *x += b;
+            }
+        }
         gemm(
             m,
             n,
@@ -159,15 +229,14 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let (n, m, d, h) = (t.n, t.m, ws.d, self.step_size());
         ws.grad.iter_mut().for_each(|x| *x = 0.0);
         if let Some(sep) = &ws.separable {
-            // Kinetic part (1/h) Σ_b K_ab M (Q_b − u_b q_k): constants applied to Q − q_k, which
-            // loses fewer digits than applying them to Q (DESIGN.md §4).
+            // Kinetic part (1/h) Σ_b K_ab M ΔQ_b with ΔQ_b = Q_b − u_b q_k: constants applied to
+            // the increments, never to Q (DESIGN.md §4).
             let coeffs = if cand { &ws.cand } else { &ws.coeffs };
-            let q0 = &coeffs[..d];
             for b in 0..n {
                 for r in 0..d {
                     let mut s = 0.0;
                     for c in 0..d {
-                        s += sep.mass[r * d + c] * (coeffs[b * d + c] - t.unit[b] * q0[c]);
+                        s += sep.mass[r * d + c] * coeffs[b * d + c];
                     }
                     ws.mq[b * d + r] = s;
                 }
@@ -186,6 +255,23 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 &mut ws.grad,
                 rd,
             );
+            if !cand {
+                // The low part of ΔQ_{n−1} in every kinetic row (the Legendre-transform row and
+                // the curve see it too), so that all equations see the same unknown.
+                for r in 0..d {
+                    let mut s = 0.0;
+                    for c in 0..d {
+                        s += sep.mass[r * d + c] * ws.last_lo[c];
+                    }
+                    ws.small_rhs[r] = s / h;
+                }
+                for a in 0..n {
+                    let k = t.kinetic[a * n + n - 1];
+                    for r in 0..d {
+                        ws.grad[a * d + r] += k * ws.small_rhs[r];
+                    }
+                }
+            }
             for j in 0..m {
                 lag.force(&ws.qj[j * d..(j + 1) * d], &mut ws.lq[j * d..(j + 1) * d]);
                 let w = t.weights[j] * h;
@@ -236,6 +322,71 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         m
     }
 
+    /// The Legendre-transform rows of the initial-value residual into `ws.rhs[..D]`, and the
+    /// step's total impulse h Σ_j b_j L_q(c_j) into `ws.impulse` + `ws.impulse_lo`.
+    ///
+    /// The rows are p_k + impulse − ∂S/∂ΔQ_{n−1} = 0, the form that makes
+    /// p_{k+1} = p_k + impulse exactly D₂L_d of the discrete Lagrangian the tables define (q_k
+    /// enters every node with coefficient exactly 1 and the velocities not at all); in exact
+    /// arithmetic it is p_k + Σ_{a<n−1} u_a ∂S/∂Q_a = 0, the paper's eq. (3.2) plus
+    /// u-weighted stage equations.
+    ///
+    /// Round-off (DESIGN.md §4): the terms p_k, the impulse, and both parts of ∂S/∂ΔQ_{n−1}
+    /// are O(|p|) each (near periapsis of an eccentric orbit the impulse of a large step is as
+    /// large as p) and cancel to O(ε). Rounding them in working precision leaves an error
+    /// ε|p| in the row, i.e. in q_{k+1}, every step — and, measured, not a random one: it
+    /// made the energy drift linearly (Kepler e = 0.6, Legendre n = 24, h = 0.5:
+    /// ΔE = −4e-14 at T = 2000 and −7e-14 at T = 4000, every realisation the same sign; the
+    /// harmonic oscillator likewise). So for separable Lagrangians the whole row is summed in
+    /// double-double: products exact by FMA, sums by TwoSum, including the low parts of the
+    /// state (p_err) and of ΔQ_{n−1}. The drift fell below the random walk (`tests/roundoff.rs`).
+    fn legendre_transform_rows(&self, ws: &mut Workspace, p_k: &[f64]) {
+        let (t, h) = (self.tables(), self.step_size());
+        let (d, n) = (ws.d, ws.n);
+        let last = (n - 1) * d;
+        for r in 0..d {
+            let (mut hi, mut lo) = (0.0, 0.0);
+            for j in 0..t.m {
+                dd_acc(&mut hi, &mut lo, h * t.weights[j], ws.lq[j * d + r]);
+            }
+            (ws.impulse[r], ws.impulse_lo[r]) = two_sum(hi, lo);
+            ws.rhs[r] = (p_k[r] - ws.grad[last + r]) + (ws.impulse[r] + ws.p_err[r]);
+        }
+        let Some(sep) = &ws.separable else {
+            return;
+        };
+        let x = if ws.curve_from_cand {
+            &ws.cand
+        } else {
+            &ws.coeffs
+        };
+        let nd = n * d;
+        for r in 0..d {
+            // p_k + impulse …
+            let (mut s, mut e) = two_sum(p_k[r], ws.impulse[r]);
+            e += ws.p_err[r] + ws.impulse_lo[r];
+            // … − Σ_j φ_{n−1}(c_j) h b_j L_q(c_j) …
+            for j in 0..t.m {
+                let (w, f) = (h * t.weights[j], ws.lq[j * d + r]);
+                let g = w * f;
+                let phi = t.phi[j * n + n - 1];
+                dd_acc(&mut s, &mut e, -phi, g);
+                e -= phi * w.mul_add(f, -g);
+            }
+            // … − (1/h) Σ_b K_{n−1,b} M ΔQ_b.
+            let kinetic = &sep.kinetic_last[r * nd..(r + 1) * nd];
+            for (c, v) in kinetic.iter().zip(x) {
+                dd_acc(&mut s, &mut e, -c, *v);
+            }
+            if !ws.curve_from_cand {
+                for (c, lo) in kinetic[last..].iter().zip(&ws.last_lo) {
+                    e -= c * lo;
+                }
+            }
+            ws.rhs[r] = s + e;
+        }
+    }
+
     /// Residual of the stage equations for `mode` into `ws.rhs` (negated, ready for the
     /// Newton solve); returns its max-norm.
     fn residual(&self, ws: &mut Workspace, mode: Mode, p_k: &[f64]) -> f64 {
@@ -243,11 +394,15 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let rows = mode.count(n) * d;
         let off = mode.row_offset() * d;
         let mut norm = 0.0f64;
+        if mode == Mode::InitialValue {
+            self.legendre_transform_rows(ws, p_k);
+        }
         for i in 0..rows {
-            let mut r = ws.grad[off + i];
-            if mode == Mode::InitialValue && i < d {
-                r += p_k[i];
-            }
+            let r = if mode == Mode::InitialValue && i < d {
+                ws.rhs[i]
+            } else {
+                ws.grad[off + i]
+            };
             ws.rhs[i] = -r;
             norm = norm.max(r.abs());
             if !r.is_finite() {
@@ -260,6 +415,34 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
     /// Assemble the exact Jacobian ∂²S/∂Q_a∂Q_b for `mode` into `ws.jac` (uses the curve values
     /// left in the workspace by the last gradient evaluation). Returns Hessian evaluations.
     pub(super) fn jacobian<L: Lagrangian>(&self, lag: &L, ws: &mut Workspace, mode: Mode) -> usize {
+        let evals = self.jacobian_rows(lag, ws, mode);
+        if mode == Mode::InitialValue {
+            // Row block 0 of the Legendre-transform equation as residual() forms it:
+            // Σ_{a<n−1} u_a (row block a).
+            let t = self.tables();
+            let (n, d) = (t.n, ws.d);
+            let size = (n - 1) * d;
+            let (first, rest) = ws.jac[..size * size].split_at_mut(d * size);
+            for a in 1..n - 1 {
+                let u = t.unit[a];
+                if u != 0.0 {
+                    let block = &rest[(a - 1) * d * size..a * d * size];
+                    for (x, y) in first.iter_mut().zip(block) {
+                        *x += u * y;
+                    }
+                }
+            }
+        }
+        evals
+    }
+
+    /// The rows ∂²S/∂Q_a∂Q_b of [`jacobian`](Self::jacobian), before row block 0 is combined.
+    pub(super) fn jacobian_rows<L: Lagrangian>(
+        &self,
+        lag: &L,
+        ws: &mut Workspace,
+        mode: Mode,
+    ) -> usize {
         let t: &Tables = self.tables();
         let (n, m, d, h) = (t.n, t.m, ws.d, self.step_size());
         let cnt = mode.count(n);
@@ -445,9 +628,12 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 &ws.rk_states[i * w..(i + 1) * w],
                 &ws.rk_states[(i + 1) * w..(i + 2) * w],
             );
+            // Increments from q_k (h00 + h01 = 1).
             for r in 0..d {
-                ws.cand[k * d + r] =
-                    h00 * a[r] + h10 * dt * a[d + r] + h01 * b[r] + h11 * dt * b[d + r];
+                ws.cand[k * d + r] = h00 * (a[r] - q[r])
+                    + h10 * dt * a[d + r]
+                    + h01 * (b[r] - q[r])
+                    + h11 * dt * b[d + r];
             }
         }
         t.fit
@@ -469,11 +655,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let (n, d, h) = (t.n, ws.d, self.step_size());
         match g {
             InitialGuess::Constant | InitialGuess::BestResidual | InitialGuess::Warm => {
-                for i in 0..n {
-                    for r in 0..d {
-                        ws.cand[i * d + r] = t.unit[i] * q[r];
-                    }
-                }
+                ws.cand.iter_mut().for_each(|x| *x = 0.0);
             }
             InitialGuess::Linear => {
                 if ws.has_prev {
@@ -490,7 +672,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 }
                 for i in 0..n {
                     for r in 0..d {
-                        ws.cand[i * d + r] = t.unit[i] * q[r] + t.ramp[i] * h * ws.vel[r];
+                        ws.cand[i * d + r] = t.ramp[i] * h * ws.vel[r];
                     }
                 }
             }
@@ -506,16 +688,20 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 if !ws.has_prev {
                     return false;
                 }
+                // The previous curve is q_{k−1} + Σ ΔP_i φ_i and q_k = q_{k−1} + ΔP_{n−1}; E
+                // maps constants to constants, so the continued curve's increments from q_k
+                // are E ΔP − u ΔP_{n−1}.
+                let last = (n - 1) * d;
                 for i in 0..n {
                     for r in 0..d {
-                        ws.cand[i * d + r] =
-                            (0..n).map(|k| e[i * n + k] * ws.prev[k * d + r]).sum();
+                        let c: f64 = (0..n).map(|k| e[i * n + k] * ws.prev[k * d + r]).sum();
+                        ws.cand[i * d + r] = c - t.unit[i] * ws.prev[last + r];
                     }
                 }
             }
         }
-        // The start of the curve is q_k exactly.
-        ws.cand[..d].copy_from_slice(q);
+        // The start of the curve is q_k exactly: ΔQ_0 = 0.
+        ws.cand[..d].iter_mut().for_each(|x| *x = 0.0);
         ws.cand.iter().all(|x| x.is_finite())
     }
 
@@ -529,8 +715,14 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
     ) -> (InitialGuess, usize) {
         if ws.has_warm {
             ws.has_warm = false;
-            ws.coeffs.copy_from_slice(&ws.warm);
-            ws.coeffs[..ws.d].copy_from_slice(q);
+            // Absolute coefficients to increments from q_k (ΔQ_0 = 0).
+            let (t, d) = (self.tables(), ws.d);
+            for i in 0..t.n {
+                for r in 0..d {
+                    ws.coeffs[i * d + r] = ws.warm[i * d + r] - t.unit[i] * q[r];
+                }
+            }
+            ws.coeffs[..d].iter_mut().for_each(|x| *x = 0.0);
             return (InitialGuess::Warm, 0);
         }
         let choice = self.options().initial_guess;
@@ -587,6 +779,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let size = mode.count(n) * d;
         let u0 = mode.first_unknown() * d;
         let mut previous_increment = f64::INFINITY;
+        ws.last_lo.iter_mut().for_each(|x| *x = 0.0);
         let fail = |ws: &Workspace, residual: f64, iterations, reason: &str| {
             let _ = ws;
             StepFailure {
@@ -643,9 +836,22 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             it += 1;
             stats.iterations += 1;
             let delta = max_abs(&ws.rhs[..size]);
+            // ΔQ_{n−1} (the increment of q) is kept as hi + lo: the corrections of the last
+            // iterations lie below its ulp, and the compensated Legendre-transform row resolves
+            // them.
+            let last = (n - 1) * d;
             for i in 0..size {
-                ws.coeffs[u0 + i] += ws.rhs[i];
+                let k = u0 + i;
+                if k >= last && ws.separable.is_some() {
+                    let (s, e) = two_sum(ws.coeffs[k], ws.rhs[i]);
+                    ws.coeffs[k] = s;
+                    ws.last_lo[k - last] += e;
+                } else {
+                    ws.coeffs[k] += ws.rhs[i];
+                }
             }
+            // The scale of the unknowns, the increments ΔQ (which the stage equations determine
+            // to a relative accuracy far better than ε|q_k| when h is small).
             let scale = max_abs(&ws.coeffs).max(f64::MIN_POSITIVE);
             if !delta.is_finite() || !scale.is_finite() {
                 ws.lu_valid = false;
@@ -680,9 +886,14 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
     /// coefficients are left in [`Workspace::coefficients`] and remembered for the next
     /// step's extrapolated guess.
     ///
-    /// p_{k+1} is computed as p_k + h Σ_j b_j L_q(c_j), which equals ∂S/∂Q_{n−1} once the
-    /// stage equations hold (the basis reproduces constants, so Σ_a u_a ∂S/∂Q_a is the total
-    /// impulse) but avoids the cancellation of large kinetic terms when h is small.
+    /// The Newton unknowns are the increments ΔQ_i = Q_i − u_i q_k (u: the coefficients of
+    /// the constant curve), so the curve is q_k + Σ ΔQ_i φ_i and q_{k+1} = q_k + ΔQ_{n−1}
+    /// with ΔQ_{n−1} computed to full relative accuracy. p_{k+1} is computed as
+    /// p_k + h Σ_j b_j L_q(c_j), which equals ∂S/∂Q_{n−1} once the stage equations hold (the
+    /// basis reproduces constants, so Σ_a u_a ∂S/∂Q_a is the total impulse) but avoids the
+    /// cancellation of large kinetic terms when h is small. See
+    /// [`step_compensated`](Self::step_compensated) for the variant that also carries the
+    /// rounding errors of these two sums across steps.
     pub fn step<L: Lagrangian>(
         &self,
         lag: &L,
@@ -692,7 +903,77 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         q_next: &mut [f64],
         p_next: &mut [f64],
     ) -> std::result::Result<StepStats, StepFailure> {
+        let stats = self.solve_step(lag, ws, q, p)?;
         let d = ws.d;
+        let last = (ws.n - 1) * d;
+        for r in 0..d {
+            // Correctly rounded sums of the state and the double-double increments.
+            q_next[r] = dd_add(q[r], 0.0, ws.coeffs[last + r], ws.last_lo[r]).0;
+            p_next[r] = dd_add(p[r], 0.0, ws.impulse[r], ws.impulse_lo[r]).0;
+        }
+        self.finish_step(ws, q_next);
+        Ok(stats)
+    }
+
+    /// [`step`](Self::step) with compensated summation of the state, in place: (q, p) is
+    /// advanced by one step and `q_err`, `p_err` carry the rounding errors of the sums
+    /// q_{k+1} = q_k + ΔQ_{n−1} and p_{k+1} = p_k + impulse (Kahan–Babuška with Knuth's
+    /// TwoSum), so that q + q_err and p + p_err represent the state to about twice the
+    /// working precision over any number of steps. Start with `q_err = p_err = 0`. The step
+    /// itself is solved at the rounded (q, p); only the increments are compensated, as in
+    /// IAS15. On failure the state is unchanged.
+    pub fn step_compensated<L: Lagrangian>(
+        &self,
+        lag: &L,
+        ws: &mut Workspace,
+        q: &mut [f64],
+        q_err: &mut [f64],
+        p: &mut [f64],
+        p_err: &mut [f64],
+    ) -> std::result::Result<StepStats, StepFailure> {
+        ws.base_err.copy_from_slice(q_err);
+        ws.p_err.copy_from_slice(p_err);
+        let solved = self.solve_step(lag, ws, q, p);
+        ws.base_err.iter_mut().for_each(|x| *x = 0.0);
+        ws.p_err.iter_mut().for_each(|x| *x = 0.0);
+        let stats = solved?;
+        let d = ws.d;
+        let last = (ws.n - 1) * d;
+        for r in 0..d {
+            (q[r], q_err[r]) = dd_add(q[r], q_err[r], ws.coeffs[last + r], ws.last_lo[r]);
+            (p[r], p_err[r]) = dd_add(p[r], p_err[r], ws.impulse[r], ws.impulse_lo[r]);
+        }
+        self.finish_step(ws, q);
+        Ok(stats)
+    }
+
+    /// Absolute coefficients for [`Workspace::coefficients`] (Q_i = u_i q_k + ΔQ_i, with the
+    /// ends exactly q_k and the returned q_{k+1}), and the increments kept for the next guess.
+    fn finish_step(&self, ws: &mut Workspace, q_next: &[f64]) {
+        let t = self.tables();
+        let (n, d) = (t.n, ws.d);
+        for i in 1..n - 1 {
+            for r in 0..d {
+                ws.abs[i * d + r] = t.unit[i] * ws.base[r] + ws.coeffs[i * d + r];
+            }
+        }
+        ws.abs[..d].copy_from_slice(&ws.base);
+        ws.abs[(n - 1) * d..].copy_from_slice(q_next);
+        ws.prev.copy_from_slice(&ws.coeffs);
+        ws.has_prev = true;
+    }
+
+    /// Solve the stage equations of one step from (q, p): on success `ws.coeffs` holds the
+    /// increments ΔQ and `ws.impulse` the total impulse h Σ_j b_j L_q(c_j).
+    fn solve_step<L: Lagrangian>(
+        &self,
+        lag: &L,
+        ws: &mut Workspace,
+        q: &[f64],
+        p: &[f64],
+    ) -> std::result::Result<StepStats, StepFailure> {
+        let d = ws.d;
+        ws.base.copy_from_slice(q);
         let mut stats = StepStats::default();
         let (guess, evals) = self.initial_guess(lag, ws, q, p);
         stats.guess = guess;
@@ -728,19 +1009,9 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 });
             }
         }
-        let t = self.tables();
-        let (n, h) = (t.n, self.step_size());
-        q_next.copy_from_slice(&ws.coeffs[(n - 1) * d..n * d]);
-        // Total impulse h Σ_j b_j L_q(c_j) (L_q left in ws.lq by the last gradient evaluation).
-        for r in 0..d {
-            let mut impulse = 0.0;
-            for j in 0..t.m {
-                impulse += t.weights[j] * ws.lq[j * d + r];
-            }
-            p_next[r] = p[r] + h * impulse;
-        }
-        ws.prev.copy_from_slice(&ws.coeffs);
-        ws.has_prev = true;
+        // The total impulse h Σ_j b_j L_q(c_j) at the solution is left in ws.impulse by the
+        // last residual evaluation.
+        let _ = d;
         Ok(stats)
     }
 
@@ -761,14 +1032,17 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let mut ws = self.workspace(lag)?;
         let t = self.tables();
         let n = t.n;
-        // Start from the straight line between the ends.
+        // Start from the straight line between the ends, as increments from q0.
+        ws.base.copy_from_slice(q0);
         for i in 0..n {
             for r in 0..d {
-                ws.coeffs[i * d + r] = t.unit[i] * q0[r] + t.ramp[i] * (q1[r] - q0[r]);
+                ws.coeffs[i * d + r] = t.ramp[i] * (q1[r] - q0[r]);
             }
         }
-        ws.coeffs[..d].copy_from_slice(q0);
-        ws.coeffs[(n - 1) * d..].copy_from_slice(q1);
+        ws.coeffs[..d].iter_mut().for_each(|x| *x = 0.0);
+        for r in 0..d {
+            ws.coeffs[(n - 1) * d + r] = q1[r] - q0[r];
+        }
         let mut stats = StepStats::default();
         self.newton(lag, &mut ws, Mode::BoundaryValue, &[], &mut stats)
             .map_err(|f| GviError::NewtonFailure {
@@ -788,7 +1062,10 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             value: h * value,
             p0: ws.grad[..d].iter().map(|x| -x).collect(),
             p1: ws.grad[(n - 1) * d..n * d].to_vec(),
-            coefficients: ws.coeffs.clone(),
+            coefficients: {
+                self.finish_step(&mut ws, q1);
+                ws.abs.clone()
+            },
         })
     }
 }

@@ -376,7 +376,7 @@ mod tests {
     use super::*;
     use crate::systems::{Kepler, Pendulum};
 
-    /// The stage block of the full action Hessian is the Newton matrix of `jacobian` (both
+    /// The stage block of the full action Hessian is the Newton matrix of `jacobian_rows` (both
     /// evaluated on the converged curve), for the separable and the general path.
     fn check_block<L: Lagrangian>(lag: &L, q: &[f64], p: &[f64]) {
         let gvi = GalerkinIntegrator::spectral(7, 0.4).unwrap();
@@ -386,7 +386,7 @@ mod tests {
         gvi.step(lag, &mut ws, q, p, &mut qn, &mut pn).unwrap();
         let nodes = gvi.node_hessians(lag, ws.coefficients());
         let hess = gvi.full_action_hessian(lag, &nodes).unwrap();
-        gvi.jacobian(lag, &mut ws, Mode::InitialValue);
+        gvi.jacobian_rows(lag, &mut ws, Mode::InitialValue);
         let nu = 6 * d;
         for r in 0..nu {
             for c in 0..nu {

@@ -17,9 +17,25 @@ pub struct Workspace {
     pub(crate) n: usize,
     /// Present for separable Lagrangians L = ½vᵀMv − V(q).
     pub(crate) separable: Option<Separable>,
-    /// Current coefficients, row i = Q_i (n×D).
+    /// The Newton unknowns: increments ΔQ_i = Q_i − u_i q_k, row i (n×D; ΔQ_0 = 0).
     pub(crate) coeffs: Vec<f64>,
-    /// Previous step's coefficients and whether they are valid.
+    /// q_k, the start of the current step's curve (D).
+    pub(crate) base: Vec<f64>,
+    /// Low-order parts of the compensated state (q_k + base_err, p_k + p_err), zero unless
+    /// the step is taken by `step_compensated`.
+    pub(crate) base_err: Vec<f64>,
+    pub(crate) p_err: Vec<f64>,
+    /// Whether the curve values last evaluated came from `cand` (else `coeffs`).
+    pub(crate) curve_from_cand: bool,
+    /// Absolute coefficients Q_i of the last completed step (n×D), the public meaning.
+    pub(crate) abs: Vec<f64>,
+    /// Total impulse h Σ_j b_j L_q(c_j) of the last solved step (D).
+    pub(crate) impulse: Vec<f64>,
+    /// Its low-order part (the impulse is hi + lo to about twice the working precision).
+    pub(crate) impulse_lo: Vec<f64>,
+    /// Low-order part of ΔQ_{n−1} accumulated by the Newton corrections.
+    pub(crate) last_lo: Vec<f64>,
+    /// Previous step's increments and whether they are valid.
     pub(crate) prev: Vec<f64>,
     pub(crate) has_prev: bool,
     /// A caller-supplied start for the next step's Newton iteration (absolute coefficients,
@@ -81,6 +97,9 @@ pub(crate) struct Separable {
     pub mass_lu: Lu,
     /// (K_ab / h) M for equations a = 0…n−2 and unknowns b = 1…n−1: ((n−1)D)².
     pub kinetic_jacobian: Vec<f64>,
+    /// (K_{n−1,b} / h) M for the last row block against every unknown b = 0…n−1: D×(nD),
+    /// the kinetic part of ∂S/∂ΔQ_{n−1} for its compensated evaluation.
+    pub kinetic_last: Vec<f64>,
 }
 
 impl Workspace {
@@ -134,7 +153,17 @@ impl Workspace {
                         }
                     }
                 }
+                let mut kl = vec![0.0; d * n * d];
+                for b in 0..n {
+                    let kab = t.kinetic[(n - 1) * n + b] / h;
+                    for r in 0..d {
+                        for s in 0..d {
+                            kl[r * n * d + b * d + s] = kab * flat[r * d + s];
+                        }
+                    }
+                }
                 Some(Separable {
+                    kinetic_last: kl,
                     mass: flat,
                     mass_lu,
                     kinetic_jacobian: kj,
@@ -146,6 +175,14 @@ impl Workspace {
             n,
             separable,
             coeffs: vec![0.0; n * d],
+            base: vec![0.0; d],
+            base_err: vec![0.0; d],
+            p_err: vec![0.0; d],
+            curve_from_cand: false,
+            abs: vec![0.0; n * d],
+            impulse: vec![0.0; d],
+            impulse_lo: vec![0.0; d],
+            last_lo: vec![0.0; d],
             prev: vec![0.0; n * d],
             has_prev: false,
             warm: vec![0.0; n * d],
@@ -188,7 +225,7 @@ impl Workspace {
 
     /// The Galerkin coefficients of the last completed step (n×D, row i = Q_i).
     pub fn coefficients(&self) -> &[f64] {
-        &self.coeffs
+        &self.abs
     }
 
     /// Forget the previous step's curve (the next guess will not extrapolate) and any pending
