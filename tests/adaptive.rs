@@ -261,16 +261,16 @@ fn cheapest_fixed_cost(
 }
 
 #[test]
-fn embedded_control_meets_tolerance_and_beats_fixed_n_on_kepler_06_and_09() {
+fn embedded_control_meets_tolerance_and_beats_fixed_n_on_kepler_09() {
     // The default control (ErrorControl::Embedded: warm-started pairs, unchecked steps, local
-    // extrapolation). Measured with `gvi tolerance-study kepler --eccentricity E --basis
-    // legendre --controls embedded` (100 steps, h = 1 for e = 0.6, h = 0.25 for e = 0.9), at
-    // tol = 1e-6 and 1e-9: achieved / tol 0.48, 0.03 (e = 0.6) and 1.79, 0.02 (e = 0.9); cost
-    // (force evaluations) / cheapest fixed n meeting tol 0.88, 0.88 (e = 0.6) and 0.30, 0.32
-    // (e = 0.9); 60–70 of the 100 steps checked. Asserted: ≤ 2.2× tol (the stated factor),
-    // cost ≤ 0.95 (e = 0.6) and ≤ 0.5 (e = 0.9) of the fixed n, some steps unchecked.
+    // extrapolation), 100 steps, h = 1 for e = 0.6, h = 0.25 for e = 0.9, at tol = 1e-6 and
+    // 1e-9: achieved / tol 0.48, 0.02 (e = 0.6) and 1.79, 0.16 (e = 0.9). Cost (force
+    // evaluations, the RK4 predictor's included) / cheapest fixed n meeting tol: 1.10, 1.10
+    // (e = 0.6) and 0.33, 0.32 (e = 0.9). (Before the fixed-n runs stopped repeating the
+    // guess competition every step, e = 0.6 measured 0.88.) Asserted: ≤ 2.2× tol (the stated
+    // factor), cost ≤ 0.5 of the fixed n at e = 0.9 and ≤ 1.2 at e = 0.6, some steps unchecked.
     let kepler = Kepler::new(1.0).unwrap();
-    for (e, h, max_ratio, fixed_from) in [(0.6, 1.0, 0.95, 10), (0.9, 0.25, 0.5, 30)] {
+    for (e, h, max_ratio, fixed_from) in [(0.6, 1.0, 1.2, 10), (0.9, 0.25, 0.5, 30)] {
         let (q0, p0) = kepler_state(e);
         let exact = kepler.exact_solution(0.0, &q0, &p0).unwrap().unwrap();
         for tol in [1e-6, 1e-9] {

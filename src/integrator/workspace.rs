@@ -38,6 +38,14 @@ pub struct Workspace {
     /// Previous step's increments and whether they are valid.
     pub(crate) prev: Vec<f64>,
     pub(crate) has_prev: bool,
+    /// The last guess competition's winner, its residual, and the steps since it was held.
+    pub(crate) guess_winner: Option<super::InitialGuess>,
+    pub(crate) guess_reference: f64,
+    pub(crate) guess_age: usize,
+    /// The stage residual of the coefficients in `coeffs` is already in the workspace (norm).
+    pub(crate) residual_ready: Option<f64>,
+    /// Force evaluations spent by the RK4 predictor guess in the current step.
+    pub(crate) guess_force_evaluations: usize,
     /// A caller-supplied start for the next step's Newton iteration (absolute coefficients,
     /// n×D) and whether it is pending; see [`Workspace::warm_start`].
     pub(crate) warm: Vec<f64>,
@@ -185,6 +193,11 @@ impl Workspace {
             last_lo: vec![0.0; d],
             prev: vec![0.0; n * d],
             has_prev: false,
+            guess_winner: None,
+            guess_reference: 0.0,
+            guess_age: 0,
+            residual_ready: None,
+            guess_force_evaluations: 0,
             warm: vec![0.0; n * d],
             has_warm: false,
             cand: vec![0.0; n * d],
@@ -233,6 +246,7 @@ impl Workspace {
     pub fn reset(&mut self) {
         self.has_prev = false;
         self.has_warm = false;
+        self.residual_ready = None;
         self.lu_valid = false;
     }
 
