@@ -209,18 +209,31 @@ pub fn gemm(
     assert!(k == 0 || sb.last(k, n) < b.len(), "gemm: B out of bounds");
     assert!(sc.last(m, n) < c.len(), "gemm: C out of bounds");
     if n <= 4 && sa.col_stride == 1 {
-        // Few columns (C = Φ Q with D ≤ 4): one dot product per entry over contiguous rows of A.
+        // Few columns (C = Φ Q with D ≤ 4): the n dot products of a row of A are accumulated
+        // together, walking the rows of B (contiguous when B is row-major), so the n sums are
+        // independent chains.
         for i in 0..m {
             let a0 = sa.offset + i * sa.row_stride;
             let arow = &a[a0..a0 + k];
-            for j in 0..n {
-                let b0 = sb.offset + j * sb.col_stride;
-                let mut acc = 0.0;
+            let mut acc = [0.0f64; 4];
+            if sb.col_stride == 1 {
                 for (kk, &x) in arow.iter().enumerate() {
-                    acc += x * b[b0 + kk * sb.row_stride];
+                    let b0 = sb.offset + kk * sb.row_stride;
+                    for (s, &y) in acc.iter_mut().zip(&b[b0..b0 + n]) {
+                        *s += x * y;
+                    }
                 }
+            } else {
+                for (kk, &x) in arow.iter().enumerate() {
+                    let b0 = sb.offset + kk * sb.row_stride;
+                    for (j, s) in acc.iter_mut().enumerate().take(n) {
+                        *s += x * b[b0 + j * sb.col_stride];
+                    }
+                }
+            }
+            for (j, &s) in acc.iter().enumerate().take(n) {
                 let ci = sc.offset + i * sc.row_stride + j * sc.col_stride;
-                c[ci] = alpha * acc + if beta == 0.0 { 0.0 } else { beta * c[ci] };
+                c[ci] = alpha * s + if beta == 0.0 { 0.0 } else { beta * c[ci] };
             }
         }
         return;

@@ -213,19 +213,23 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 *x += b;
             }
         }
-        gemm(
-            m,
-            n,
-            d,
-            1.0 / h,
-            &t.dphi,
-            rn,
-            coeffs,
-            rd,
-            0.0,
-            &mut ws.vj,
-            rd,
-        );
+        // Velocities: the separable residual and Jacobian never use them (the kinetic part is
+        // the precomputed K ΔQ), only the general path and the value of L_d do.
+        if ws.separable.is_none() || ws.need_velocities {
+            gemm(
+                m,
+                n,
+                d,
+                1.0 / h,
+                &t.dphi,
+                rn,
+                coeffs,
+                rd,
+                0.0,
+                &mut ws.vj,
+                rd,
+            );
+        }
     }
 
     /// ∂S/∂Q_a for every a into `ws.grad`, from the coefficients in `ws.coeffs` (or
@@ -1068,6 +1072,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         ensure_finite("q0", q0)?;
         ensure_finite("q1", q1)?;
         let mut ws = self.workspace(lag)?;
+        ws.need_velocities = true;
         let t = self.tables();
         let n = t.n;
         // Start from the straight line between the ends, as increments from q0.

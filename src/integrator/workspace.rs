@@ -46,6 +46,8 @@ pub struct Workspace {
     pub(crate) residual_ready: Option<f64>,
     /// Force evaluations spent by the RK4 predictor guess in the current step.
     pub(crate) guess_force_evaluations: usize,
+    /// Evaluate the curve's velocities at the nodes also for separable Lagrangians.
+    pub(crate) need_velocities: bool,
     /// A caller-supplied start for the next step's Newton iteration (absolute coefficients,
     /// n×D) and whether it is pending; see [`Workspace::warm_start`].
     pub(crate) warm: Vec<f64>,
@@ -198,6 +200,7 @@ impl Workspace {
             guess_age: 0,
             residual_ready: None,
             guess_force_evaluations: 0,
+            need_velocities: false,
             warm: vec![0.0; n * d],
             has_warm: false,
             cand: vec![0.0; n * d],
