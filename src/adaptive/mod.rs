@@ -36,11 +36,11 @@
 //!     lower down.
 //!
 //!   Measured (`gvi tolerance-study`, 100 steps, Legendre, tol = 1e-6…1e-12, see the README):
-//!   Kepler e = 0.6 (h = 1) achieved/tol 0.03–0.78, cost 0.85–0.88 of the cheapest fixed n
-//!   meeting tol for 1e-6…1e-11 (1.01 at 1e-12, at the round-off floor, one warning); Kepler e = 0.9 (h = 0.25) achieved/tol
-//!   0.02–1.79 (4.0 at 1e-12 with warnings: n = 64 is not enough at periapsis, nor is any
-//!   fixed n ≤ 64), cost 0.28–0.32 of the fixed n; the outer solar system: see the README
-//!   (the needed n hardly varies along near-circular orbits, so the checks do not pay off).
+//!   Kepler e = 0.6 (h = 1) achieved/tol 0.02–1.09, cost 1.07–1.30 of the cheapest fixed n
+//!   meeting tol (0.85–0.88 before the fixed-n runs stopped holding a guess competition every
+//!   step); Kepler e = 0.9 (h = 0.25) achieved/tol 0.14–1.79, cost 0.29–0.33 of the fixed n;
+//!   the outer solar system: see the README (the needed n hardly varies along near-circular
+//!   orbits, so the checks do not pay off).
 //!   Without warm starts e = 0.6 cost 1.30–1.54× the fixed n, checking every step 1.13–1.85×.
 //! * **Indicator**: the indicator alone, with a fixed relation error ≈ indicator^α
 //!   ([`INDICATOR_EXPONENT`], calibrated on Kepler e = 0.6). One solve per step; on e = 0.6
