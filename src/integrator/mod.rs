@@ -467,6 +467,7 @@ impl Tables {
                 kinetic[a * n + b] = kinetic[b * n + a];
             }
         }
+        snap_to_short_binary(&mut kinetic);
         let fit = CurveFit::new(basis)?;
         let nodes = fit.nodes().to_vec();
         let mut unit = vec![1.0; n];
@@ -513,5 +514,24 @@ impl Tables {
             chebyshev: chebyshev_transform(basis, n),
             fit,
         })
+    }
+}
+
+/// Entries of the kinetic matrix within a few ulps of a short binary fraction (a multiple of
+/// 2⁻¹⁰, zero included) are set to it: the integrated Legendre basis's K is exactly 2·I on its
+/// interior block, with ±1 and 0 elsewhere, and the quadrature leaves those entries an ulp or
+/// two off. An entry c = 2(1 + η) with |η| ≈ ε makes fl(c·x) round to 2x or to the next
+/// double depending on x's last bits, always on the side of η: a state-dependent, one-signed
+/// perturbation of the stage equations that is not variational and made the energy of long
+/// Kepler runs drift (Legendre n = 24, h = 0.5: ΔE ≈ +1.2e-14 over T = 8000 in 3 of 4
+/// realisations; snapped, the signs are mixed). Any symmetric K defines a discrete Lagrangian,
+/// so snapping changes the method by O(ε) and keeps it exactly variational.
+fn snap_to_short_binary(kinetic: &mut [f64]) {
+    let scale = kinetic.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    for k in kinetic.iter_mut() {
+        let snapped = (*k * 1024.0).round() / 1024.0;
+        if (*k - snapped).abs() <= 16.0 * f64::EPSILON * scale.max(1.0) {
+            *k = snapped;
+        }
     }
 }
