@@ -69,6 +69,7 @@ fn main() -> Result<(), GviError> {
                             NewtonOptions::default().floor_tolerance,
                         ),
                         reuse_jacobian: std::env::var("GVI_NO_REUSE").is_err(),
+                        exact_kinetic: std::env::var("GVI_EXACT_KINETIC").is_ok(),
                         tolerance: env_f64("GVI_TOL", NewtonOptions::default().tolerance),
                         ..NewtonOptions::default()
                     });

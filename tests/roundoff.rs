@@ -92,3 +92,40 @@ fn kepler_t20000_reaches_1e_9_and_its_energy_only_walks() {
     println!("RK4 energy changes {rk4_changes:?}: |mean|/rms = {rk4_ratio:.2}");
     assert!(rk4_ratio > 0.9, "{rk4_changes:?}");
 }
+
+/// `NewtonOptions::exact_kinetic` changes only the rounding of the stage rows: the same
+/// 10-step Kepler run (Chebyshev n = 24, h = 0.5) agrees with the default to round-off.
+/// Over T = 20,000 it cuts the Chebyshev basis's error from 1.9e-7 to 1.9e-8 and its energy
+/// drift from 7.5e-17 to −9.7e-19 per unit time (`GVI_EXACT_KINETIC=1 cargo run --release
+/// --example roundoff -- 20000 chebyshev:24:0.5`).
+#[test]
+fn exact_kinetic_option_is_the_same_method() {
+    let kepler = Kepler::new(1.0).unwrap();
+    let (q0, p0) = Kepler::paper_initial_state();
+    let run = |exact_kinetic: bool| {
+        GalerkinIntegrator::from_kinds(
+            BasisKind::Chebyshev,
+            24,
+            QuadratureKind::GaussLegendre,
+            None,
+            0.5,
+        )
+        .unwrap()
+        .with_options(NewtonOptions {
+            exact_kinetic,
+            ..NewtonOptions::default()
+        })
+        .integrate(&kepler, 0.0, &q0, &p0, 10)
+        .unwrap()
+    };
+    let (a, b) = (run(false), run(true));
+    let diff =
+        a.q.iter()
+            .zip(&b.q)
+            .flat_map(|(x, y)| x.iter().zip(y).map(|(u, v)| (u - v).abs()))
+            .fold(0.0f64, f64::max);
+    println!("max difference over 10 steps: {diff:.2e}");
+    // Round-off level: the Chebyshev stage solution is determined to ≈ 1e-13 per step here
+    // (ε times the Newton matrix's condition); measured 1.7e-12 over the 10 steps.
+    assert!(diff > 0.0 && diff < 1e-11, "{diff:e}");
+}

@@ -67,6 +67,13 @@ pub struct NewtonOptions {
     /// naive sums over N steps.
     #[serde(default = "default_compensated")]
     pub compensated: bool,
+    /// Sum the kinetic part (1/h) Σ_b K_ab M ΔQ_b of every stage row in double-double (exact
+    /// products by FMA, TwoSum) instead of one matrix product. Rounded, those products carry a
+    /// one-signed bias when K's entries are not short binary fractions (the Chebyshev–Lagrange
+    /// basis; the Legendre basis's entries are snapped to exact values instead) and long runs
+    /// drift in energy. Costs ≈ n² D TwoProds per residual; for long runs with nodal bases.
+    #[serde(default)]
+    pub exact_kinetic: bool,
 }
 
 fn default_compensated() -> bool {
@@ -84,6 +91,7 @@ impl Default for NewtonOptions {
             reuse_jacobian: true,
             reuse_contraction: 0.1,
             reuse_across_steps: false,
+            exact_kinetic: false,
             compensated: true,
         }
     }
@@ -253,19 +261,32 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 }
             }
             let rd = Strided::rows(0, d);
-            gemm(
-                n,
-                n,
-                d,
-                1.0 / h,
-                &t.kinetic,
-                Strided::rows(0, n),
-                &ws.mq,
-                rd,
-                0.0,
-                &mut ws.grad,
-                rd,
-            );
+            if self.options().exact_kinetic {
+                for a in 0..n {
+                    let row = &t.kinetic[a * n..(a + 1) * n];
+                    for r in 0..d {
+                        let (mut hi, mut lo) = (0.0, 0.0);
+                        for (b, &k) in row.iter().enumerate() {
+                            dd_acc(&mut hi, &mut lo, k, ws.mq[b * d + r]);
+                        }
+                        ws.grad[a * d + r] = (hi + lo) / h;
+                    }
+                }
+            } else {
+                gemm(
+                    n,
+                    n,
+                    d,
+                    1.0 / h,
+                    &t.kinetic,
+                    Strided::rows(0, n),
+                    &ws.mq,
+                    rd,
+                    0.0,
+                    &mut ws.grad,
+                    rd,
+                );
+            }
             if !cand {
                 // The low part of ΔQ_{n−1} in every kinetic row (the Legendre-transform row and
                 // the curve see it too), so that all equations see the same unknown.
