@@ -603,7 +603,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             return false;
         };
         let t = self.tables();
-        let (n, d, h) = (t.n, ws.d, self.step_size());
+        let (d, h) = (ws.d, self.step_size());
         let sub = ws.rk_substeps;
         let dt = h / sub as f64;
         let w = 2 * d;
@@ -671,7 +671,6 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         }
         t.fit
             .values_to_coefficients_with(&mut ws.cand, d, &mut ws.fit_col, &mut ws.fit_scratch);
-        let _ = n;
         true
     }
 
@@ -834,13 +833,10 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let u0 = mode.first_unknown() * d;
         let mut previous_increment = f64::INFINITY;
         ws.last_lo.iter_mut().for_each(|x| *x = 0.0);
-        let fail = |ws: &Workspace, residual: f64, iterations, reason: &str| {
-            let _ = ws;
-            StepFailure {
-                residual,
-                iterations,
-                reason: reason.to_string(),
-            }
+        let fail = |residual: f64, iterations, reason: &str| StepFailure {
+            residual,
+            iterations,
+            reason: reason.to_string(),
         };
         if size == 0 {
             stats.gradient_evaluations += self.action_gradient(lag, ws, false);
@@ -867,7 +863,6 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             if !res.is_finite() {
                 ws.lu_valid = false;
                 return Err(fail(
-                    ws,
                     res,
                     it,
                     "non-finite residual (the iteration diverged)",
@@ -875,7 +870,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             }
             if it >= opts.max_iterations {
                 ws.lu_valid = false;
-                return Err(fail(ws, res, it, "iteration limit reached"));
+                return Err(fail(res, it, "iteration limit reached"));
             }
             if !have_lu {
                 stats.hessian_evaluations += self.jacobian(lag, ws, mode);
@@ -885,7 +880,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 stats.factorizations += 1;
                 if ws.lu.refactor(&ws.jac[..size * size]).is_err() {
                     ws.lu_valid = false;
-                    return Err(fail(ws, res, it, "singular Jacobian"));
+                    return Err(fail(res, it, "singular Jacobian"));
                 }
                 ws.lu_valid = mode == Mode::InitialValue;
                 have_lu = true;
@@ -915,7 +910,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             let scale = max_abs(&ws.coeffs).max(f64::MIN_POSITIVE);
             if !delta.is_finite() || !scale.is_finite() {
                 ws.lu_valid = false;
-                return Err(fail(ws, f64::INFINITY, it, "non-finite Newton update"));
+                return Err(fail(f64::INFINITY, it, "non-finite Newton update"));
             }
             // θ estimates the contraction; undefined on the first iteration.
             let theta = if previous_increment.is_finite() {
@@ -1032,7 +1027,6 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         q: &[f64],
         p: &[f64],
     ) -> std::result::Result<StepStats, StepFailure> {
-        let d = ws.d;
         ws.base.copy_from_slice(q);
         let mut stats = StepStats::default();
         let (guess, evals) = self.initial_guess(lag, ws, q, p);
@@ -1074,7 +1068,6 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         stats.gradient_evaluations += std::mem::take(&mut ws.guess_force_evaluations);
         // The total impulse h Σ_j b_j L_q(c_j) at the solution is left in ws.impulse by the
         // last residual evaluation.
-        let _ = d;
         Ok(stats)
     }
 
