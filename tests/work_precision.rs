@@ -104,3 +104,51 @@ fn pareto_marks_by_hand() {
         .collect();
     assert_eq!(marked, vec![0, 1, 2]);
 }
+
+/// The long-run preset sweeps only Legendre and Chebyshev–Lagrange and the accurate end of
+/// the peers; at a shortened horizon (T = 400) its Legendre runs already beat every peer's
+/// best error (DOP853 at 1e-14, Gauss s = 4 and Kahan–Li-8 at Δ/128), the ordering that
+/// `gvi work-precision kepler --long` shows at T = 20,000 (README).
+#[test]
+fn long_preset_at_a_short_horizon() {
+    let scene = Scene::load("kepler").unwrap();
+    let mut config = WorkPrecisionConfig::long();
+    assert_eq!(config.horizon, Some(20_000.0));
+    config.horizon = Some(400.0);
+    let study = work_precision(&scene, &config).unwrap();
+    let families: std::collections::BTreeSet<&str> =
+        study.points.iter().map(|p| p.method.as_str()).collect();
+    assert!(families.contains("galerkin-legendre") && families.contains("galerkin-chebyshev"));
+    assert!(!families.contains("galerkin-hermite") && !families.contains("galerkin-fourier"));
+    let best = |m: &str| {
+        study
+            .points
+            .iter()
+            .filter(|p| p.method == m)
+            .map(|p| p.error)
+            .fold(f64::INFINITY, f64::min)
+    };
+    let legendre = best("galerkin-legendre");
+    eprintln!(
+        "T = 400: Legendre {legendre:.2e}, DOP853 {:.2e}, Gauss-4 {:.2e}",
+        best("dop853"),
+        best("gauss-4")
+    );
+    assert!(legendre < 1e-10, "Legendre best {legendre:e}");
+    for peer in [
+        "stormer-verlet",
+        "rk4",
+        "yoshida-6",
+        "kahan-li-8",
+        "gauss-4",
+    ] {
+        assert!(
+            legendre < best(peer),
+            "{peer} {:e} ≤ {legendre:e}",
+            best(peer)
+        );
+    }
+    if cfg!(feature = "dop853") {
+        assert!(legendre < best("dop853"));
+    }
+}

@@ -13,12 +13,18 @@ pub struct WorkPrecisionArgs {
     /// Time span (default: the scene's h · steps). Samples every scene h.
     #[arg(long)]
     pub horizon: Option<f64>,
-    /// Timed repetitions per configuration (the median is reported).
-    #[arg(long, default_value_t = 5)]
-    pub repeats: usize,
+    /// Timed repetitions per configuration (the median is reported; default 5, 1 with
+    /// --long).
+    #[arg(long)]
+    pub repeats: Option<usize>,
     /// A reduced sweep (seconds), for smoke tests.
     #[arg(long)]
     pub quick: bool,
+    /// The long-run sweep: T = 20,000 (unless --horizon is given), only the accurate end of
+    /// each family (Legendre and Chebyshev n = 16…32 at h = Δ/2, Δ/4; DOP853 at 1e-10…1e-14),
+    /// one repeat (minutes on Kepler).
+    #[arg(long, conflicts_with = "quick")]
+    pub long: bool,
     /// Output directory (default ./out/work-precision).
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -30,11 +36,16 @@ pub fn run_work_precision(args: WorkPrecisionArgs) -> Result<(), GviError> {
     let scene = load_scene(&args.run)?;
     let mut config = if args.quick {
         WorkPrecisionConfig::quick()
+    } else if args.long {
+        WorkPrecisionConfig::long()
     } else {
         WorkPrecisionConfig::full()
     };
-    config.horizon = args.horizon;
-    config.repeats = args.repeats.max(1);
+
+    if args.horizon.is_some() {
+        config.horizon = args.horizon;
+    }
+    config.repeats = args.repeats.unwrap_or(if args.long { 1 } else { 5 }).max(1);
     let study = work_precision(&scene, &config)?;
     let dir = args
         .out
