@@ -32,12 +32,13 @@ fn newton_counts_are_deterministic() {
 }
 
 /// (iterations, factorisations, gradient evaluations, Hessian evaluations), measured.
-const EXPECTED_32: (usize, usize, usize, usize) = (296, 110, 42752, 7040);
-const EXPECTED_16: (usize, usize, usize, usize) = (360, 120, 23744, 3840);
+const EXPECTED_32: (usize, usize, usize, usize) = (261, 100, 40512, 6400);
+const EXPECTED_16: (usize, usize, usize, usize) = (322, 100, 22528, 3200);
 
 /// A warm start from the converged curve of the same step converges at once (updates already
-/// at the round-off floor; two are needed to see the contraction) to the same step, and costs
-/// no guess evaluations; a wrong-length warm start is a typed error.
+/// at the round-off floor: measured 3.3e-16, 1.6e-16, 1.8e-16 relative; the second's
+/// contraction 0.49 lies just under the 0.5 of the floor test, so three are taken) to the same
+/// step, and costs no guess evaluations; a wrong-length warm start is a typed error.
 #[test]
 fn warm_start_from_the_solution_converges_immediately() {
     let kepler = Kepler::new(1.0).unwrap();
@@ -56,7 +57,7 @@ fn warm_start_from_the_solution_converges_immediately() {
         .step(&kepler, &mut ws2, &q0, &p0, &mut q2, &mut p2)
         .unwrap();
     assert_eq!(warm.guess, InitialGuess::Warm);
-    assert!(warm.iterations <= 2, "{warm:?}");
+    assert!(warm.iterations <= 3, "{warm:?}");
     // No guess competition: one residual per iteration plus the final one (m = 2n = 48 points).
     assert_eq!(warm.gradient_evaluations, (warm.iterations + 1) * 48);
     assert!(

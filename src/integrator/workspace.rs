@@ -44,6 +44,7 @@ pub struct Workspace {
     pub(crate) guess_age: usize,
     /// The stage residual of the coefficients in `coeffs` is already in the workspace (norm).
     pub(crate) residual_ready: Option<f64>,
+
     /// Force evaluations spent by the RK4 predictor guess in the current step.
     pub(crate) guess_force_evaluations: usize,
     /// Evaluate the curve's velocities at the nodes also for separable Lagrangians.
