@@ -208,27 +208,34 @@ pub fn gemm(
     assert!(k == 0 || sa.last(m, k) < a.len(), "gemm: A out of bounds");
     assert!(k == 0 || sb.last(k, n) < b.len(), "gemm: B out of bounds");
     assert!(sc.last(m, n) < c.len(), "gemm: C out of bounds");
+    if n <= 4 && sb.col_stride == 1 {
+        // Few columns (C = Φ Q or Φᵀ F with D ≤ 4): static sizes, so the D sums of a row of C
+        // are unrolled and kept in registers (the "static sizes for small D" of the step).
+        // Both loop orders keep the summation order of the general loop below (bit-for-bit
+        // the same results).
+        let args = (m, k, alpha, a, sa, b, sb, beta);
+        let row_major = sa.col_stride == 1;
+        match (n, row_major) {
+            (1, true) => thin::<1>(args, c, sc),
+            (2, true) => thin::<2>(args, c, sc),
+            (3, true) => thin::<3>(args, c, sc),
+            (_, true) => thin::<4>(args, c, sc),
+            (1, false) => thin_accumulate::<1>(args, c, sc),
+            (2, false) => thin_accumulate::<2>(args, c, sc),
+            (3, false) => thin_accumulate::<3>(args, c, sc),
+            (_, false) => thin_accumulate::<4>(args, c, sc),
+        }
+        return;
+    }
     if n <= 4 && sa.col_stride == 1 {
-        // Few columns (C = Φ Q with D ≤ 4): the n dot products of a row of A are accumulated
-        // together, walking the rows of B (contiguous when B is row-major), so the n sums are
-        // independent chains.
+        // Few columns of a strided B: the n sums of a row of A accumulated together.
         for i in 0..m {
             let a0 = sa.offset + i * sa.row_stride;
-            let arow = &a[a0..a0 + k];
             let mut acc = [0.0f64; 4];
-            if sb.col_stride == 1 {
-                for (kk, &x) in arow.iter().enumerate() {
-                    let b0 = sb.offset + kk * sb.row_stride;
-                    for (s, &y) in acc.iter_mut().zip(&b[b0..b0 + n]) {
-                        *s += x * y;
-                    }
-                }
-            } else {
-                for (kk, &x) in arow.iter().enumerate() {
-                    let b0 = sb.offset + kk * sb.row_stride;
-                    for (j, s) in acc.iter_mut().enumerate().take(n) {
-                        *s += x * b[b0 + j * sb.col_stride];
-                    }
+            for (kk, &x) in a[a0..a0 + k].iter().enumerate() {
+                let b0 = sb.offset + kk * sb.row_stride;
+                for (j, s) in acc.iter_mut().enumerate().take(n) {
+                    *s += x * b[b0 + j * sb.col_stride];
                 }
             }
             for (j, &s) in acc.iter().enumerate().take(n) {
@@ -271,9 +278,141 @@ pub fn gemm(
     }
 }
 
+/// The operands of [`thin`]: (m, k, alpha, A, its strides, B, its strides, beta).
+type ThinArgs<'a> = (
+    usize,
+    usize,
+    f64,
+    &'a [f64],
+    Strided,
+    &'a [f64],
+    Strided,
+    f64,
+);
+
+/// C = alpha·A·B + beta·C for B with D contiguous columns (row-major rows of length D) and
+/// A with contiguous rows: each row of C is D independent sums kept in registers, then
+/// scaled. Bounds were checked by [`gemm`].
+fn thin<const D: usize>(args: ThinArgs<'_>, c: &mut [f64], sc: Strided) {
+    let (m, k, alpha, a, sa, b, sb, beta) = args;
+    for i in 0..m {
+        let a0 = sa.offset + i * sa.row_stride;
+        let mut acc = [0.0f64; D];
+        for kk in 0..k {
+            let x = a[a0 + kk * sa.col_stride];
+            let o = sb.offset + kk * sb.row_stride;
+            let br = &b[o..o + D];
+            for j in 0..D {
+                acc[j] += x * br[j];
+            }
+        }
+        for j in 0..D {
+            let ci = sc.offset + i * sc.row_stride + j * sc.col_stride;
+            c[ci] = alpha * acc[j] + if beta == 0.0 { 0.0 } else { beta * c[ci] };
+        }
+    }
+}
+
+/// [`thin`] for A with strided rows (e.g. Φᵀ): C's row is scaled by beta first and
+/// alpha·a_ik·B_k accumulated into it, in the order of the general loop of [`gemm`].
+fn thin_accumulate<const D: usize>(args: ThinArgs<'_>, c: &mut [f64], sc: Strided) {
+    let (m, k, alpha, a, sa, b, sb, beta) = args;
+    for i in 0..m {
+        let c0 = sc.offset + i * sc.row_stride;
+        let mut acc = [0.0f64; D];
+        for (j, x) in acc.iter_mut().enumerate() {
+            let cij = c[c0 + j * sc.col_stride];
+            *x = if beta == 0.0 {
+                0.0
+            } else if beta != 1.0 {
+                cij * beta
+            } else {
+                cij
+            };
+        }
+        let a0 = sa.offset + i * sa.row_stride;
+        for kk in 0..k {
+            let aik = alpha * a[a0 + kk * sa.col_stride];
+            if aik == 0.0 {
+                continue;
+            }
+            let o = sb.offset + kk * sb.row_stride;
+            let br = &b[o..o + D];
+            for j in 0..D {
+                acc[j] += aik * br[j];
+            }
+        }
+        for (j, x) in acc.iter().enumerate() {
+            c[c0 + j * sc.col_stride] = *x;
+        }
+    }
+}
+
 #[cfg(test)]
 mod gemm_tests {
     use super::*;
+
+    /// The static-size few-column kernels (D = 1…4) against a naive product, for row-major
+    /// and transposed A, contiguous and strided B, and every beta case.
+    #[test]
+    fn few_column_kernels_match_a_naive_product() {
+        let (m, k) = (5, 7);
+        let a: Vec<f64> = (0..m * k).map(|x| (x as f64 * 0.3).sin()).collect();
+        let at: Vec<f64> = (0..k * m).map(|idx| a[(idx % m) * k + idx / m]).collect();
+        for n in 1..=4 {
+            let b: Vec<f64> = (0..k * n).map(|x| (x as f64 * 0.7).cos()).collect();
+            let bt: Vec<f64> = (0..n * k).map(|idx| b[(idx % k) * n + idx / k]).collect();
+            let a_views = [
+                (&a, Strided::rows(0, k)),
+                (
+                    &at,
+                    Strided {
+                        offset: 0,
+                        row_stride: 1,
+                        col_stride: m,
+                    },
+                ),
+            ];
+            let b_views = [
+                (&b, Strided::rows(0, n)),
+                (
+                    &bt,
+                    Strided {
+                        offset: 0,
+                        row_stride: 1,
+                        col_stride: k,
+                    },
+                ),
+            ];
+            for (av, sa) in a_views {
+                for (bv, sb) in b_views {
+                    for (alpha, beta) in [(1.0, 0.0), (2.0, 1.0), (-1.5, 0.5)] {
+                        let mut c = vec![0.25; m * n];
+                        gemm(
+                            m,
+                            k,
+                            n,
+                            alpha,
+                            av,
+                            sa,
+                            bv,
+                            sb,
+                            beta,
+                            &mut c,
+                            Strided::rows(0, n),
+                        );
+                        for i in 0..m {
+                            for j in 0..n {
+                                let dot: f64 = (0..k).map(|t| a[i * k + t] * b[t * n + j]).sum();
+                                let exact = alpha * dot + beta * 0.25;
+                                assert!((c[i * n + j] - exact).abs() < 1e-13, "n = {n}");
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
 
     #[test]
     fn gemm_matches_a_naive_product_with_strides() {
