@@ -4,7 +4,9 @@
 //!
 //! Run: `cargo run --release --example roundoff -- [T] [basis:n:h[:points]] ...`
 //! (default T = 20000 and the configurations legendre:32:1, legendre:24:0.5,
-//! chebyshev:32:1).
+//! chebyshev:32:1). Experiments with the Newton options through the environment: GVI_TOL,
+//! GVI_FLOOR (tolerances), GVI_NO_REUSE (no simplified Newton), GVI_ROUNDED_KINETIC (rounded
+//! kinetic products in the residuals instead of the default double-double ones).
 
 use galerkin_vi::prelude::*;
 use std::time::Instant;
@@ -69,7 +71,7 @@ fn main() -> Result<(), GviError> {
                             NewtonOptions::default().floor_tolerance,
                         ),
                         reuse_jacobian: std::env::var("GVI_NO_REUSE").is_err(),
-                        exact_kinetic: std::env::var("GVI_EXACT_KINETIC").is_ok(),
+                        exact_kinetic: std::env::var("GVI_ROUNDED_KINETIC").is_err(),
                         tolerance: env_f64("GVI_TOL", NewtonOptions::default().tolerance),
                         ..NewtonOptions::default()
                     });

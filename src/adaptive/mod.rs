@@ -36,12 +36,13 @@
 //!     lower down.
 //!
 //!   Measured (`gvi tolerance-study`, 100 steps, Legendre, tol = 1e-6…1e-12, see the README):
-//!   Kepler e = 0.6 (h = 1) achieved/tol 0.02–1.09, cost 1.07–1.30 of the cheapest fixed n
-//!   meeting tol (0.85–0.88 before the fixed-n runs stopped holding a guess competition every
-//!   step); Kepler e = 0.9 (h = 0.25) achieved/tol 0.14–1.79, cost 0.29–0.33 of the fixed n;
-//!   the outer solar system: see the README (the needed n hardly varies along near-circular
-//!   orbits, so the checks do not pay off).
-//!   Without warm starts e = 0.6 cost 1.30–1.54× the fixed n, checking every step 1.13–1.85×.
+//!   Kepler e = 0.6 at h = 0.25: achieved/tol 0.001–0.05, cost 0.71–0.94 of the cheapest
+//!   fixed n meeting tol; at h = 1 (≈ 6 steps per orbit, the needed n changes 4× from step
+//!   to step, so every step is a fresh search): achieved/tol 0.02–0.56, cost 1.06–1.22;
+//!   Kepler e = 0.9 (h = 0.25): achieved/tol 0.11–1.79, cost 0.28–0.33 of the fixed n (at
+//!   1e-12 no fixed n ≤ 64 meets tol); the outer solar system: see the README (the needed n
+//!   hardly varies along near-circular orbits, so the checks cannot pay off).
+//!   Without warm starts e = 0.6 (h = 1) cost 1.30–1.54× the fixed n, checking every step 1.13–1.85×.
 //! * **Indicator**: the indicator alone, with a fixed relation error ≈ indicator^α
 //!   ([`INDICATOR_EXPONENT`], calibrated on Kepler e = 0.6). One solve per step; on e = 0.6
 //!   achieved/tol 0.7–4.4 at 0.77–0.86× the cost of the cheapest fixed n, but on e = 0.9
