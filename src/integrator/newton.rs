@@ -514,6 +514,12 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 let q = &ws.qj[j * d..(j + 1) * d];
                 lag.force_jacobian(q, &mut ws.hall[j * dd..(j + 1) * dd]);
             }
+            if d <= 4 && dd <= m {
+                // Few coordinates: all d² blocks in one pass over the nodes (the same products
+                // and the same order of summation as the per-block products below).
+                gram_blocks_fused(t, &ws.hall, &mut ws.gram, jac, (cnt, d, h, r0, u0));
+                return m;
+            }
             for r in 0..d {
                 for s in 0..d {
                     for a in 0..cnt {
@@ -1133,6 +1139,48 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 ws.abs.clone()
             },
         })
+    }
+}
+
+/// The potential part of the Newton matrix for d ≤ 4 coordinates, every block at once:
+/// jac[(a d + r)·size + b d + s] += Σ_j (φ_{a+r0}(c_j) b_j h H_j[r, s]) φ_{b+u0}(c_j), summed
+/// over j in order, exactly as [`gram_accumulate`] sums each block (bit-for-bit the same
+/// matrix), without the d² separate products. `acc` needs d²·cnt entries.
+fn gram_blocks_fused(
+    t: &Tables,
+    hall: &[f64],
+    acc: &mut [f64],
+    jac: &mut [f64],
+    dims: (usize, usize, f64, usize, usize),
+) {
+    let (cnt, d, h, r0, u0) = dims;
+    let (n, m, dd) = (t.n, t.m, d * d);
+    let size = cnt * d;
+    let acc = &mut acc[..dd * cnt];
+    for a in 0..cnt {
+        acc.iter_mut().for_each(|x| *x = 0.0);
+        for j in 0..m {
+            let base = t.phi[j * n + a + r0] * t.weights[j] * h;
+            let row = &t.phi[j * n + u0..j * n + u0 + cnt];
+            for (rs, &hrs) in hall[j * dd..(j + 1) * dd].iter().enumerate() {
+                let g = base * hrs;
+                if g == 0.0 {
+                    continue;
+                }
+                for (x, &y) in acc[rs * cnt..(rs + 1) * cnt].iter_mut().zip(row) {
+                    *x += g * y;
+                }
+            }
+        }
+        for r in 0..d {
+            for s in 0..d {
+                let block = &acc[(r * d + s) * cnt..(r * d + s + 1) * cnt];
+                let row = (a * d + r) * size + s;
+                for (b, &v) in block.iter().enumerate() {
+                    jac[row + b * d] += v;
+                }
+            }
+        }
     }
 }
 
