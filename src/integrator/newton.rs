@@ -41,9 +41,10 @@ pub struct NewtonOptions {
     /// ΔQ_i = Q_i − u_i q_k) is below `tolerance · max|ΔQ|` (error estimated from the
     /// contraction of successive Newton increments). The default 1e-16 is just below ε: with
     /// 1e-15 the Hermite and Chebyshev flows of `tests/bases.rs` drift apart by 1.1e-10 in
-    /// 10 steps at n = 22 (the solve error, not the basis); 1e-16 costs 2.96 linear solves per
-    /// step at n = 32, h = 2 (2.49 with 1e-15; `tests/counts.rs`). The long-run results of
-    /// `tests/roundoff.rs` are measured with the default.
+    /// 10 steps at n = 22 (the solve error, not the basis); 1e-16 costs 2.61 linear solves per
+    /// step at n = 32, h = 2 with the exactly summed residuals of
+    /// [`exact_kinetic`](Self::exact_kinetic) (2.96 with rounded ones; `tests/counts.rs`). The
+    /// long-run results of `tests/roundoff.rs` are measured with the default.
     pub tolerance: f64,
     /// Also stop, as converged at the round-off floor, once increments below
     /// `floor_tolerance · max|ΔQ|` stop shrinking (iterating further only stirs noise).
