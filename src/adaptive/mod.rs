@@ -42,7 +42,8 @@
 //!   Kepler e = 0.9 (h = 0.25): achieved/tol 0.11–1.79, cost 0.28–0.33 of the fixed n (at
 //!   1e-12 no fixed n ≤ 64 meets tol); the outer solar system: see the README (the needed n
 //!   hardly varies along near-circular orbits, so the checks cannot pay off).
-//!   Without warm starts e = 0.6 (h = 1) cost 1.30–1.54× the fixed n, checking every step 1.13–1.85×.
+//!   Without warm starts e = 0.6 (h = 1) cost 1.30–1.54× the fixed n, checking every step
+//!   1.13–1.85×.
 //! * **Indicator**: the indicator alone, with a fixed relation error ≈ indicator^α
 //!   ([`INDICATOR_EXPONENT`], calibrated on Kepler e = 0.6). One solve per step; on e = 0.6
 //!   achieved/tol 0.7–4.4 at 0.77–0.86× the cost of the cheapest fixed n, but on e = 0.9

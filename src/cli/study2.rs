@@ -22,7 +22,7 @@ pub struct WorkPrecisionArgs {
     pub quick: bool,
     /// The long-run sweep: T = 20,000 (unless --horizon is given), only the accurate end of
     /// each family (Legendre and Chebyshev n = 16…32 at h = Δ/2, Δ/4; DOP853 at 1e-10…1e-14),
-    /// one repeat (minutes on Kepler).
+    /// one repeat (about a minute on Kepler).
     #[arg(long, conflicts_with = "quick")]
     pub long: bool,
     /// Output directory (default ./out/work-precision).
@@ -41,7 +41,6 @@ pub fn run_work_precision(args: WorkPrecisionArgs) -> Result<(), GviError> {
     } else {
         WorkPrecisionConfig::full()
     };
-
     if args.horizon.is_some() {
         config.horizon = args.horizon;
     }
