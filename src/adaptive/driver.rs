@@ -40,10 +40,20 @@ const WARM_RESIDUAL: f64 = 1e-8;
 const STALL: f64 = 0.5;
 /// See [`STALL`].
 const STALL_FLOOR: f64 = 1e4;
+/// After a stall (see [`STALL`]) the per-step budget is raised to this multiple of the
+/// stalled estimate (the measured floor of the embedded estimates), and a check whose
+/// estimate lies at that floor lets the next check probe one rung lower (measured: outer
+/// solar system, h = 1825 days, one-step differences between solves at n ≥ 14 are
+/// 3e-13…1e-12 AU whatever n, so without the probe a run that climbed to n = 24 stayed
+/// there).
+const NOISE_MARGIN: f64 = 2.0;
 /// Weight of the latest first solve in the moving averages of [`Ladder::first_start`].
 const START_EMA: f64 = 0.25;
-/// [`Ladder::first_start`] tries the start not chosen at least every this many steps.
+/// [`Ladder::first_start`] tries the start not chosen at least every this many steps; the
+/// spacing doubles (up to [`START_RETRY_MAX`]) each time the retried start loses again.
 const START_RETRY: usize = 8;
+/// See [`START_RETRY`].
+const START_RETRY_MAX: usize = 64;
 /// At most this many rungs down from one step to the next.
 const MAX_DOWN: usize = 5;
 /// [`ErrorControl::Calibrated`]: a check is forced when the indicator grows by this factor
@@ -82,6 +92,10 @@ struct Ladder {
     /// Solve the lower member of an embedded pair with the loose Newton tolerance (only when
     /// the upper one is kept: [`ErrorControl::Embedded`] with local extrapolation).
     loose_ok: bool,
+    /// The measured floor of the embedded estimates (0: no stall seen), and the last climb
+    /// (rung it started from, step) of the embedded control.
+    noise: f64,
+    climbed_from: Option<(usize, usize)>,
     transfers: Transfers,
     /// The last accepted step's curve (coefficients of rung `prev_rung`).
     prev: Vec<f64>,
@@ -95,6 +109,10 @@ struct Ladder {
     /// the start not chosen was last tried.
     start_cost: [f64; 2],
     since_other: usize,
+    /// Current spacing of the retries, and the start being retried (measured by the next
+    /// solve to round-off that used it).
+    retry_every: usize,
+    retrying: Option<Start>,
     /// Warm-start coefficients being assembled (max n × D), Chebyshev coefficients of the
     /// last accepted curve (max n × D) and scratch for fitting (2 max n).
     buf: Vec<f64>,
@@ -291,13 +309,29 @@ impl Ladder {
                 };
                 c.0 += stats.gradient_evaluations;
                 c.1 += m;
+                // Only solves to round-off compare the starts: a loose solve stops early
+                // whatever its start (measured on the outer solar system: loose continued
+                // solves looked cheap and kept the continued start, which costs 8–13 Newton
+                // iterations per solve to round-off there against 3 from the predictor).
                 let slot = match start {
+                    _ if loose => None,
                     Start::Cold => Some(0),
                     Start::Continue => Some(1),
                     Start::Refit(_) => None,
                 };
                 if let Some(s) = slot {
                     let x = stats.gradient_evaluations as f64 / m as f64;
+                    if self.retrying.take_if(|r| *r == start).is_some() {
+                        // Back off from a start that keeps losing (outer solar system: the
+                        // continued start costs 1.4× the cold one per node, and retrying it
+                        // every 8 steps cost 6 % of the run).
+                        let other = self.start_cost[1 - s];
+                        self.retry_every = if x > other {
+                            (2 * self.retry_every).min(START_RETRY_MAX)
+                        } else {
+                            START_RETRY
+                        };
+                    }
                     let e = &mut self.start_cost[s];
                     *e = if e.is_nan() {
                         x
@@ -354,13 +388,15 @@ impl Ladder {
             Start::Cold
         };
         self.since_other += 1;
-        if self.since_other >= START_RETRY {
+        if self.since_other >= self.retry_every {
             self.since_other = 0;
-            return if best == Start::Continue {
+            let other = if best == Start::Continue {
                 Start::Cold
             } else {
                 Start::Continue
             };
+            self.retrying = Some(other);
+            return other;
         }
         best
     }
@@ -441,6 +477,8 @@ pub fn integrate_adaptive<L: Lagrangian>(
         d,
         warm: opts.warm_start,
         loose_ok: opts.extrapolate && opts.control == ErrorControl::Embedded,
+        noise: 0.0,
+        climbed_from: None,
         transfers: Transfers::new(opts.ladder.len()),
         prev: vec![0.0; opts.ladder.last().copied().unwrap_or(0) * d],
         prev_rung: None,
@@ -448,6 +486,8 @@ pub fn integrate_adaptive<L: Lagrangian>(
         refit_cost: (0, 0),
         start_cost: [f64::NAN; 2],
         since_other: 0,
+        retry_every: START_RETRY,
+        retrying: None,
         buf: vec![0.0; opts.ladder.last().copied().unwrap_or(0) * d],
         cheb: vec![0.0; opts.ladder.last().copied().unwrap_or(0) * d],
         fit_scratch: vec![0.0; 2 * opts.ladder.last().copied().unwrap_or(0)],
@@ -678,6 +718,8 @@ fn embedded_step<L: Lagrangian>(
 ) -> Option<Accepted> {
     let top = ladder.rungs.len() - 1;
     let mut lo = lo.min(top - 1);
+    let first = lo;
+    let budget = budget.max(NOISE_MARGIN * ladder.noise);
     let mut start = ladder.first_start();
     if let Some(c) = last.filter(|c| c.rung == lo && k < c.step + opts.check_every) {
         if ladder.solve(lag, lo, start, false, q, p) {
@@ -710,7 +752,9 @@ fn embedded_step<L: Lagrangian>(
         if let Some((b, best_est)) = best {
             if est >= STALL * best_est && best_est <= floor {
                 // Best effort at the round-off floor: keep the pair with the smallest
-                // estimate instead of climbing to rungs whose own round-off is larger.
+                // estimate instead of climbing to rungs whose own round-off is larger, and
+                // take that estimate as the floor of later steps' budgets.
+                ladder.noise = ladder.noise.max(best_est);
                 lo = b;
                 break (best_est, best_est);
             }
@@ -727,7 +771,19 @@ fn embedded_step<L: Lagrangian>(
         (true, _, true) | (false, false, true) => lo + 1,
         (false, true, true) => lo,
     };
-    let next = ladder.next_rung(lo, crit, budget);
+    if lo > first {
+        ladder.climbed_from = Some((first, k));
+    }
+    let mut next = ladder.next_rung(lo, crit, budget);
+    // At the floor the estimate says nothing about lower rungs: probe one rung down, unless
+    // a climb from there happened within the last check_every steps.
+    let at_floor = ladder.noise > 0.0 && crit <= NOISE_MARGIN * ladder.noise;
+    let failed_recently = ladder
+        .climbed_from
+        .is_some_and(|(r, s)| r + 1 == lo && k < s + opts.check_every);
+    if at_floor && next == lo && lo > 0 && !failed_recently {
+        next = lo - 1;
+    }
     let ind = ladder.rungs[lo].ind;
     *last = (est.is_finite() && est <= budget && ind > 0.0).then_some(LastCheck {
         rung: lo,

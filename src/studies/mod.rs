@@ -6,6 +6,7 @@
 //! high-resolution spectral run), writes CSV/JSON tables and SVG charts, and never aborts on a
 //! solver failure: the failure is recorded in the measurement and shown.
 
+pub mod allocation;
 pub mod compare_bases;
 pub mod compare_refinement;
 pub mod peers;

@@ -11,6 +11,7 @@
 //! [`crate::nbody_report`]: the shortest two-body period spans ≥ 256 reference steps, and at
 //! least 16 substeps), otherwise the spectral run of [`Reference::for_system`].
 
+use super::allocation::{Allocation, one_step_errors};
 use super::{Reference, max_norm_diff, write_file};
 use crate::adaptive::{AdaptiveOptions, DEFAULT_LADDER, ErrorControl, integrate_adaptive};
 use crate::baselines::GaussCollocationBaseline;
@@ -72,6 +73,9 @@ pub struct ToleranceRow {
     pub seconds: f64,
     /// Wall time of the cheapest fixed-n run meeting tol, seconds.
     pub fixed_seconds: Option<f64>,
+    /// The oracle bound ([`super::allocation`]): the cheapest per-step allocation of n whose
+    /// summed one-step error is at most that of the cheapest fixed n.
+    pub oracle: Option<Allocation>,
 }
 
 /// The study of one scene.
@@ -175,6 +179,37 @@ fn study_system<S: System>(
         };
         fixed.push((n, err, cost));
     }
+    // The oracle bound: one-step errors for n from the smallest rung to a few above the
+    // largest cheapest fixed n, against a solve eight above that.
+    let needed = config
+        .tols
+        .iter()
+        .filter_map(|&tol| {
+            fixed
+                .iter()
+                .filter(|f| f.1 <= tol)
+                .min_by_key(|f| f.2)
+                .map(|f| f.0)
+        })
+        .max();
+    let one_step = match needed {
+        Some(nf) => {
+            let cap = (nf + 4).min(hi);
+            let ns: Vec<usize> = (lo..=cap).collect();
+            let cost: Vec<f64> = fixed[..ns.len()]
+                .iter()
+                .map(|f| {
+                    if f.1.is_finite() {
+                        f.2 as f64 / m.steps as f64
+                    } else {
+                        f64::INFINITY
+                    }
+                })
+                .collect();
+            one_step_errors(system, scene, &ns, &cost, (cap + 8).min(hi.max(cap + 1))).ok()
+        }
+        None => None,
+    };
     let mut rows = Vec::new();
     for &tol in &config.tols {
         let cheapest_at = fixed
@@ -185,6 +220,24 @@ fn study_system<S: System>(
             .map(|(i, _)| i);
         let cheapest = cheapest_at.map(|i| fixed[i]);
         let cheapest_seconds = cheapest_at.map(|i| fixed_seconds[i]);
+        let oracle = match (&one_step, cheapest) {
+            (Some(e), Some((n, _, cost))) => e
+                .fixed_error_sum(n)
+                .and_then(|budget| e.cheapest_within(budget))
+                .map(|a| {
+                    if a.cost <= cost as f64 {
+                        a
+                    } else {
+                        // The fixed choice itself is feasible: never report more than it.
+                        Allocation {
+                            cost: cost as f64,
+                            error_sum: e.fixed_error_sum(n).unwrap_or(f64::NAN),
+                            n_range: (n, n),
+                        }
+                    }
+                }),
+            _ => None,
+        };
         for &control in &config.controls {
             let mut opts = AdaptiveOptions::new(tol, m.basis, m.quadrature, m.h);
             opts.ladder = config.ladder.clone();
@@ -211,6 +264,7 @@ fn study_system<S: System>(
                         saving: cheapest.map(|f| f.2 as f64 / run.gradient_evaluations as f64),
                         seconds,
                         fixed_seconds: cheapest_seconds,
+                        oracle,
                     }
                 }
                 Err(_) => ToleranceRow {
@@ -226,6 +280,7 @@ fn study_system<S: System>(
                     saving: None,
                     seconds,
                     fixed_seconds: cheapest_seconds,
+                    oracle,
                 },
             };
             rows.push(row);
@@ -247,15 +302,24 @@ impl ToleranceStudy {
     pub fn to_csv(&self) -> String {
         let mut out = String::from(
             "scene,tol,control,error,factor,cost,n_min,n_max,checks,warnings,fixed_n,\
-             fixed_error,fixed_cost,saving,seconds,fixed_seconds\n",
+             fixed_error,fixed_cost,saving,seconds,fixed_seconds,oracle_cost,oracle_n_min,\
+             oracle_n_max\n",
         );
         for r in &self.rows {
             let (fname, ferr, fcost) = match r.fixed {
                 Some((n, e, c)) => (n.to_string(), format!("{e:e}"), c.to_string()),
                 None => Default::default(),
             };
+            let (ocost, olo, ohi) = match r.oracle {
+                Some(a) => (
+                    format!("{:.0}", a.cost),
+                    a.n_range.0.to_string(),
+                    a.n_range.1.to_string(),
+                ),
+                None => Default::default(),
+            };
             out.push_str(&format!(
-                "{},{:e},{},{:e},{:.3},{},{},{},{},{},{},{},{},{},{:.4},{}\n",
+                "{},{:e},{},{:e},{:.3},{},{},{},{},{},{},{},{},{},{:.4},{},{},{},{}\n",
                 self.scene,
                 r.tol,
                 r.control,
@@ -273,7 +337,10 @@ impl ToleranceStudy {
                 r.seconds,
                 r.fixed_seconds
                     .map(|s| format!("{s:.4}"))
-                    .unwrap_or_default()
+                    .unwrap_or_default(),
+                ocost,
+                olo,
+                ohi
             ));
         }
         out
@@ -283,8 +350,9 @@ impl ToleranceStudy {
     pub fn to_markdown(&self) -> String {
         let mut out = format!(
             "{} (h = {}, {} steps; reference: {})\n\n| tol | control | achieved | ×tol | cost | n | \
-             checks | cheapest fixed n | its error | its cost | saving | time (ms) | fixed time (ms) |\n\
-             |---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+             checks | cheapest fixed n | its error | its cost | saving | time (ms) | fixed time (ms) | \
+             oracle per-step n: cost (n) | oracle saving |\n\
+             |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
             self.scene, self.h, self.steps, self.reference
         );
         for r in &self.rows {
@@ -292,8 +360,15 @@ impl ToleranceStudy {
                 Some((n, e, c)) => format!("{n} | {e:.1e} | {c}"),
                 None => "none ≤ ladder max | – | –".into(),
             };
+            let (oracle, oracle_saving) = match (r.oracle, r.fixed) {
+                (Some(a), Some(f)) => (
+                    format!("{:.0} ({}–{})", a.cost, a.n_range.0, a.n_range.1),
+                    format!("{:.2}×", f.2 as f64 / a.cost),
+                ),
+                _ => ("–".into(), "–".into()),
+            };
             out.push_str(&format!(
-                "| {:.0e} | {} | {:.1e} | {:.2} | {} | {}–{} | {} | {} |{} | {:.1} | {} |\n",
+                "| {:.0e} | {} | {:.1e} | {:.2} | {} | {}–{} | {} | {} |{} | {:.1} | {} | {} | {} |\n",
                 r.tol,
                 r.control,
                 r.error,
@@ -308,6 +383,8 @@ impl ToleranceStudy {
                 r.fixed_seconds
                     .map(|s| format!("{:.1}", 1e3 * s))
                     .unwrap_or("–".into()),
+                oracle,
+                oracle_saving,
             ));
         }
         out
@@ -354,6 +431,8 @@ impl ToleranceStudy {
             Series::line_markers("cheapest fixed n", fx.map(|(t, f)| (t, f.2 as f64)))
                 .with_color(6),
         );
+        let oracle = self.rows.iter().filter_map(|r| r.oracle.map(|a| (r.tol, a.cost)));
+        cost.push(Series::dashed("oracle per-step n (bound)", oracle).with_color(5));
         (err, cost)
     }
 
