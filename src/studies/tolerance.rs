@@ -76,6 +76,8 @@ pub struct ToleranceRow {
     /// The oracle bound ([`super::allocation`]): the cheapest per-step allocation of n whose
     /// summed one-step error is at most that of the cheapest fixed n.
     pub oracle: Option<Allocation>,
+    /// The oracle's budget: the summed one-step error of the cheapest fixed n.
+    pub oracle_budget: Option<f64>,
 }
 
 /// The study of one scene.
@@ -220,9 +222,12 @@ fn study_system<S: System>(
             .map(|(i, _)| i);
         let cheapest = cheapest_at.map(|i| fixed[i]);
         let cheapest_seconds = cheapest_at.map(|i| fixed_seconds[i]);
+        let oracle_budget = match (&one_step, cheapest) {
+            (Some(e), Some((n, _, _))) => e.fixed_error_sum(n),
+            _ => None,
+        };
         let oracle = match (&one_step, cheapest) {
-            (Some(e), Some((n, _, cost))) => e
-                .fixed_error_sum(n)
+            (Some(e), Some((n, _, cost))) => oracle_budget
                 .and_then(|budget| e.cheapest_within(budget))
                 .map(|a| {
                     if a.cost <= cost as f64 {
@@ -265,6 +270,7 @@ fn study_system<S: System>(
                         seconds,
                         fixed_seconds: cheapest_seconds,
                         oracle,
+                        oracle_budget,
                     }
                 }
                 Err(_) => ToleranceRow {
@@ -281,6 +287,7 @@ fn study_system<S: System>(
                     seconds,
                     fixed_seconds: cheapest_seconds,
                     oracle,
+                    oracle_budget,
                 },
             };
             rows.push(row);
