@@ -439,7 +439,10 @@ impl Ladder {
         // Over the next `horizon` steps: unchecked solves at lo, against one checked step at
         // j followed by unchecked solves there (measured: comparing single steps kept the
         // oscillator at h = 20 on n = 40 for a whole run where n = 21 meets tol).
-        let horizon = self.streak_ema.max(self.streak as f64).clamp(1.0, self.horizon as f64);
+        let horizon = self
+            .streak_ema
+            .max(self.streak as f64)
+            .clamp(1.0, self.horizon as f64);
         if horizon * first * m(lo)
             <= first * m(j) + refit * m(j + 1) + (horizon - 1.0) * first * m(j)
         {

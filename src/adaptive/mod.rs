@@ -33,17 +33,40 @@
 //!     rung, a step whose modal indicator has not grown since that check is solved at that rung
 //!     alone (error predicted as e·ind/ind_check, kept without extrapolation); a step that may
 //!     go down stays at its rung unchecked when that is predicted cheaper than a checked step
-//!     lower down.
+//!     lower down followed by unchecked steps there, amortised over the measured number of
+//!     steps a rung stays right (moving average of the runs at one rung, at most
+//!     `check_every`; comparing single steps kept the oscillator at h = 20 on n = 40 for a
+//!     whole run where n = 21 meets tol).
+//!   - *Memory*: a step down whose first estimate misses the budget keeps later steps down
+//!     (for `check_every` steps) no lower than the middle between it and the current rung
+//!     (bisection), and a climb does not jump past a rung that met the budget within
+//!     `check_every` steps (the decay model fitted on an unresolved curve overshoots: the
+//!     oscillator at h = 20 jumped from n = 20 to 40 where 24 had just passed).
+//!   - *Starts*: continued or cold is chosen by the cost of solves to round-off only (loose
+//!     solves stop early whatever their start); the start that loses is retried at doubling
+//!     intervals, 8 to 64 steps (on the outer solar system the continued start costs 8–13
+//!     Newton iterations against 3 from the predictor).
+//!   - *Round-off floor*: a climb whose estimates stall at the round-off level, or the top
+//!     pair of the ladder missing a budget there, measures the floor of the estimates; later
+//!     steps use twice that floor as their budget (one warning per run), and a check at the
+//!     floor lets the next one probe a rung lower (outer solar system, tol = 1e-10: one-step
+//!     differences between solves at n ≥ 14 are 3e-13…1e-12 AU whatever n; without this the
+//!     run climbed to n = 24–28 and stayed there, 3.7× the cost of the fixed n).
 //!
-//!   Measured (`gvi tolerance-study`, 100 steps, Legendre, tol = 1e-6…1e-12, see the README):
-//!   Kepler e = 0.6 at h = 0.25: achieved/tol 0.001–0.05, cost 0.71–0.94 of the cheapest
-//!   fixed n meeting tol; at h = 1 (≈ 6 steps per orbit, the needed n changes 4× from step
-//!   to step, so every step is a fresh search): achieved/tol 0.02–0.56, cost 1.06–1.22;
-//!   Kepler e = 0.9 (h = 0.25): achieved/tol 0.11–1.79, cost 0.28–0.33 of the fixed n (at
-//!   1e-12 no fixed n ≤ 64 meets tol); the outer solar system: see the README (the needed n
-//!   hardly varies along near-circular orbits, so the checks cannot pay off).
-//!   Without warm starts e = 0.6 (h = 1) cost 1.30–1.54× the fixed n, checking every step
-//!   1.13–1.85×.
+//!   Measured (`gvi tolerance-study`, 100 steps, tol = 1e-6…1e-12, see the README; "saving" =
+//!   cost of the cheapest fixed n meeting tol / adaptive cost): Kepler e = 0.6 at h = 0.25
+//!   (Legendre): achieved/tol ≤ 0.07, saving 1.28–1.57×; at h = 1 (≈ 6 steps per orbit, the
+//!   needed n changes 4× from step to step, so most steps are a fresh search): achieved/tol
+//!   ≤ 0.51, saving 0.83–0.91×; Kepler e = 0.9 (h = 0.25): achieved/tol ≤ 1.79, saving
+//!   2.83–3.60× (at 1e-12 no fixed n ≤ 64 meets tol); the oscillator at h = 20 (Chebyshev):
+//!   0.85–1.08×; the outer solar system: 0.69–0.77× at 1e-6…1e-10. The oracle bound of
+//!   [`crate::studies::allocation`] shows why the last two cannot be won by choosing n: an
+//!   exact per-step choice, knowing every one-step error and paying nothing to learn it,
+//!   saves 1.00–1.03× on the oscillator and 1.01–1.06× on the outer solar system (their need
+//!   hardly varies), against 1.2–1.6× on e = 0.6 and 5.5–6.4× on e = 0.9.
+//!   Switches (Kepler e = 0.6, h = 1, tol = 1e-8): without warm starts the run costs 1.41×
+//!   the defaults, checking every step 1.24× (test
+//!   `warm_starts_and_unchecked_steps_each_cut_the_cost`).
 //! * **Indicator**: the indicator alone, with a fixed relation error ≈ indicator^α
 //!   ([`INDICATOR_EXPONENT`], calibrated on Kepler e = 0.6). One solve per step; on e = 0.6
 //!   achieved/tol 0.7–4.4 at 0.77–0.86× the cost of the cheapest fixed n, but on e = 0.9

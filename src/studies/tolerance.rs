@@ -438,7 +438,10 @@ impl ToleranceStudy {
             Series::line_markers("cheapest fixed n", fx.map(|(t, f)| (t, f.2 as f64)))
                 .with_color(6),
         );
-        let oracle = self.rows.iter().filter_map(|r| r.oracle.map(|a| (r.tol, a.cost)));
+        let oracle = self
+            .rows
+            .iter()
+            .filter_map(|r| r.oracle.map(|a| (r.tol, a.cost)));
         cost.push(Series::dashed("oracle per-step n (bound)", oracle).with_color(5));
         (err, cost)
     }
