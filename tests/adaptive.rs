@@ -518,7 +518,7 @@ fn uniform_need_stays_near_the_fixed_n_cost() {
     // The oscillator at h = 20 (3.2 periods per step, every step the same rotation): the
     // need does not vary, so the adaptive run can at best match the cheapest fixed n. Before
     // the step-down memory and the amortised step-down the run settled on n = 40 with checks
-    // at 48 (1.2–1.6× the fixed cost). Measured (Chebyshev, 100 steps, q0 = 1): tol = 1e-6
+    // at 48 (1.5–1.6× the fixed cost). Measured (Chebyshev, 100 steps, q0 = 1): tol = 1e-6
     // and 1e-9 cost 1.18 and 0.97 of the cheapest fixed n, achieved 2.2e-11 and 2.4e-11.
     // Asserted: cost ≤ 1.3 and ≤ 1.1, achieved ≤ tol.
     let sys = HarmonicOscillator::new(1.0, 1.0).unwrap();
