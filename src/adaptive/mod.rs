@@ -108,6 +108,9 @@
 //! kept whose stage residual is not at round-off (above 1e-8·max|p|) is redone cold.
 
 mod driver;
+mod embedded;
+mod indicator;
+mod ladder;
 
 pub use driver::integrate_adaptive;
 

@@ -25,7 +25,10 @@
 //! [`NewtonOptions::compensated`] is off. The public coefficients
 //! ([`Workspace::coefficients`], `Trajectory::coefficients`) stay absolute Q.
 
+mod dd;
+mod guess;
 mod newton;
+mod stage;
 mod tangent;
 mod workspace;
 

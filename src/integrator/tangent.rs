@@ -372,7 +372,7 @@ fn check_steps(steps: usize) -> Result<()> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::newton::Mode;
+    use super::super::stage::Mode;
     use super::*;
     use crate::systems::{Kepler, Pendulum};
 

@@ -1,0 +1,38 @@
+//! Double-double helpers: error-free sums and products (TwoSum, Fast2Sum, FMA) used to keep
+//! the stage residuals and the state increments free of rounding bias (DESIGN.md §4).
+
+/// Knuth's TwoSum: s = fl(a + b) and the exact rounding error e, a + b = s + e.
+#[inline]
+pub(super) fn two_sum(a: f64, b: f64) -> (f64, f64) {
+    let s = a + b;
+    let bb = s - a;
+    (s, (a - (s - bb)) + (b - bb))
+}
+
+/// hi + lo += a·b with the product exact (FMA) and the sum compensated (TwoSum).
+#[inline]
+pub(super) fn dd_acc(hi: &mut f64, lo: &mut f64, a: f64, b: f64) {
+    let prod = a * b;
+    let low = a.mul_add(b, -prod);
+    let (s, e) = two_sum(*hi, prod);
+    *hi = s;
+    *lo += e + low;
+}
+
+/// (a_hi + a_lo) + (b_hi + b_lo) as a normalised hi + lo pair (double-double addition):
+/// unlike Kahan's `two_sum(a, b + a_lo)`, the low parts are not rounded away when the
+/// increment is as large as the sum (steps of a large-h spectral method).
+#[inline]
+pub(super) fn dd_add(a_hi: f64, a_lo: f64, b_hi: f64, b_lo: f64) -> (f64, f64) {
+    let (s, e) = two_sum(a_hi, b_hi);
+    let (t, f) = two_sum(a_lo, b_lo);
+    let (s, e) = fast_two_sum(s, e + t);
+    fast_two_sum(s, e + f)
+}
+
+/// Dekker's Fast2Sum for |a| ≥ |b|.
+#[inline]
+fn fast_two_sum(a: f64, b: f64) -> (f64, f64) {
+    let s = a + b;
+    (s, b - (s - a))
+}
