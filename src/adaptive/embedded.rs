@@ -7,7 +7,7 @@ use super::AdaptiveOptions;
 use super::ladder::{Accepted, Ladder, Start, decay_rate};
 use crate::lagrangian::Lagrangian;
 
-/// [`ErrorControl::Embedded`]: an unchecked step is allowed while the indicator is at most
+/// [`ErrorControl::Embedded`](super::ErrorControl::Embedded): an unchecked step is allowed while the indicator is at most
 /// this factor above that of the last check.
 const GROWTH: f64 = 1.0;
 /// Step down one rung per factor DOWN that the estimate lies below the budget (at most
@@ -16,7 +16,7 @@ const DOWN: f64 = 0.05;
 /// Ratio of the decay rate (per unit n) of the embedded estimate to that of the Chebyshev
 /// coefficients of the curve, measured 1.5–1.7 on Kepler e = 0.6 (h = 1, n = 4…24).
 const DECAY_RATIO: f64 = 1.5;
-/// [`ErrorControl::Embedded`]: a climb whose estimate is not below this fraction of the
+/// [`ErrorControl::Embedded`](super::ErrorControl::Embedded): a climb whose estimate is not below this fraction of the
 /// smallest estimate of the step so far stops there, when that smallest estimate is at the
 /// round-off level [`STALL_FLOOR`]·ε·max|q| (measured: outer solar system at tol = 1e-10,
 /// the per-step budget 5e-13 AU is below what any pair resolves, and climbing to n = 64 left
@@ -34,7 +34,7 @@ pub(super) const NOISE_MARGIN: f64 = 2.0;
 /// At most this many rungs down from one step to the next.
 const MAX_DOWN: usize = 5;
 
-/// The last embedded check of [`ErrorControl::Embedded`]: at step `step`, rung `rung` had
+/// The last embedded check of [`ErrorControl::Embedded`](super::ErrorControl::Embedded): at step `step`, rung `rung` had
 /// the estimate `est` and the indicator `ind`.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct LastCheck {
@@ -45,7 +45,7 @@ pub(super) struct LastCheck {
 }
 
 /// The embedded control from rung `lo`: climb until |q_lo − q_{lo+1}| meets the budget.
-/// Within [`AdaptiveOptions::check_every`] steps of a check at the same rung, a step whose
+/// Within [`AdaptiveOptions::check_every`](super::AdaptiveOptions::check_every) steps of a check at the same rung, a step whose
 /// indicator has not grown since that check is solved at that rung alone, its error predicted
 /// as est · ind / ind_check (see the module docs).
 #[allow(clippy::too_many_arguments)]

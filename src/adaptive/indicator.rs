@@ -6,13 +6,13 @@ use super::AdaptiveOptions;
 use super::ladder::{Accepted, Ladder, Start, decay_rate};
 use crate::lagrangian::Lagrangian;
 
-/// [`ErrorControl::Calibrated`]: a check is forced when the indicator grows by this factor
+/// [`ErrorControl::Calibrated`](super::ErrorControl::Calibrated): a check is forced when the indicator grows by this factor
 /// from one step to the next.
 const JUMP: f64 = 10.0;
-/// [`ErrorControl::Calibrated`]: the calibrated ratio of a rung is the largest of this many
+/// [`ErrorControl::Calibrated`](super::ErrorControl::Calibrated): the calibrated ratio of a rung is the largest of this many
 /// latest ratios (error estimate / indicator) measured there.
 const WINDOW: usize = 4;
-/// [`ErrorControl::Calibrated`]: the ratio assumed where none has been measured (the stated
+/// [`ErrorControl::Calibrated`](super::ErrorControl::Calibrated): the ratio assumed where none has been measured (the stated
 /// bound of the indicator, see the module docs).
 const UNCALIBRATED_RATIO: f64 = 4.0;
 
@@ -123,7 +123,7 @@ pub(super) fn predict(
         .unwrap_or(top)
 }
 
-/// The calibrated control (see [`ErrorControl::Calibrated`]).
+/// The calibrated control (see [`ErrorControl::Calibrated`](super::ErrorControl::Calibrated)).
 #[allow(clippy::too_many_arguments)]
 pub(super) fn calibrated_step<L: Lagrangian>(
     ladder: &mut Ladder,

@@ -52,7 +52,7 @@ pub(super) struct Ladder {
     /// Warm-start the solves (see [`Start`]); off: every solve chooses its own guess.
     pub(super) warm: bool,
     /// Solve the lower member of an embedded pair with the loose Newton tolerance (only when
-    /// the upper one is kept: [`ErrorControl::Embedded`] with local extrapolation).
+    /// the upper one is kept: [`ErrorControl::Embedded`](super::ErrorControl::Embedded) with local extrapolation).
     pub(super) loose_ok: bool,
     /// The measured floor of the embedded estimates (0: no stall seen), and the last climb
     /// (rung it started from, step) of the embedded control.
@@ -68,7 +68,7 @@ pub(super) struct Ladder {
     pub(super) streak_ema: f64,
     /// The last rung accepted within the budget (checked or predicted), and the step.
     pub(super) passed: Option<(usize, usize)>,
-    /// Memory of [`Ladder::failed`], steps ([`AdaptiveOptions::check_every`]).
+    /// Memory of [`Ladder::failed`], steps ([`AdaptiveOptions::check_every`](super::AdaptiveOptions::check_every)).
     pub(super) horizon: usize,
     pub(super) transfers: Transfers,
     /// The last accepted step's curve (coefficients of rung `prev_rung`).

@@ -44,8 +44,9 @@ enum Command {
     /// N-body accuracy report: per-body position errors, energy and momentum errors and
     /// Mercury's perihelion drift against a Gauss-collocation reference (CSV, SVG, summary).
     NbodyReport(Box<nbody::NBodyReportArgs>),
-    /// Tolerance-driven n against the cheapest fixed n meeting each tolerance: achieved
-    /// error and force evaluations against tol (CSV, Markdown, SVG in --out).
+    /// Tolerance-driven n against the cheapest fixed n meeting each tolerance and against
+    /// the oracle bound (best per-step n with every one-step error known): achieved error
+    /// and force evaluations against tol (CSV, Markdown, SVG in --out).
     ToleranceStudy(Box<tolerance::ToleranceArgs>),
     /// List the built-in scenes.
     Scenes,

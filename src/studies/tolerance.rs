@@ -10,6 +10,11 @@
 //! for N-body scenes Gauss collocation with 6 stages at h/K (K as in
 //! [`crate::nbody_report`]: the shortest two-body period spans ≥ 256 reference steps, and at
 //! least 16 substeps), otherwise the spectral run of [`Reference::for_system`].
+//!
+//! Each row also carries the oracle bound of [`super::allocation`]: the cheapest choice of n
+//! per step with every one-step error known (n from the smallest rung to four above the
+//! largest cheapest fixed n, one-step errors against a solve eight above that), within the
+//! summed one-step error of the cheapest fixed n — what choosing n alone could save.
 
 use super::allocation::{Allocation, one_step_errors};
 use super::{Reference, max_norm_diff, write_file};
