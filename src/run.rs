@@ -72,6 +72,9 @@ pub struct RunSummary {
     pub force_evaluations: usize,
     /// Warnings (e.g. a tolerance not met at the largest n: best effort kept).
     pub warnings: Vec<String>,
+    /// The step size chosen from the tolerance (`auto_h`), with its pilot runs (their force
+    /// evaluations are not included in `force_evaluations`).
+    pub step_choice: Option<crate::adaptive::StepChoice>,
 }
 
 impl std::fmt::Display for RunSummary {
@@ -91,6 +94,22 @@ impl std::fmt::Display for RunSummary {
             "  Newton iterations per step: {:.2}; force evaluations: {}; integration time: {:.3} s",
             self.newton_iterations_per_step, self.force_evaluations, self.seconds
         )?;
+        if let Some(c) = &self.step_choice {
+            write!(
+                f,
+                "\n  h chosen from tol: {:.6e} ({} steps; time scale {:.4e}; pilot force \
+                 evaluations per unit time: {}; pilots cost {} evaluations)",
+                c.h,
+                c.steps,
+                c.time_scale,
+                c.pilots
+                    .iter()
+                    .map(|p| format!("h = {:.3e}: {:.4e}", p.h, p.cost_per_time))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                c.pilot_evaluations
+            )?;
+        }
         for w in &self.warnings {
             write!(f, "\n  warning: {w}")?;
         }
@@ -179,6 +198,14 @@ pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> 
     let exact = system.exact_solution(init.t0, &init.q, &init.p)?;
     let start = Instant::now();
     let mut adaptive: Option<AdaptiveColumns> = None;
+    let mut step_choice = None;
+    if m.auto_h && m.tol.is_none() {
+        return Err(crate::error::GviError::InvalidArgument {
+            name: "auto_h".into(),
+            reason: "choosing h needs a tolerance (tol)".into(),
+        });
+    }
+    let (h, steps) = (m.h, m.steps);
     let outcome = match m.tol {
         None => gvi.integrate(system, init.t0, &init.q, &init.p, m.steps),
         Some(tol) => {
@@ -189,7 +216,20 @@ pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> 
             if let Some(c) = m.control {
                 opts.control = c;
             }
-            integrate_adaptive(system, &opts, init.t0, &init.q, &init.p, m.steps).map(|run| {
+            let mut steps = steps;
+            if m.auto_h {
+                let c = crate::adaptive::choose_step(
+                    system,
+                    &opts,
+                    init.t0,
+                    &init.q,
+                    &init.p,
+                    h * steps as f64,
+                )?;
+                (opts.h, steps) = (c.h, c.steps);
+                step_choice = Some(c);
+            }
+            integrate_adaptive(system, &opts, init.t0, &init.q, &init.p, steps).map(|run| {
                 adaptive = Some(AdaptiveColumns {
                     indicators: run.indicators,
                     estimates: run.estimates,
@@ -284,7 +324,7 @@ pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> 
     let method = match (m.tol, n_range) {
         (Some(tol), Some((lo, hi))) => format!(
             "{} basis, n chosen per step in {lo}…{hi} for tol = {tol:e}, {} (default points), h = {}",
-            m.basis, m.quadrature, m.h
+            m.basis, m.quadrature, trajectory.h
         ),
         _ => format!(
             "{} basis n = {}, {} with {} points, h = {}",
@@ -304,6 +344,7 @@ pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> 
         method,
         warnings,
         force_evaluations,
+        step_choice,
         steps,
         max_position_error: max_pos,
         max_curve_error,

@@ -205,6 +205,10 @@ pub struct MethodSpec {
     /// default [`crate::adaptive::ErrorControl::Embedded`]).
     #[serde(default)]
     pub control: Option<crate::adaptive::ErrorControl>,
+    /// With `tol`: choose one h for the run (spanning the same horizon h · steps) from the
+    /// tolerance and the system's time scale by pilot runs ([`crate::adaptive::choose_step`]).
+    #[serde(default)]
+    pub auto_h: bool,
 }
 
 impl Scene {

@@ -272,6 +272,26 @@ fn cli_tol_adds_the_n_column_and_rejects_bad_tolerances() {
         &["run", "kepler", "--tol", "1e-8", "--control", "magic"],
         "control",
     );
+    // --auto-h: h chosen from the tolerance and the orbital period, reported; it needs --tol.
+    let (code, out, err) = gvi(&[
+        "run", "kepler", "--tol", "1e-8", "--h", "1", "--steps", "20", "--auto-h",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("h chosen from tol"), "{err}");
+    let last: f64 = out
+        .lines()
+        .last()
+        .unwrap()
+        .split(',')
+        .nth(1)
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(
+        (last - 20.0).abs() < 1e-9,
+        "the horizon h·steps is kept: t_end = {last}"
+    );
+    assert_clean_failure(&["run", "kepler", "--auto-h"], "auto_h");
 }
 
 #[test]

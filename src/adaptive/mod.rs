@@ -111,8 +111,10 @@ mod driver;
 mod embedded;
 mod indicator;
 mod ladder;
+mod step_size;
 
 pub use driver::integrate_adaptive;
+pub use step_size::{Pilot, StepChoice, choose_step};
 
 use crate::basis::BasisKind;
 use crate::error::{GviError, Result};

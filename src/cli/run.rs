@@ -56,6 +56,10 @@ pub struct RunArgs {
     /// Values of n a --tol run may use, comma-separated (default 4,6,…,64).
     #[arg(long)]
     pub ladder: Option<String>,
+    /// With --tol: choose one h for the run (same horizon h·steps) from the tolerance and the
+    /// system's time scale by short pilot runs; the choice is reported.
+    #[arg(long)]
+    pub auto_h: bool,
     /// Output format.
     #[arg(long, value_enum, default_value_t = Format::Csv)]
     pub format: Format,
@@ -107,6 +111,9 @@ pub fn apply_overrides(scene: &mut Scene, a: &RunArgs) -> Result<(), GviError> {
     }
     if let Some(c) = &a.control {
         scene.method.control = Some(c.parse()?);
+    }
+    if a.auto_h {
+        scene.method.auto_h = true;
     }
     if let Some(l) = &a.ladder {
         let values = parse_vector("--ladder", l)?;

@@ -65,6 +65,10 @@ impl System for HarmonicOscillator {
     fn name(&self) -> &'static str {
         "harmonic"
     }
+    /// The period 2π √(m/k).
+    fn shortest_time_scale(&self, _q: &[f64], _p: &[f64]) -> Option<f64> {
+        Some(std::f64::consts::TAU * (self.mass / self.stiffness).sqrt())
+    }
     fn invariant_names(&self) -> &'static [&'static str] {
         &["energy"]
     }

@@ -77,6 +77,23 @@ impl System for Kepler {
     fn name(&self) -> &'static str {
         "kepler"
     }
+    /// The orbital period 2π √(a³/μ) of a bound orbit (a = −μ/(2E)); for an unbound one
+    /// the time 2π r/|v| to sweep its current distance.
+    fn shortest_time_scale(&self, q: &[f64], p: &[f64]) -> Option<f64> {
+        if q.len() != 2 || p.len() != 2 {
+            return None;
+        }
+        let r = q[0].hypot(q[1]);
+        let v2 = p[0] * p[0] + p[1] * p[1];
+        let energy = 0.5 * v2 - self.mu / r;
+        let t = if energy < 0.0 {
+            let a = -self.mu / (2.0 * energy);
+            std::f64::consts::TAU * (a * a * a / self.mu).sqrt()
+        } else {
+            std::f64::consts::TAU * r / v2.sqrt()
+        };
+        (t.is_finite() && t > 0.0).then_some(t)
+    }
     fn invariant_names(&self) -> &'static [&'static str] {
         &["energy", "angular_momentum"]
     }

@@ -64,6 +64,10 @@ impl System for Pendulum {
     fn name(&self) -> &'static str {
         "pendulum"
     }
+    /// The small-amplitude period 2π √(l/g) (larger amplitudes swing more slowly).
+    fn shortest_time_scale(&self, _q: &[f64], _p: &[f64]) -> Option<f64> {
+        Some(std::f64::consts::TAU * (self.length / self.gravity).sqrt())
+    }
     fn invariant_names(&self) -> &'static [&'static str] {
         &["energy"]
     }
