@@ -152,6 +152,16 @@ fn gauss_substeps(system: &NBody, q: &[f64], h: f64) -> usize {
     }
 }
 
+/// Index of the cheapest fixed-n run (n, error, cost) whose error meets tol.
+fn cheapest_fixed(fixed: &[(usize, f64, usize)], tol: f64) -> Option<usize> {
+    fixed
+        .iter()
+        .enumerate()
+        .filter(|(_, f)| f.1 <= tol)
+        .min_by_key(|(_, f)| f.2)
+        .map(|(i, _)| i)
+}
+
 fn max_error(traj: &Trajectory, reference: &[Vec<f64>]) -> f64 {
     if traj.q.len() != reference.len() {
         return f64::NAN;
@@ -191,13 +201,7 @@ fn study_system<S: System>(
     let needed = config
         .tols
         .iter()
-        .filter_map(|&tol| {
-            fixed
-                .iter()
-                .filter(|f| f.1 <= tol)
-                .min_by_key(|f| f.2)
-                .map(|f| f.0)
-        })
+        .filter_map(|&tol| cheapest_fixed(&fixed, tol).map(|i| fixed[i].0))
         .max();
     let one_step = match needed {
         Some(nf) => {
@@ -219,33 +223,26 @@ fn study_system<S: System>(
     };
     let mut rows = Vec::new();
     for &tol in &config.tols {
-        let cheapest_at = fixed
-            .iter()
-            .enumerate()
-            .filter(|(_, f)| f.1 <= tol)
-            .min_by_key(|(_, f)| f.2)
-            .map(|(i, _)| i);
+        let cheapest_at = cheapest_fixed(&fixed, tol);
         let cheapest = cheapest_at.map(|i| fixed[i]);
         let cheapest_seconds = cheapest_at.map(|i| fixed_seconds[i]);
         let oracle_budget = match (&one_step, cheapest) {
             (Some(e), Some((n, _, _))) => e.fixed_error_sum(n),
             _ => None,
         };
-        let oracle = match (&one_step, cheapest) {
-            (Some(e), Some((n, _, cost))) => oracle_budget
-                .and_then(|budget| e.cheapest_within(budget))
-                .map(|a| {
-                    if a.cost <= cost as f64 {
-                        a
-                    } else {
-                        // The fixed choice itself is feasible: never report more than it.
-                        Allocation {
-                            cost: cost as f64,
-                            error_sum: e.fixed_error_sum(n).unwrap_or(f64::NAN),
-                            n_range: (n, n),
-                        }
+        let oracle = match (&one_step, cheapest, oracle_budget) {
+            (Some(e), Some((n, _, cost)), Some(budget)) => e.cheapest_within(budget).map(|a| {
+                // The fixed choice itself is feasible: never report more than it.
+                if a.cost <= cost as f64 {
+                    a
+                } else {
+                    Allocation {
+                        cost: cost as f64,
+                        error_sum: budget,
+                        n_range: (n, n),
                     }
-                }),
+                }
+            }),
             _ => None,
         };
         for &control in &config.controls {
