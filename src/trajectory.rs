@@ -89,6 +89,9 @@ impl Trajectory {
         p: &[f64],
         stats: StepStats,
     ) {
+        if self.step_n.capacity() == 0 {
+            self.step_n.reserve(self.coefficients.capacity());
+        }
         while self.step_n.len() < self.coefficients.len() {
             self.step_n.push(self.n);
         }

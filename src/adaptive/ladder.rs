@@ -465,12 +465,8 @@ pub(super) fn decay_rate(r: &Rung, d: usize) -> f64 {
     if n < 6 {
         return 0.3;
     }
-    let a = r.gvi.chebyshev_coefficients(r.ws.coefficients(), d);
-    let env = |j: usize| {
-        a[j * d..(j + 2).min(n) * d]
-            .iter()
-            .fold(0.0f64, |m, x| m.max(x.abs()))
-    };
+    let mode = |j: usize| r.gvi.chebyshev_mode_size(r.ws.coefficients(), d, j);
+    let env = |j: usize| (j..(j + 2).min(n)).map(mode).fold(0.0f64, f64::max);
     let (j1, j2) = (n / 2, n - 2);
     let (e1, e2) = (env(j1), env(j2).max(1e-300));
     ((e1 / e2).ln() / (j2 - j1) as f64).clamp(0.05, 5.0)

@@ -390,12 +390,49 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
 
     /// The modal error indicator of a step: the max-norm of the last two Chebyshev
     /// coefficients of its Galerkin curve (two, because odd and even modes alternate).
+    ///
+    /// Allocation-free (it is evaluated for every solve of a tolerance-driven run); NaN when
+    /// `coeffs` does not hold n×`dim` values.
     pub fn modal_indicator(&self, coeffs: &[f64], dim: usize) -> f64 {
-        let a = self.chebyshev_coefficients(coeffs, dim);
         let n = self.tables.n;
-        a[(n.saturating_sub(2)) * dim..]
-            .iter()
-            .fold(0.0f64, |m, x| m.max(x.abs()))
+        (n.saturating_sub(2)..n)
+            .map(|j| self.chebyshev_mode_size(coeffs, dim, j))
+            .fold(0.0f64, f64::max)
+    }
+
+    /// max_r |a_{j,r}|: the size of Chebyshev mode j of a step's Galerkin curve (basis
+    /// coefficients n×`dim`), without allocating. Summed in the order of
+    /// [`Self::chebyshev_coefficients`], so it equals the largest entry of that matrix's row
+    /// j bit for bit. NaN when j ≥ n or `coeffs` does not hold n×`dim` values.
+    ///
+    /// ```
+    /// use galerkin_vi::prelude::*;
+    ///
+    /// let gvi = GalerkinIntegrator::spectral(8, 0.5)?;
+    /// let kepler = Kepler::new(1.0)?;
+    /// let (q0, p0) = Kepler::paper_initial_state();
+    /// let mut ws = gvi.workspace(&kepler)?;
+    /// let (mut q1, mut p1) = ([0.0; 2], [0.0; 2]);
+    /// gvi.step(&kepler, &mut ws, &q0, &p0, &mut q1, &mut p1)?;
+    /// let a = gvi.chebyshev_coefficients(ws.coefficients(), 2);
+    /// let size = gvi.chebyshev_mode_size(ws.coefficients(), 2, 5);
+    /// assert_eq!(size, a[10].abs().max(a[11].abs()));
+    /// # Ok::<(), galerkin_vi::GviError>(())
+    /// ```
+    pub fn chebyshev_mode_size(&self, coeffs: &[f64], dim: usize, j: usize) -> f64 {
+        let n = self.tables.n;
+        if j >= n || coeffs.len() != n * dim {
+            return f64::NAN;
+        }
+        let row = &self.tables.chebyshev[j * n..(j + 1) * n];
+        (0..dim)
+            .map(|r| {
+                row.iter()
+                    .zip(coeffs.chunks_exact(dim))
+                    .fold(0.0f64, |s, (c, q)| s + c * q[r])
+                    .abs()
+            })
+            .fold(0.0f64, f64::max)
     }
 }
 
