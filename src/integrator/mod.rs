@@ -417,7 +417,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
     /// let a = gvi.chebyshev_coefficients(ws.coefficients(), 2);
     /// let size = gvi.chebyshev_mode_size(ws.coefficients(), 2, 5);
     /// assert_eq!(size, a[10].abs().max(a[11].abs()));
-    /// # Ok::<(), galerkin_vi::GviError>(())
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
     pub fn chebyshev_mode_size(&self, coeffs: &[f64], dim: usize, j: usize) -> f64 {
         let n = self.tables.n;

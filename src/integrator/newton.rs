@@ -457,6 +457,18 @@ pub struct StepFailure {
     pub reason: String,
 }
 
+impl std::fmt::Display for StepFailure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "Newton's iteration failed after {} iterations (stage residual {:.3e}): {}",
+            self.iterations, self.residual, self.reason
+        )
+    }
+}
+
+impl std::error::Error for StepFailure {}
+
 /// The discrete Lagrangian and its discrete Legendre transforms at one pair of end points.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DiscreteLagrangian {
