@@ -73,6 +73,7 @@ pub(super) fn embedded_step<L: Lagrangian>(
                 ladder.passed = Some((lo, k));
                 ladder.note_rung(lo);
                 let next = ladder.next_rung(lo, predicted, budget, k);
+                let next = ladder.swing_start(lo, next);
                 return Some(Accepted {
                     keep: lo,
                     next,
@@ -157,6 +158,7 @@ pub(super) fn embedded_step<L: Lagrangian>(
     if at_floor && next == lo && lo > 0 && !failed_recently {
         next = lo - 1;
     }
+    let next = ladder.swing_start(lo, next);
     let ind = ladder.rungs[lo].ind;
     *last = (est.is_finite() && est <= budget && ind > 0.0).then_some(LastCheck {
         rung: lo,

@@ -178,6 +178,13 @@ pub struct AdaptiveOptions {
     /// curve of the same step. Changes only where Newton starts, not the map it solves.
     #[serde(default = "default_true")]
     pub warm_start: bool,
+    /// Follow swings of the need ([`ErrorControl::Embedded`]; default true): when the n of the
+    /// last three steps' lower rungs differ by a factor of 1.5 or more, a step starts no higher
+    /// than the lowest of them, since the step after a hard one is usually easy (Kepler at
+    /// h = 2: three steps per orbit needing n ≈ 45, 10 and 13 in turn). Changes only where the
+    /// search for a step's n starts.
+    #[serde(default = "default_true")]
+    pub follow_swings: bool,
 }
 
 fn default_true() -> bool {
@@ -247,6 +254,7 @@ impl AdaptiveOptions {
             extrapolate: true,
             check_every: CHECK_EVERY,
             warm_start: true,
+            follow_swings: true,
         }
     }
 
