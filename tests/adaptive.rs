@@ -562,11 +562,13 @@ fn uniform_need_stays_near_the_fixed_n_cost() {
 fn step_size_is_chosen_from_the_tolerance_and_time_scale() {
     // Kepler (period 2π), tol = 1e-8, horizon 100, pilots at h = 2π/2^j over one period.
     // Measured: chosen h = 0.787 (e = 0.6) and 0.196 (e = 0.9). Full runs at every pilot's
-    // h: e = 0.6 costs 26 280 force evaluations at the chosen h against 29 080–37 788 at the
-    // others; e = 0.9 costs 65 436 against 79 380–109 132 at the others meeting tol (larger
-    // steps miss it by 25× up to 8e7×). The pilots cost 11 248 and 33 072 evaluations (0.43
-    // and 0.51 of the run). Asserted: the chosen h's full run meets 2.2 tol and costs at most
-    // 1.1× the cheapest full run at a pilot's h that meets 2.2 tol.
+    // h: e = 0.6 costs 25 784 force evaluations at the chosen h against 28 576–38 200 at the
+    // others; e = 0.9 costs 58 040 (0.69 tol) against 111 984 at h = 0.049, the only other
+    // meeting 2.2 tol (larger steps miss it by 25× up to 8e7×; h = 0.098, 1 019 steps, reaches
+    // 3.2 tol: over thousands of steps the phase error grows faster than the sum of the
+    // per-step budgets). The pilots cost 11 272 and 33 144 evaluations (0.44 and 0.57 of the
+    // run). Asserted: the chosen h's full run meets 2.2 tol and costs at most 1.1× the
+    // cheapest full run at a pilot's h that meets 2.2 tol.
     use galerkin_vi::adaptive::choose_step;
     let kepler = Kepler::new(1.0).unwrap();
     let horizon = 100.0;
