@@ -638,6 +638,27 @@ fn scene_files_choose_h_from_tol() {
     ));
 }
 
+/// 100-step tolerance-driven runs (Chebyshev) with and without following the swings of the
+/// need.
+fn with_and_without_swings<L: Lagrangian>(
+    lag: &L,
+    tol: f64,
+    h: f64,
+    q0: &[f64],
+    p0: &[f64],
+) -> (
+    galerkin_vi::adaptive::AdaptiveRun,
+    galerkin_vi::adaptive::AdaptiveRun,
+) {
+    let on = AdaptiveOptions::new(tol, BasisKind::Chebyshev, QuadratureKind::GaussLegendre, h);
+    let off = AdaptiveOptions {
+        follow_swings: false,
+        ..on.clone()
+    };
+    let run = |o: &AdaptiveOptions| integrate_adaptive(lag, o, 0.0, q0, p0, 100).unwrap();
+    (run(&on), run(&off))
+}
+
 #[test]
 fn following_swings_cuts_the_cost_only_where_the_need_swings() {
     // Kepler e = 0.6 at the scene's h = 2 (Chebyshev, three steps per orbit): the steps need
@@ -651,18 +672,7 @@ fn following_swings_cuts_the_cost_only_where_the_need_swings() {
     let (q0, p0) = kepler_state(0.6);
     let exact = kepler.exact_solution(0.0, &q0, &p0).unwrap().unwrap();
     for tol in [1e-6, 1e-8] {
-        let on = AdaptiveOptions::new(
-            tol,
-            BasisKind::Chebyshev,
-            QuadratureKind::GaussLegendre,
-            2.0,
-        );
-        let off = AdaptiveOptions {
-            follow_swings: false,
-            ..on.clone()
-        };
-        let a = integrate_adaptive(&kepler, &on, 0.0, &q0, &p0, 100).unwrap();
-        let b = integrate_adaptive(&kepler, &off, 0.0, &q0, &p0, 100).unwrap();
+        let (a, b) = with_and_without_swings(&kepler, tol, 2.0, &q0, &p0);
         let (ea, eb) = (
             max_error_kepler(&a.trajectory, &exact),
             max_error_kepler(&b.trajectory, &exact),
@@ -676,18 +686,7 @@ fn following_swings_cuts_the_cost_only_where_the_need_swings() {
     }
     let sys = HarmonicOscillator::new(1.0, 1.0).unwrap();
     for tol in [1e-6, 1e-9] {
-        let on = AdaptiveOptions::new(
-            tol,
-            BasisKind::Chebyshev,
-            QuadratureKind::GaussLegendre,
-            20.0,
-        );
-        let off = AdaptiveOptions {
-            follow_swings: false,
-            ..on.clone()
-        };
-        let a = integrate_adaptive(&sys, &on, 0.0, &[1.0], &[0.0], 100).unwrap();
-        let b = integrate_adaptive(&sys, &off, 0.0, &[1.0], &[0.0], 100).unwrap();
+        let (a, b) = with_and_without_swings(&sys, tol, 20.0, &[1.0], &[0.0]);
         assert_eq!(a.trajectory.step_n, b.trajectory.step_n);
         assert_eq!(a.gradient_evaluations, b.gradient_evaluations);
     }
