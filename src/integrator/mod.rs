@@ -392,9 +392,12 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
     /// coefficients of its Galerkin curve (two, because odd and even modes alternate).
     ///
     /// Allocation-free (it is evaluated for every solve of a tolerance-driven run); NaN when
-    /// `coeffs` does not hold n×`dim` values.
+    /// `coeffs` does not hold n×`dim` values (`dim` ≥ 1).
     pub fn modal_indicator(&self, coeffs: &[f64], dim: usize) -> f64 {
         let n = self.tables.n;
+        if dim == 0 || coeffs.len() != n * dim {
+            return f64::NAN;
+        }
         (n.saturating_sub(2)..n)
             .map(|j| self.chebyshev_mode_size(coeffs, dim, j))
             .fold(0.0f64, f64::max)
@@ -417,11 +420,14 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
     /// let a = gvi.chebyshev_coefficients(ws.coefficients(), 2);
     /// let size = gvi.chebyshev_mode_size(ws.coefficients(), 2, 5);
     /// assert_eq!(size, a[10].abs().max(a[11].abs()));
+    /// // Bad input gives NaN, not a panic: no mode 8 at n = 8, or a wrong dimension.
+    /// assert!(gvi.chebyshev_mode_size(ws.coefficients(), 2, 8).is_nan());
+    /// assert!(gvi.modal_indicator(ws.coefficients(), 3).is_nan());
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
     pub fn chebyshev_mode_size(&self, coeffs: &[f64], dim: usize, j: usize) -> f64 {
         let n = self.tables.n;
-        if j >= n || coeffs.len() != n * dim {
+        if j >= n || dim == 0 || coeffs.len() != n * dim {
             return f64::NAN;
         }
         let row = &self.tables.chebyshev[j * n..(j + 1) * n];
