@@ -80,12 +80,14 @@
 //!   costs 1.21–1.33× (test `following_swings_cuts_the_cost_only_where_the_need_swings`).
 //!
 //!   **Long runs.** The budget per step is tol/steps, which bounds the sum of the local
-//!   errors; on an eccentric orbit over thousands of steps the phase error grows faster than
-//!   that sum (a local energy error shifts the period, and the shift accumulates): Kepler
-//!   e = 0.9, tol = 1e-8, T = 100 reaches 0.69 tol with 509 steps but 3.2 tol with 1 019 steps
-//!   (1.8 tol with 2 037; 13 tol without following swings). The per-step budget does not
-//!   model this growth; the tolerance is met within the stated 2.2× at the 100–500 steps of the
-//!   studies and tests.
+//!   errors, not their propagation: on an eccentric orbit a local error becomes an energy
+//!   error, the energy error a period error, and the period error a phase error that grows
+//!   with every orbit. Kepler e = 0.9, tol = 1e-8, T = 100 (16 orbits) with 1 019 steps: every
+//!   step's true one-step error is within 0.6 of its budget and their sum is 0.01 tol, but the
+//!   global error is 3.2 tol (near periapsis, r = 0.1, a position error δ moves the energy by
+//!   ≈ δ·μ/r² = 100 δ). With 509 steps 0.69 tol, with 2 037 steps 1.8 tol (13 tol without
+//!   following swings). The per-step budget does not model this propagation; the tolerance is
+//!   met within the stated 2.2× at the 100–500 steps of the studies and tests.
 //! * **Indicator**: the indicator alone, with a fixed relation error ≈ indicator^α
 //!   ([`INDICATOR_EXPONENT`], calibrated on Kepler e = 0.6). One solve per step; on e = 0.6
 //!   achieved/tol 0.7–4.4 at 0.77–0.86× the cost of the cheapest fixed n, but on e = 0.9
