@@ -60,7 +60,7 @@ pub mod prelude {
     pub use crate::baselines::{OneStepMethod, Rk4, StormerVerlet};
     pub use crate::basis::{AnyBasis, Basis, BasisKind, ChebyshevLagrange};
     pub use crate::geometry::{MomentumMap, Rotation, Translation, symplecticity_defect};
-    pub use crate::integrator::{GalerkinIntegrator, InitialGuess, NewtonOptions};
+    pub use crate::integrator::{GalerkinIntegrator, InitialGuess, NewtonOptions, StageSolver};
     pub use crate::lagrangian::{Lagrangian, Mechanical};
     pub use crate::quadrature::{GaussLegendre, Quadrature, QuadratureKind, QuadratureRule};
     pub use crate::systems::{HarmonicOscillator, Kepler, NBody, Pendulum, System};

@@ -496,3 +496,94 @@ mod tests {
         assert!(reciprocal_condition(&[1.0, 2.0, 2.0, 4.0], 2) < 1e-15);
     }
 }
+
+/// Eigen-decomposition of a symmetric n×n matrix by cyclic Jacobi rotations, in place and
+/// without allocation: on return `a`'s diagonal holds the eigenvalues (copied into
+/// `values`) and the columns of `vectors` (row-major n×n) the orthonormal eigenvectors,
+/// A = V diag(λ) Vᵀ. Jacobi is slower than QR for large n but accurate to the last bits for
+/// the small matrices of a step (the frozen force Jacobian, D×D) and needs no workspace.
+/// Returns the sweeps taken (at most 50).
+pub fn symmetric_eigen(a: &mut [f64], n: usize, values: &mut [f64], vectors: &mut [f64]) -> usize {
+    vectors[..n * n].iter_mut().for_each(|x| *x = 0.0);
+    for i in 0..n {
+        vectors[i * n + i] = 1.0;
+    }
+    let mut sweeps = 0;
+    for sweep in 0..50 {
+        sweeps = sweep + 1;
+        let mut off = 0.0f64;
+        let mut diag = 0.0f64;
+        for p in 0..n {
+            diag = diag.max(a[p * n + p].abs());
+            for q in p + 1..n {
+                off = off.max(a[p * n + q].abs());
+            }
+        }
+        if off <= f64::EPSILON * 1e-3 * diag || off == 0.0 || !off.is_finite() {
+            break;
+        }
+        for p in 0..n {
+            for q in p + 1..n {
+                let apq = a[p * n + q];
+                if apq == 0.0 {
+                    continue;
+                }
+                let (app, aqq) = (a[p * n + p], a[q * n + q]);
+                let theta = (aqq - app) / (2.0 * apq);
+                let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
+                let t = if theta == 0.0 { 1.0 } else { t };
+                let c = 1.0 / (t * t + 1.0).sqrt();
+                let s = t * c;
+                // A ← Jᵀ A J with the rotation in the (p, q) plane.
+                for k in 0..n {
+                    let (akp, akq) = (a[k * n + p], a[k * n + q]);
+                    a[k * n + p] = c * akp - s * akq;
+                    a[k * n + q] = s * akp + c * akq;
+                }
+                for k in 0..n {
+                    let (apk, aqk) = (a[p * n + k], a[q * n + k]);
+                    a[p * n + k] = c * apk - s * aqk;
+                    a[q * n + k] = s * apk + c * aqk;
+                }
+                for k in 0..n {
+                    let (vkp, vkq) = (vectors[k * n + p], vectors[k * n + q]);
+                    vectors[k * n + p] = c * vkp - s * vkq;
+                    vectors[k * n + q] = s * vkp + c * vkq;
+                }
+            }
+        }
+    }
+    for i in 0..n {
+        values[i] = a[i * n + i];
+    }
+    sweeps
+}
+
+#[cfg(test)]
+mod eigen_tests {
+    use super::symmetric_eigen;
+
+    #[test]
+    fn jacobi_reconstructs_a_symmetric_matrix() {
+        let n = 5;
+        let mut a = vec![0.0; n * n];
+        for i in 0..n {
+            for j in 0..n {
+                a[i * n + j] = 1.0 / (1.0 + (i + j) as f64) + if i == j { (i as f64) - 2.0 } else { 0.0 };
+            }
+        }
+        let orig = a.clone();
+        let (mut w, mut v) = (vec![0.0; n], vec![0.0; n * n]);
+        symmetric_eigen(&mut a, n, &mut w, &mut v);
+        let mut err = 0.0f64;
+        for i in 0..n {
+            for j in 0..n {
+                let s: f64 = (0..n).map(|k| v[i * n + k] * w[k] * v[j * n + k]).sum();
+                err = err.max((s - orig[i * n + j]).abs());
+                let o: f64 = (0..n).map(|k| v[k * n + i] * v[k * n + j]).sum();
+                err = err.max((o - if i == j { 1.0 } else { 0.0 }).abs());
+            }
+        }
+        assert!(err < 1e-14, "{err}");
+    }
+}

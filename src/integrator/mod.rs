@@ -27,12 +27,16 @@
 
 mod dd;
 mod guess;
+mod kronecker;
+mod krylov;
 mod newton;
+mod solver;
 mod stage;
 mod tangent;
 mod workspace;
 
 pub use newton::{DiscreteLagrangian, InitialGuess, NewtonOptions, StepFailure, StepStats};
+pub use solver::StageSolver;
 pub use tangent::StepJacobian;
 pub use workspace::Workspace;
 
@@ -94,6 +98,9 @@ pub(crate) struct Tables {
     /// Chebyshev coefficients of the Galerkin curve from its basis coefficients (n×n):
     /// a = C·Q, with q(τ) ≈ Σ_j a_j T_j(2τ − 1) (exact for polynomial bases).
     pub chebyshev: Vec<f64>,
+    /// The Schur form of the stage matrices for the Kronecker solver (`None` when it could
+    /// not be computed; the exact solver is then used).
+    pub kron: Option<kronecker::KroneckerTables>,
 }
 
 impl GalerkinIntegrator<ChebyshevLagrange, GaussLegendre> {
@@ -546,7 +553,7 @@ impl Tables {
                 reason: "basis tables are not finite at this size".into(),
             });
         }
-        Ok(Tables {
+        let mut tables = Tables {
             n,
             m,
             phi,
@@ -559,7 +566,10 @@ impl Tables {
             extrapolate,
             chebyshev: chebyshev_transform(basis, n),
             fit,
-        })
+            kron: None,
+        };
+        tables.kron = kronecker::KroneckerTables::build(&tables);
+        Ok(tables)
     }
 }
 

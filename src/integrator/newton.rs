@@ -3,6 +3,7 @@
 //! their Jacobian are in `stage`, the initial guesses in `guess`.
 
 use super::dd::{dd_add, two_sum};
+use super::solver::StageSolver;
 use super::stage::Mode;
 use super::{GalerkinIntegrator, Workspace};
 use crate::basis::Basis;
@@ -87,6 +88,10 @@ pub struct NewtonOptions {
     /// n = 24).
     #[serde(default = "default_true")]
     pub exact_kinetic: bool,
+    /// How the linear systems of the iteration are solved ([`StageSolver`]): the dense exact
+    /// Jacobian, or the Kronecker-structured frozen-Hessian Jacobian.
+    #[serde(default)]
+    pub solver: StageSolver,
 }
 
 fn default_true() -> bool {
@@ -106,6 +111,7 @@ impl Default for NewtonOptions {
             reuse_across_steps: false,
             exact_kinetic: true,
             compensated: true,
+            solver: StageSolver::Auto,
         }
     }
 }
@@ -123,11 +129,34 @@ pub struct StepStats {
     pub gradient_evaluations: usize,
     /// Evaluations of second derivatives, per quadrature point.
     pub hessian_evaluations: usize,
-    /// LU factorisations of the Newton matrix.
+    /// LU factorisations of the Newton matrix (for the Kronecker solver: freezes of the
+    /// Hessian, each factorising the n − 1 small diagonal blocks).
     pub factorizations: usize,
+    /// Iterations of the structured (Kronecker) solver that stalled and were continued with
+    /// the exact Jacobian.
+    #[serde(default)]
+    pub fallbacks: usize,
+    /// Krylov (GMRES) iterations of the Newton–Krylov solver.
+    #[serde(default)]
+    pub inner_iterations: usize,
     /// The initial guess that was used.
     pub guess: InitialGuess,
 }
+
+/// The linear solve inside one Newton iteration.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Linear {
+    /// Dense LU of the exact Jacobian.
+    Dense,
+    /// The Kronecker solve of the frozen-Hessian Jacobian.
+    Frozen,
+    /// GMRES on the exact Jacobian, preconditioned by the Kronecker solve.
+    Krylov,
+}
+
+/// Contraction per iteration above which the Kronecker solver's frozen Hessian is refrozen
+/// (once) and then abandoned for exact Newton within the step.
+const KRONECKER_STALL: f64 = 0.5;
 
 pub(super) fn max_abs(x: &[f64]) -> f64 {
     x.iter().fold(0.0f64, |m, v| m.max(v.abs()))
@@ -167,6 +196,23 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let reuse = opts.reuse_jacobian && mode == Mode::InitialValue;
         let mut have_lu = reuse && opts.reuse_across_steps && ws.lu_valid && ws.lu.dim() == size;
         let mut fresh = false;
+        // The structured solvers (initial-value steps of separable Lagrangians): the
+        // Kronecker solver freezes the Hessian per step (refrozen once if the iteration
+        // contracts slowly); Newton–Krylov freezes it for its preconditioner only. Either
+        // continues with exact dense Newton within the step if it stalls.
+        let structured = mode == Mode::InitialValue
+            && ws.kron.is_some()
+            && ws.krylov.is_some()
+            && self.tables().kron.is_some();
+        let mut linear = match (structured, self.resolve_solver(ws)) {
+            (true, StageSolver::Kronecker) => Linear::Frozen,
+            (true, StageSolver::NewtonKrylov) => Linear::Krylov,
+            _ => Linear::Dense,
+        };
+        let mut refrozen = false;
+        if linear != Linear::Dense {
+            have_lu = false;
+        }
         let mut it = 0;
         loop {
             // The initial guess's residual may already be in the workspace (same point).
@@ -190,6 +236,24 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 ws.lu_valid = false;
                 return Err(fail(res, it, "iteration limit reached"));
             }
+            if linear == Linear::Krylov && have_lu {
+                // Exact node Hessians at the current iterate for the products J x.
+                stats.hessian_evaluations += self.node_force_jacobians(lag, ws);
+            }
+            if !have_lu && linear != Linear::Dense {
+                stats.factorizations += 1;
+                match self.freeze_hessian(lag, ws) {
+                    Ok(evals) => {
+                        stats.hessian_evaluations += evals;
+                        have_lu = true;
+                        fresh = true;
+                    }
+                    Err(_) => {
+                        linear = Linear::Dense;
+                        stats.fallbacks += 1;
+                    }
+                }
+            }
             if !have_lu {
                 stats.hessian_evaluations += self.jacobian(lag, ws, mode);
                 if ws.lu.dim() != size {
@@ -204,8 +268,31 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 have_lu = true;
                 fresh = true;
             }
-            ws.lu
-                .solve_in_place(&mut ws.rhs[..size], &mut ws.scratch[..size]);
+            let h = self.step_size();
+            let kt = self.tables().kron.as_ref();
+            match (linear, kt) {
+                (Linear::Frozen, Some(kt)) => {
+                    if let Some(kw) = ws.kron.as_mut() {
+                        kw.solve(kt, h, &mut ws.rhs[..size]);
+                    }
+                }
+                (Linear::Krylov, Some(kt)) => {
+                    let d = ws.d;
+                    if let Some((kw, kv, mass, hall, rhs)) = ws.krylov_parts() {
+                        let op = super::krylov::Operator {
+                            t: self.tables(),
+                            h,
+                            d,
+                            mass,
+                            hall,
+                        };
+                        stats.inner_iterations += super::krylov::gmres(&op, kt, kw, kv, rhs);
+                    }
+                }
+                _ => ws
+                    .lu
+                    .solve_in_place(&mut ws.rhs[..size], &mut ws.scratch[..size]),
+            }
             it += 1;
             stats.iterations += 1;
             let delta = max_abs(&ws.rhs[..size]);
@@ -245,9 +332,39 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 stats.residual = self.residual(ws, mode, p_k);
                 return Ok(());
             }
+            let growing = delta > previous_increment;
+            match linear {
+                Linear::Frozen => {
+                    // A frozen Hessian contracts at a rate set by how much the force Jacobian
+                    // varies over the step: keep it while it contracts, refreeze once at the
+                    // current iterate when it does not, then continue with exact Newton.
+                    let stalled = growing || (theta.is_finite() && theta > KRONECKER_STALL);
+                    if stalled {
+                        have_lu = false;
+                        if refrozen {
+                            linear = Linear::Dense;
+                            stats.fallbacks += 1;
+                        }
+                        refrozen = true;
+                    }
+                    previous_increment = delta;
+                    continue;
+                }
+                Linear::Krylov => {
+                    // Exact Newton directions (to the forcing term): an iteration that grows
+                    // after the first has left the basin the dense solver would keep.
+                    if growing && it >= 3 {
+                        have_lu = false;
+                        linear = Linear::Dense;
+                        stats.fallbacks += 1;
+                    }
+                    previous_increment = delta;
+                    continue;
+                }
+                Linear::Dense => {}
+            }
             // A reused (stale) Jacobian that does not contract quickly is replaced.
             let slow = theta.is_finite() && theta > opts.reuse_contraction;
-            let growing = delta > previous_increment;
             if !reuse || slow || growing || (!fresh && it >= 2 && !theta.is_finite()) {
                 have_lu = false;
             }

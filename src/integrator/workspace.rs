@@ -97,6 +97,10 @@ pub struct Workspace {
     pub(crate) small: Lu,
     pub(crate) small_rhs: Vec<f64>,
     pub(crate) small_scratch: Vec<f64>,
+    /// Buffers of the Kronecker solver (separable Lagrangians whose tables have a Schur form).
+    pub(crate) kron: Option<super::kronecker::KroneckerWork>,
+    /// Buffers of the Newton–Krylov solver (present with `kron`).
+    pub(crate) krylov: Option<super::krylov::KrylovWork>,
 }
 
 /// The constant kinetic part of a separable Lagrangian.
@@ -181,6 +185,10 @@ impl Workspace {
                 })
             }
         };
+        let kron = match (&t.kron, &separable) {
+            (Some(kt), Some(sep)) => super::kronecker::KroneckerWork::new(kt, d, &sep.mass),
+            _ => None,
+        };
         Ok(Workspace {
             d,
             n,
@@ -237,6 +245,10 @@ impl Workspace {
             small: Lu::with_capacity(d),
             small_rhs: vec![0.0; d],
             small_scratch: vec![0.0; d],
+            krylov: kron
+                .is_some()
+                .then(|| super::krylov::KrylovWork::new(n - 1, m, d)),
+            kron,
         })
     }
 
