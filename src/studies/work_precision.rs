@@ -210,7 +210,7 @@ fn sample_grid(scene: &Scene, config: &WorkPrecisionConfig) -> Result<(f64, usiz
         });
     }
     let samples = (horizon / dt).round().max(1.0);
-    if !(samples <= MAX_SAMPLES) {
+    if samples.is_nan() || samples > MAX_SAMPLES {
         return Err(GviError::CostTooHigh {
             what: format!("the number of samples (T = {horizon:e} every {dt})"),
             estimate: samples,
