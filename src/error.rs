@@ -134,6 +134,38 @@ pub enum GviError {
         /// The underlying error.
         source: std::io::Error,
     },
+    /// An external work–precision file (`gvi work-precision --external`) could not be read.
+    #[error("cannot read external work-precision file {path}: {source}")]
+    ExternalFile {
+        /// The file.
+        path: PathBuf,
+        /// The underlying error.
+        source: std::io::Error,
+    },
+    /// An external work–precision file is malformed: a wrong or missing column, a malformed or
+    /// non-finite number, a row with the wrong number of fields.
+    #[error("{path}:{line}: {reason}")]
+    ExternalCsv {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line number (1 is the header line).
+        line: usize,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A study would take an absurd time or memory; refused before any work is done.
+    #[error(
+        "refusing the sweep: {what} is estimated at {estimate:.3e}, above the limit \
+         {limit:.0e} (shorten --horizon or the sweep)"
+    )]
+    CostTooHigh {
+        /// What was estimated (total integration steps, samples).
+        what: String,
+        /// The estimate.
+        estimate: f64,
+        /// The documented limit.
+        limit: f64,
+    },
     /// Serialisation failed.
     #[error("serialisation error: {0}")]
     Serialize(String),

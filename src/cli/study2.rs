@@ -5,7 +5,10 @@ use clap::Args;
 use galerkin_vi::GviError;
 use galerkin_vi::studies::compare_refinement::{CompareConfig, compare_refinement};
 use galerkin_vi::studies::stability::{Class, StabilityConfig, stability};
-use galerkin_vi::studies::work_precision::{WorkPrecisionConfig, work_precision};
+use galerkin_vi::studies::work_precision::{
+    WorkPrecisionConfig, read_external_csv, reference_csv, work_precision,
+};
+use galerkin_vi::studies::write_file;
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -28,6 +31,16 @@ pub struct WorkPrecisionArgs {
     /// Output directory (default ./out/work-precision).
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Merge the rows of an external peer's CSV (the study's schema, e.g. written by
+    /// scripts/rebound/work_precision.py) into the table, Pareto front, fastest table and
+    /// chart, marked external. Repeatable. Every file is checked before the sweep runs; a bad
+    /// file is an error naming the file and line, and nothing is written.
+    #[arg(long, value_name = "FILE.csv")]
+    pub external: Vec<PathBuf>,
+    /// Write the reference positions at the study's sample times (k,t,q0,q1,…; the exact
+    /// solution or the study's reference run) to FILE and exit without running the sweep.
+    #[arg(long, value_name = "FILE.csv")]
+    pub write_reference: Option<PathBuf>,
     #[command(flatten)]
     pub run: RunArgs,
 }
@@ -45,7 +58,30 @@ pub fn run_work_precision(args: WorkPrecisionArgs) -> Result<(), GviError> {
         config.horizon = args.horizon;
     }
     config.repeats = args.repeats.unwrap_or(if args.long { 1 } else { 5 }).max(1);
-    let study = work_precision(&scene, &config)?;
+    if let Some(path) = &args.write_reference {
+        let reference = reference_csv(&scene, &config)?;
+        write_file(path, &reference.csv())?;
+        eprintln!(
+            "{}: {} samples of the {} at t = {} … {}\n  wrote {}",
+            reference.scene,
+            reference.t.len(),
+            reference.reference,
+            reference.t.first().copied().unwrap_or(f64::NAN),
+            reference.t.last().copied().unwrap_or(f64::NAN),
+            path.display()
+        );
+        return Ok(());
+    }
+    // Check every external file before the sweep: a bad one writes nothing.
+    let external = args
+        .external
+        .iter()
+        .map(|path| read_external_csv(path).map(|points| (path, points)))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut study = work_precision(&scene, &config)?;
+    for (path, points) in external {
+        study.merge_external(&path.display().to_string(), points);
+    }
     let dir = args
         .out
         .unwrap_or_else(|| PathBuf::from("out/work-precision"));

@@ -98,6 +98,30 @@ impl Reference {
         Ok(Reference::Numerical(Box::new(traj)))
     }
 
+    /// The integration steps [`Reference::for_system`] would take (0 for an exact solution),
+    /// computed without running it, so that absurd horizons can be refused up front.
+    pub fn estimated_steps<S: System>(
+        system: &S,
+        initial: &InitialState,
+        h: f64,
+        horizon: f64,
+    ) -> f64 {
+        if matches!(
+            system.exact_solution(initial.t0, &initial.q, &initial.p),
+            Ok(Some(_))
+        ) {
+            return 0.0;
+        }
+        if let (Some(tau), true) = (
+            system.shortest_time_scale(&initial.q, &initial.p),
+            system.dim() > 4,
+        ) {
+            let per = 16.0 * (h * 256.0 / tau / 16.0).ceil().clamp(1.0, 10_000.0);
+            return (horizon / h).ceil().max(1.0) * per;
+        }
+        (horizon / (h / 4.0).min(1.0)).ceil().max(1.0)
+    }
+
     /// Short description for reports.
     pub fn describe(&self) -> &'static str {
         match self {

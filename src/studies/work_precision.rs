@@ -9,6 +9,17 @@
 //! process (building the method included), run one after another (never in parallel, so that
 //! runs do not compete for cores). Timing is measured, never asserted.
 //!
+//! External peers (e.g. REBOUND's IAS15 and WHFast, `scripts/rebound/work_precision.py`) write
+//! rows in the same CSV schema; [`read_external_csv`] reads them (typed errors naming the file
+//! and line) and [`WorkPrecisionStudy::merge_external`] merges them into the table, the Pareto
+//! front, the fastest table and the chart, marked `external`. [`reference_csv`] writes the
+//! reference positions at the sample times for such scripts.
+//!
+//! A sweep whose predicted cost is absurd is refused up front ([`GviError::CostTooHigh`]):
+//! more than [`MAX_SAMPLES`] samples, or more than [`MAX_TOTAL_STEPS`] integration steps in
+//! total (samples × steps per sample interval, summed over the configurations, times the
+//! repeats, plus the reference run).
+//!
 //! ```
 //! use galerkin_vi::scene::Scene;
 //! use galerkin_vi::studies::work_precision::{work_precision, WorkPrecisionConfig};
@@ -131,6 +142,8 @@ pub struct WorkPoint {
     pub failure: Option<String>,
     /// On the Pareto front (no other point is both faster and more accurate).
     pub pareto: bool,
+    /// Read from an external file (`--external`), not run by this study.
+    pub external: bool,
 }
 
 /// The fastest configuration of one method reaching one accuracy.
@@ -159,6 +172,8 @@ pub struct WorkPrecisionStudy {
     pub points: Vec<WorkPoint>,
     /// Fastest configuration per method at 10⁻⁶, 10⁻⁹, 10⁻¹².
     pub fastest: Vec<Fastest>,
+    /// The external files merged into `points` (see [`WorkPrecisionStudy::merge_external`]).
+    pub external_files: Vec<String>,
 }
 
 /// The targets of [`WorkPrecisionStudy::fastest`].
@@ -176,11 +191,14 @@ pub fn work_precision(scene: &Scene, config: &WorkPrecisionConfig) -> Result<Wor
     visit_system(&scene.system, Visit(scene, config))
 }
 
-fn study_system<S: System>(
-    system: &S,
-    scene: &Scene,
-    config: &WorkPrecisionConfig,
-) -> Result<WorkPrecisionStudy> {
+/// The study's largest number of samples (the reference positions are held in memory).
+pub const MAX_SAMPLES: f64 = 1e8;
+/// The study's largest predicted number of integration steps (all configurations, repeats
+/// and the reference run together).
+pub const MAX_TOTAL_STEPS: f64 = 1e9;
+
+/// Validate the horizon and return (Δ, samples), refusing more than [`MAX_SAMPLES`] samples.
+fn sample_grid(scene: &Scene, config: &WorkPrecisionConfig) -> Result<(f64, usize)> {
     let dt = scene.method.h;
     let horizon = config
         .horizon
@@ -191,11 +209,110 @@ fn study_system<S: System>(
             reason: format!("{horizon}: must be finite and at least the scene's h = {dt}"),
         });
     }
-    let samples = (horizon / dt).round().max(1.0) as usize;
+    let samples = (horizon / dt).round().max(1.0);
+    if samples.is_nan() || samples > MAX_SAMPLES {
+        return Err(GviError::CostTooHigh {
+            what: format!("the number of samples (T = {horizon:e} every {dt})"),
+            estimate: samples,
+            limit: MAX_SAMPLES,
+        });
+    }
+    Ok((dt, samples as usize))
+}
+
+/// The reference positions at t_k = t₀ + kΔ, k = 0 … samples.
+fn reference_positions<S: System>(
+    system: &S,
+    scene: &Scene,
+    dt: f64,
+    samples: usize,
+) -> Result<(Reference, Vec<Vec<f64>>)> {
     let reference = Reference::for_system(system, &scene.initial, dt, samples as f64 * dt)?;
     let exact: Vec<Vec<f64>> = (0..=samples)
         .map(|k| reference.position(scene.initial.t0 + k as f64 * dt))
         .collect::<Result<_>>()?;
+    Ok((reference, exact))
+}
+
+/// The reference positions at the study's sample times, as written by
+/// `gvi work-precision SCENE --write-reference FILE` for external peers.
+#[derive(Debug, Clone, Serialize)]
+pub struct ReferenceSamples {
+    /// Scene name.
+    pub scene: String,
+    /// What the positions are (exact solution or a reference run).
+    pub reference: String,
+    /// Sample times t_k = t₀ + kΔ.
+    pub t: Vec<f64>,
+    /// Positions at t_k (the system's coordinates; barycentric for N-body scenes).
+    pub q: Vec<Vec<f64>>,
+}
+
+impl ReferenceSamples {
+    /// CSV: a header `k,t,q0,q1,…`, then one line per sample; numbers in Rust's shortest
+    /// round-trip form.
+    pub fn csv(&self) -> String {
+        let dim = self.q.first().map_or(0, Vec::len);
+        let mut out = String::from("k,t");
+        for i in 0..dim {
+            out.push_str(&format!(",q{i}"));
+        }
+        out.push('\n');
+        for (k, (t, q)) in self.t.iter().zip(&self.q).enumerate() {
+            out.push_str(&format!("{k},{t:e}"));
+            for x in q {
+                out.push_str(&format!(",{x:e}"));
+            }
+            out.push('\n');
+        }
+        out
+    }
+}
+
+/// The study's reference positions at its sample times (the same grid, horizon checks and
+/// reference as [`work_precision`]), for external peers to measure against.
+pub fn reference_csv(scene: &Scene, config: &WorkPrecisionConfig) -> Result<ReferenceSamples> {
+    struct Visit<'a>(&'a Scene, &'a WorkPrecisionConfig);
+    impl SystemVisitor for Visit<'_> {
+        type Output = ReferenceSamples;
+        fn visit<S: System + Sync>(self, system: &S) -> Result<ReferenceSamples> {
+            let (dt, samples) = sample_grid(self.0, self.1)?;
+            let cost = Reference::estimated_steps(system, &self.0.initial, dt, samples as f64 * dt);
+            refuse_steps(cost)?;
+            let (reference, q) = reference_positions(system, self.0, dt, samples)?;
+            Ok(ReferenceSamples {
+                scene: self.0.name.clone(),
+                reference: reference.describe().into(),
+                t: (0..=samples)
+                    .map(|k| self.0.initial.t0 + k as f64 * dt)
+                    .collect(),
+                q,
+            })
+        }
+    }
+    visit_system(&scene.system, Visit(scene, config))
+}
+
+fn refuse_steps(estimate: f64) -> Result<()> {
+    if estimate <= MAX_TOTAL_STEPS {
+        Ok(())
+    } else {
+        Err(GviError::CostTooHigh {
+            what: "the total number of integration steps (samples × steps per sample interval \
+                   over all configurations, times the repeats, plus the reference run)"
+                .into(),
+            estimate,
+            limit: MAX_TOTAL_STEPS,
+        })
+    }
+}
+
+fn study_system<S: System>(
+    system: &S,
+    scene: &Scene,
+    config: &WorkPrecisionConfig,
+) -> Result<WorkPrecisionStudy> {
+    let (dt, samples) = sample_grid(scene, config)?;
     // (peer, divisor) in sweep order; fixed-step families stop refining once converged.
     let mut plan: Vec<Vec<(Peer, usize)>> = Vec::new();
     for &basis in &config.bases {
@@ -231,6 +348,16 @@ fn study_system<S: System>(
                 .collect(),
         );
     }
+    // Predicted cost: every run takes samples · m steps (DOP853 at least one per sample).
+    let steps: f64 = plan
+        .iter()
+        .flatten()
+        .map(|&(_, m)| samples as f64 * m as f64)
+        .sum::<f64>()
+        * config.repeats.max(1) as f64
+        + Reference::estimated_steps(system, &scene.initial, dt, samples as f64 * dt);
+    refuse_steps(steps)?;
+    let (reference, exact) = reference_positions(system, scene, dt, samples)?;
     let total: usize = plan.iter().map(Vec::len).sum();
     let pb = crate::progress::bar(total, "work-precision");
     let mut points = Vec::with_capacity(total);
@@ -263,6 +390,7 @@ fn study_system<S: System>(
         reference: reference.describe().into(),
         points,
         fastest,
+        external_files: Vec::new(),
     })
 }
 
@@ -294,6 +422,7 @@ fn time_point<S: System>(
         force_evaluations: 0,
         failure: None,
         pareto: false,
+        external: false,
     };
     let mut times = Vec::with_capacity(repeats.max(1));
     for _ in 0..repeats.max(1) {
@@ -424,7 +553,10 @@ impl WorkPrecisionStudy {
             if pts.is_empty() {
                 continue;
             }
-            chart.push(if k.starts_with("galerkin") {
+            let external = self.points.iter().any(|p| p.method == k && p.external);
+            chart.push(if external {
+                Series::line_markers(format!("{k} (external)"), pts)
+            } else if k.starts_with("galerkin") {
                 Series::markers(format!("{k} (all n, h)"), pts)
             } else {
                 Series::line_markers(k, pts)
@@ -443,12 +575,12 @@ impl WorkPrecisionStudy {
     /// CSV of every point.
     pub fn csv(&self) -> String {
         let mut out = String::from(
-            "method,parameters,h,n,tolerance,error,seconds,force_evaluations,pareto,failure\n",
+            "method,parameters,h,n,tolerance,error,seconds,force_evaluations,pareto,failure,external\n",
         );
         let opt = |x: Option<f64>| x.map(|v| format!("{v:e}")).unwrap_or_default();
         for p in &self.points {
             out.push_str(&format!(
-                "{},\"{}\",{},{},{},{:e},{:e},{},{},{}\n",
+                "{},\"{}\",{},{},{},{:e},{:e},{},{},{},{}\n",
                 p.method,
                 p.parameters,
                 opt(p.h),
@@ -461,7 +593,8 @@ impl WorkPrecisionStudy {
                 p.failure
                     .as_deref()
                     .map(|f| format!("\"{}\"", f.replace('"', "'")))
-                    .unwrap_or_default()
+                    .unwrap_or_default(),
+                p.external
             ));
         }
         out
@@ -474,14 +607,23 @@ impl WorkPrecisionStudy {
             self.scene, self.horizon, self.reference
         );
         for f in &self.fastest {
+            let method = if self
+                .points
+                .iter()
+                .any(|p| p.method == f.method && p.external)
+            {
+                format!("{} (external)", f.method)
+            } else {
+                f.method.clone()
+            };
             match &f.best {
                 Some((params, s, e)) => out.push_str(&format!(
-                    "| {} | {:.0e} | {params} | {s:.3e} | {e:.2e} |\n",
-                    f.method, f.target
+                    "| {method} | {:.0e} | {params} | {s:.3e} | {e:.2e} |\n",
+                    f.target
                 )),
                 None => out.push_str(&format!(
-                    "| {} | {:.0e} | not reached | | |\n",
-                    f.method, f.target
+                    "| {method} | {:.0e} | not reached | | |\n",
+                    f.target
                 )),
             }
         }
@@ -494,7 +636,26 @@ impl WorkPrecisionStudy {
                 d / g
             ));
         }
+        if !self.external_files.is_empty() {
+            out.push_str(&format!(
+                "\nExternal rows (timed by their own tools, marked \"(external)\"): {}\n",
+                self.external_files.join(", ")
+            ));
+        }
         out
+    }
+
+    /// Merge external rows (from [`read_external_csv`]) into the study: they are marked
+    /// `external`, and the Pareto front and the fastest table are recomputed over all points.
+    /// `source` (the file name) is recorded in [`WorkPrecisionStudy::external_files`].
+    pub fn merge_external(&mut self, source: &str, points: Vec<WorkPoint>) {
+        self.points.extend(points.into_iter().map(|mut p| {
+            p.external = true;
+            p
+        }));
+        self.external_files.push(source.to_string());
+        mark_pareto(&mut self.points);
+        self.fastest = fastest_table(&self.points);
     }
 
     /// Write `work_precision.{csv,json,svg}` and `work_precision.md` into `dir`.
@@ -513,4 +674,212 @@ impl WorkPrecisionStudy {
             .map_err(|e| GviError::Plot(e.to_string()))?;
         Ok(vec![csv, json, md, svg])
     }
+}
+
+/// The columns of the study's CSV that an external file must have (any order); an
+/// `external` column may follow (it is ignored: every row read is external).
+pub const EXTERNAL_COLUMNS: [&str; 10] = [
+    "method",
+    "parameters",
+    "h",
+    "n",
+    "tolerance",
+    "error",
+    "seconds",
+    "force_evaluations",
+    "pareto",
+    "failure",
+];
+
+/// Split one CSV line: fields separated by commas, a field in double quotes may hold commas,
+/// and `""` inside quotes is one quote.
+fn split_csv_line(line: &str) -> std::result::Result<Vec<String>, String> {
+    let mut fields = Vec::new();
+    let mut field = String::new();
+    let mut chars = line.chars().peekable();
+    let mut quoted = false;
+    let mut at_start = true;
+    while let Some(c) = chars.next() {
+        if quoted {
+            if c == '"' {
+                if chars.peek() == Some(&'"') {
+                    field.push('"');
+                    chars.next();
+                } else {
+                    quoted = false;
+                    if !matches!(chars.peek(), None | Some(',')) {
+                        return Err("text after a closing quote".into());
+                    }
+                }
+            } else {
+                field.push(c);
+            }
+        } else if c == ',' {
+            fields.push(std::mem::take(&mut field));
+            at_start = true;
+            continue;
+        } else if c == '"' && at_start {
+            quoted = true;
+        } else if c == '"' {
+            return Err("a quote inside an unquoted field".into());
+        } else {
+            field.push(c);
+        }
+        at_start = false;
+    }
+    if quoted {
+        return Err("unterminated quoted field".into());
+    }
+    fields.push(field);
+    Ok(fields)
+}
+
+/// Read an external work–precision CSV (the study's schema, see [`EXTERNAL_COLUMNS`]): a
+/// header line, then one row per configuration. Blank lines and lines starting with `#`
+/// (provenance comments) are skipped. Every row is marked `external`; its `pareto` value is
+/// parsed but recomputed on merging.
+///
+/// Errors: [`GviError::ExternalFile`] if the file cannot be read; [`GviError::ExternalCsv`]
+/// naming the file and the 1-based line for a missing, unknown or duplicate column, a row with
+/// the wrong number of fields, an empty method, or a malformed number (`h`, `tolerance`,
+/// `seconds` must be finite, `seconds` ≥ 0; `error` must be finite and ≥ 0 unless the row has
+/// a failure; `n` and `force_evaluations` are non-negative integers; `pareto` is `true` or
+/// `false`).
+pub fn read_external_csv(path: &Path) -> Result<Vec<WorkPoint>> {
+    let text = std::fs::read_to_string(path).map_err(|source| GviError::ExternalFile {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let bad = |line: usize, reason: String| GviError::ExternalCsv {
+        path: path.to_path_buf(),
+        line,
+        reason,
+    };
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.trim_end_matches('\r')))
+        .filter(|(_, l)| !l.trim().is_empty() && !l.starts_with('#'));
+    let (header_line, header) = lines
+        .next()
+        .ok_or_else(|| bad(1, "empty file: no header line".into()))?;
+    let names = split_csv_line(header).map_err(|r| bad(header_line, r))?;
+    let mut column = [usize::MAX; 10];
+    for (i, name) in names.iter().enumerate() {
+        let name = name.trim();
+        match EXTERNAL_COLUMNS.iter().position(|c| *c == name) {
+            Some(c) if column[c] != usize::MAX => {
+                return Err(bad(header_line, format!("duplicate column '{name}'")));
+            }
+            Some(c) => column[c] = i,
+            None if name == "external" => {}
+            None => {
+                return Err(bad(
+                    header_line,
+                    format!(
+                        "unknown column '{name}' (expected {})",
+                        EXTERNAL_COLUMNS.join(",")
+                    ),
+                ));
+            }
+        }
+    }
+    if let Some(c) = column.iter().position(|&i| i == usize::MAX) {
+        return Err(bad(
+            header_line,
+            format!(
+                "missing column '{}' (expected {})",
+                EXTERNAL_COLUMNS[c],
+                EXTERNAL_COLUMNS.join(",")
+            ),
+        ));
+    }
+    let mut points = Vec::new();
+    for (line, row) in lines {
+        let fields = split_csv_line(row).map_err(|r| bad(line, r))?;
+        if fields.len() != names.len() {
+            return Err(bad(
+                line,
+                format!("{} fields, the header has {}", fields.len(), names.len()),
+            ));
+        }
+        let get = |c: usize| fields[column[c]].trim();
+        let number = |c: usize| -> Result<Option<f64>> {
+            let v = get(c);
+            if v.is_empty() {
+                return Ok(None);
+            }
+            v.parse::<f64>().map(Some).map_err(|_| {
+                bad(
+                    line,
+                    format!("{}: malformed number '{v}'", EXTERNAL_COLUMNS[c]),
+                )
+            })
+        };
+        let finite = |c: usize, x: Option<f64>| -> Result<Option<f64>> {
+            match x {
+                Some(v) if !v.is_finite() => Err(bad(
+                    line,
+                    format!("{}: non-finite number '{}'", EXTERNAL_COLUMNS[c], get(c)),
+                )),
+                _ => Ok(x),
+            }
+        };
+        let integer = |c: usize| -> Result<Option<usize>> {
+            let v = get(c);
+            if v.is_empty() {
+                return Ok(None);
+            }
+            v.parse::<usize>().map(Some).map_err(|_| {
+                bad(
+                    line,
+                    format!("{}: not a non-negative integer '{v}'", EXTERNAL_COLUMNS[c]),
+                )
+            })
+        };
+        let method = get(0).to_string();
+        if method.is_empty() {
+            return Err(bad(line, "method: empty".into()));
+        }
+        let failure = Some(get(9).to_string()).filter(|f| !f.is_empty());
+        let h = finite(2, number(2)?)?;
+        let tolerance = finite(4, number(4)?)?;
+        let error = number(5)?.ok_or_else(|| bad(line, "error: missing".into()))?;
+        let error = if failure.is_none() {
+            finite(5, Some(error))?.unwrap_or(error)
+        } else {
+            error
+        };
+        if error < 0.0 || error.is_nan() {
+            return Err(bad(line, format!("error: must be ≥ 0, got '{}'", get(5))));
+        }
+        let seconds = finite(6, number(6)?)?.ok_or_else(|| bad(line, "seconds: missing".into()))?;
+        if seconds < 0.0 {
+            return Err(bad(line, format!("seconds: must be ≥ 0, got {seconds}")));
+        }
+        let pareto = match get(8) {
+            "true" => true,
+            "false" | "" => false,
+            v => {
+                return Err(bad(
+                    line,
+                    format!("pareto: expected true or false, got '{v}'"),
+                ));
+            }
+        };
+        points.push(WorkPoint {
+            method,
+            parameters: get(1).to_string(),
+            h,
+            n: integer(3)?,
+            tolerance,
+            error,
+            seconds,
+            force_evaluations: integer(7)?.unwrap_or(0),
+            failure,
+            pareto,
+            external: true,
+        });
+    }
+    Ok(points)
 }
