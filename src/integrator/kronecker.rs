@@ -175,6 +175,8 @@ pub(crate) struct KroneckerWork {
     w: Vec<f64>,
     mu: Vec<f64>,
     v: Vec<f64>,
+    /// Vᵀ, stored so that both transforms are contiguous products.
+    vt: Vec<f64>,
     /// Per row i of T and coordinate r: the inverse of the diagonal block (1×1: entry 0; 2×2:
     /// the four entries of the inverse, stored at the block's first row), 4·k·D.
     inv: Vec<f64>,
@@ -226,6 +228,7 @@ impl KroneckerWork {
             w: vec![0.0; d * d],
             mu: vec![0.0; d],
             v: vec![0.0; d * d],
+            vt: vec![0.0; d * d],
             inv: vec![0.0; 4 * k * d],
             y: vec![0.0; k * d],
             yh: vec![0.0; k * d],
@@ -257,6 +260,11 @@ impl KroneckerWork {
         crate::linalg::symmetric_eigen(&mut self.hhat, d, &mut self.mu, &mut self.w);
         // V = L⁻ᵀ W.
         gemm(d, d, d, 1.0, &self.linv, lt, &self.w, rd, 0.0, &mut self.v, rd);
+        for i in 0..d {
+            for j in 0..d {
+                self.vt[j * d + i] = self.v[i * d + j];
+            }
+        }
         let singular = |i: usize| GviError::InvalidParameter {
             name: "frozen stage Jacobian".into(),
             value: f64::NAN,
@@ -324,12 +332,7 @@ impl KroneckerWork {
             }
         }
         // z = ζ Vᵀ (into y), x = U z.
-        let vt = Strided {
-            offset: 0,
-            row_stride: 1,
-            col_stride: d,
-        };
-        gemm(k, d, d, 1.0, &self.zeta, rd, &self.v, vt, 0.0, &mut self.y, rd);
+        gemm(k, d, d, 1.0, &self.zeta, rd, &self.vt, rd, 0.0, &mut self.y, rd);
         gemm(k, k, d, 1.0, &kt.u, rk, &self.y, rd, 0.0, rhs, rd);
     }
 }
@@ -387,10 +390,12 @@ impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIn
         use super::StageSolver;
         match self.options().solver {
             StageSolver::Auto => {
-                if ws.kron.is_some() && (ws.n - 1) * ws.d > AUTO_STRUCTURED_SIZE {
+                if ws.kron.is_none() || (ws.n - 1) * ws.d <= AUTO_DENSE_SIZE {
+                    StageSolver::Exact
+                } else if ws.frozen_holdoff > 0 {
                     StageSolver::NewtonKrylov
                 } else {
-                    StageSolver::Exact
+                    StageSolver::Kronecker
                 }
             }
             s => s,
@@ -398,5 +403,7 @@ impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIn
     }
 }
 
-/// Newton-system size (n − 1)·D above which `Auto` takes the structured solver.
-const AUTO_STRUCTURED_SIZE: usize = 64;
+/// Newton-system size (n − 1)·D up to which `Auto` takes the dense exact solver (measured on
+/// Kepler, h = 1: exact Newton is the fastest at n = 16, size 30; the frozen-Hessian solver
+/// at n = 32, size 62, and above).
+const AUTO_DENSE_SIZE: usize = 48;

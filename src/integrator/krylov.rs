@@ -70,6 +70,8 @@ pub(crate) struct Operator<'a> {
     pub h: f64,
     pub d: usize,
     pub mass: &'a [f64],
+    /// M's diagonal when M is diagonal (N-body), for an O(D) product.
+    pub mass_diagonal: Option<&'a [f64]>,
     /// Force Jacobians L_qq at the nodes (m × D × D).
     pub hall: &'a [f64],
 }
@@ -83,10 +85,21 @@ impl Operator<'_> {
         let k = n - 1;
         let rd = Strided::rows(0, d);
         // Kinetic part (1/h) K_s (M x).
-        for (xb, mb) in x.chunks_exact(d).zip(mx.chunks_exact_mut(d)) {
-            for r in 0..d {
-                let row = &self.mass[r * d..(r + 1) * d];
-                mb[r] = row.iter().zip(xb).map(|(a, b)| a * b).sum();
+        match self.mass_diagonal {
+            Some(diag) => {
+                for (xb, mb) in x.chunks_exact(d).zip(mx.chunks_exact_mut(d)) {
+                    for ((m, &a), &b) in mb.iter_mut().zip(diag).zip(xb) {
+                        *m = a * b;
+                    }
+                }
+            }
+            None => {
+                for (xb, mb) in x.chunks_exact(d).zip(mx.chunks_exact_mut(d)) {
+                    for r in 0..d {
+                        let row = &self.mass[r * d..(r + 1) * d];
+                        mb[r] = row.iter().zip(xb).map(|(a, b)| a * b).sum();
+                    }
+                }
             }
         }
         let ks = Strided {
@@ -234,14 +247,26 @@ pub(crate) fn gmres(
     steps
 }
 
+/// The workspace parts an [`Operator`] borrows.
+pub(crate) struct Operands<'a> {
+    pub mass: &'a [f64],
+    pub mass_diagonal: Option<&'a [f64]>,
+    pub hall: &'a [f64],
+}
+
 impl Workspace {
     /// The Newton–Krylov buffers, if this workspace has them.
     pub(crate) fn krylov_parts(
         &mut self,
-    ) -> Option<(&mut KroneckerWork, &mut KrylovWork, &[f64], &[f64], &mut [f64])> {
+    ) -> Option<(&mut KroneckerWork, &mut KrylovWork, Operands<'_>, &mut [f64])> {
         let sep = self.separable.as_ref()?;
         let kw = self.kron.as_mut()?;
         let kv = self.krylov.as_mut()?;
-        Some((kw, kv, &sep.mass, &self.hall, &mut self.rhs))
+        let operands = Operands {
+            mass: &sep.mass,
+            mass_diagonal: sep.mass_diagonal.as_deref(),
+            hall: &self.hall,
+        };
+        Some((kw, kv, operands, &mut self.rhs))
     }
 }

@@ -154,6 +154,9 @@ enum Linear {
     Krylov,
 }
 
+/// Steps for which `Auto` skips the frozen-Hessian solver after it stalled.
+const AUTO_FROZEN_HOLDOFF: usize = 32;
+
 /// Contraction per iteration above which the Kronecker solver's frozen Hessian is refrozen
 /// (once) and then abandoned for exact Newton within the step.
 const KRONECKER_STALL: f64 = 0.5;
@@ -204,6 +207,8 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             && ws.kron.is_some()
             && ws.krylov.is_some()
             && self.tables().kron.is_some();
+        let auto = opts.solver == StageSolver::Auto;
+        ws.frozen_holdoff = ws.frozen_holdoff.saturating_sub(1);
         let mut linear = match (structured, self.resolve_solver(ws)) {
             (true, StageSolver::Kronecker) => Linear::Frozen,
             (true, StageSolver::NewtonKrylov) => Linear::Krylov,
@@ -278,13 +283,14 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 }
                 (Linear::Krylov, Some(kt)) => {
                     let d = ws.d;
-                    if let Some((kw, kv, mass, hall, rhs)) = ws.krylov_parts() {
+                    if let Some((kw, kv, parts, rhs)) = ws.krylov_parts() {
                         let op = super::krylov::Operator {
                             t: self.tables(),
                             h,
                             d,
-                            mass,
-                            hall,
+                            mass: parts.mass,
+                            mass_diagonal: parts.mass_diagonal,
+                            hall: parts.hall,
                         };
                         stats.inner_iterations += super::krylov::gmres(&op, kt, kw, kv, rhs);
                     }
@@ -339,7 +345,14 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                     // varies over the step: keep it while it contracts, refreeze once at the
                     // current iterate when it does not, then continue with exact Newton.
                     let stalled = growing || (theta.is_finite() && theta > KRONECKER_STALL);
-                    if stalled {
+                    if stalled && auto {
+                        // `Auto`: continue with Newton–Krylov (the frozen Hessian is too far
+                        // from the step's), and start the next steps with it too.
+                        linear = Linear::Krylov;
+                        have_lu = true;
+                        ws.frozen_holdoff = AUTO_FROZEN_HOLDOFF;
+                        stats.fallbacks += 1;
+                    } else if stalled {
                         have_lu = false;
                         if refrozen {
                             linear = Linear::Dense;

@@ -101,6 +101,8 @@ pub struct Workspace {
     pub(crate) kron: Option<super::kronecker::KroneckerWork>,
     /// Buffers of the Newton–Krylov solver (present with `kron`).
     pub(crate) krylov: Option<super::krylov::KrylovWork>,
+    /// Steps left for which `StageSolver::Auto` skips the frozen-Hessian solver (it stalled).
+    pub(crate) frozen_holdoff: usize,
 }
 
 /// The constant kinetic part of a separable Lagrangian.
@@ -115,6 +117,8 @@ pub(crate) struct Separable {
     /// (K_{n−1,b} / h) M for the last row block against every unknown b = 0…n−1: D×(nD),
     /// the kinetic part of ∂S/∂ΔQ_{n−1} for its compensated evaluation.
     pub kinetic_last: Vec<f64>,
+    /// M's diagonal when M is diagonal.
+    pub mass_diagonal: Option<Vec<f64>>,
 }
 
 impl Workspace {
@@ -177,7 +181,9 @@ impl Workspace {
                         }
                     }
                 }
+                let diagonal = (0..d).all(|r| (0..d).all(|s| r == s || flat[r * d + s] == 0.0));
                 Some(Separable {
+                    mass_diagonal: diagonal.then(|| (0..d).map(|r| flat[r * d + r]).collect()),
                     kinetic_last: kl,
                     mass: flat,
                     mass_lu,
@@ -249,6 +255,7 @@ impl Workspace {
                 .is_some()
                 .then(|| super::krylov::KrylovWork::new(n - 1, m, d)),
             kron,
+            frozen_holdoff: 0,
         })
     }
 
