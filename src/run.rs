@@ -3,7 +3,6 @@
 
 use crate::adaptive::{AdaptiveOptions, integrate_adaptive};
 use crate::error::{GviError, Result};
-use crate::integrator::GalerkinIntegrator;
 use crate::plot::{Chart, Series};
 use crate::scene::{Scene, SystemSpec};
 use crate::systems::{HarmonicOscillator, Kepler, Pendulum, System};
@@ -191,7 +190,7 @@ struct AdaptiveColumns {
 pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> Result<RunResult> {
     let m = &scene.method;
     let init = &scene.initial;
-    let gvi = GalerkinIntegrator::from_kinds(m.basis, m.n, m.quadrature, m.quad_points, m.h)?;
+    let gvi = m.integrator()?;
     let d = system.dim();
     crate::error::ensure_len("initial q (system dimension)", d, init.q.len())?;
     crate::error::ensure_len("initial p (system dimension)", d, init.p.len())?;
@@ -216,6 +215,7 @@ pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> 
             if let Some(c) = m.control {
                 opts.control = c;
             }
+            opts.solver = m.solver;
             let mut steps = steps;
             if m.auto_h {
                 let c = crate::adaptive::choose_step(
@@ -323,16 +323,17 @@ pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> 
     });
     let method = match (m.tol, n_range) {
         (Some(tol), Some((lo, hi))) => format!(
-            "{} basis, n chosen per step in {lo}…{hi} for tol = {tol:e}, {} (default points), h = {}",
-            m.basis, m.quadrature, trajectory.h
+            "{} basis, n chosen per step in {lo}…{hi} for tol = {tol:e}, {} (default points), h = {}, {} solver",
+            m.basis, m.quadrature, trajectory.h, m.solver
         ),
         _ => format!(
-            "{} basis n = {}, {} with {} points, h = {}",
+            "{} basis n = {}, {} with {} points, h = {}, {} solver",
             m.basis,
             m.n,
             gvi.rule().kind,
             gvi.rule().len(),
-            m.h
+            m.h,
+            m.solver
         ),
     };
     let (warnings, force_evaluations) = match &adaptive {

@@ -209,6 +209,31 @@ pub struct MethodSpec {
     /// tolerance and the system's time scale by pilot runs ([`crate::adaptive::choose_step`]).
     #[serde(default)]
     pub auto_h: bool,
+    /// How each step's stage equations are solved (`auto`, `exact`, `kronecker`,
+    /// `newton-krylov`; default `auto`). Every solver gives the same map to round-off.
+    #[serde(default)]
+    pub solver: crate::integrator::StageSolver,
+}
+
+impl MethodSpec {
+    /// The fixed-n integrator this method names (basis, n, quadrature, points, h and solver).
+    pub fn integrator(
+        &self,
+    ) -> Result<crate::integrator::GalerkinIntegrator<crate::basis::AnyBasis, crate::quadrature::QuadratureRule>>
+    {
+        let gvi = crate::integrator::GalerkinIntegrator::from_kinds(
+            self.basis,
+            self.n,
+            self.quadrature,
+            self.quad_points,
+            self.h,
+        )?;
+        let options = crate::integrator::NewtonOptions {
+            solver: self.solver,
+            ..*gvi.options()
+        };
+        Ok(gvi.with_options(options))
+    }
 }
 
 impl Scene {

@@ -72,6 +72,11 @@ pub fn integrate_adaptive<L: Lagrangian>(
     };
     for &n in &opts.ladder {
         let gvi = GalerkinIntegrator::from_kinds(opts.basis, n, opts.quadrature, None, opts.h)?;
+        let solver = crate::integrator::NewtonOptions {
+            solver: opts.solver,
+            ..*gvi.options()
+        };
+        let gvi = gvi.with_options(solver);
         let ws = gvi.workspace(lag)?;
         let mut o = *gvi.options();
         let scale = q0

@@ -206,6 +206,8 @@ pub struct AdaptiveOptions {
     /// search for a step's n starts.
     #[serde(default = "default_true")]
     pub follow_swings: bool,
+    /// The stage solver of every rung's integrator.
+    pub solver: crate::integrator::StageSolver,
 }
 
 fn default_true() -> bool {
@@ -276,6 +278,7 @@ impl AdaptiveOptions {
             check_every: CHECK_EVERY,
             warm_start: true,
             follow_swings: true,
+            solver: crate::integrator::StageSolver::Auto,
         }
     }
 

@@ -3,7 +3,6 @@
 use super::run::{RunArgs, load_scene};
 use galerkin_vi::GviError;
 use galerkin_vi::geometry::{CheckReport, check_report};
-use galerkin_vi::integrator::GalerkinIntegrator;
 use galerkin_vi::run::{SystemVisitor, visit_system};
 use galerkin_vi::scene::Scene;
 use galerkin_vi::systems::System;
@@ -16,7 +15,7 @@ pub fn run_check(args: RunArgs) -> Result<(), GviError> {
         fn visit<S: System + Sync>(self, system: &S) -> Result<CheckReport, GviError> {
             let m = &self.0.method;
             let gvi =
-                GalerkinIntegrator::from_kinds(m.basis, m.n, m.quadrature, m.quad_points, m.h)?;
+                m.integrator()?;
             check_report(&gvi, system, &self.0.initial.q, &self.0.initial.p, m.steps)
         }
     }

@@ -36,6 +36,10 @@ pub struct RunArgs {
     /// Step size h.
     #[arg(long, allow_hyphen_values = true)]
     pub h: Option<f64>,
+    /// Stage solver: auto (default), exact, kronecker or newton-krylov. Every solver gives
+    /// the same map to round-off; they differ in cost (docs/solvers.md).
+    #[arg(long)]
+    pub solver: Option<String>,
     /// Number of steps.
     #[arg(long)]
     pub steps: Option<usize>,
@@ -90,6 +94,9 @@ pub fn apply_overrides(scene: &mut Scene, a: &RunArgs) -> Result<(), GviError> {
     }
     if let Some(n) = a.n {
         scene.method.n = n;
+    }
+    if let Some(s) = &a.solver {
+        scene.method.solver = s.parse()?;
     }
     if a.quad_points.is_some() {
         scene.method.quad_points = a.quad_points;

@@ -127,7 +127,7 @@ impl KroneckerTables {
     }
 
     /// The eigenvalues of C (real parts and imaginary parts), for diagnostics.
-    pub(crate) fn eigenvalues(&self) -> Vec<(f64, f64)> {
+    fn eigenvalues(&self) -> Vec<(f64, f64)> {
         let k = self.k;
         let mut out = Vec::with_capacity(k);
         for &(i, s) in &self.blocks {
@@ -383,6 +383,29 @@ impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIn
             lag.force_jacobian(&ws.qj[j * d..(j + 1) * d], &mut ws.hall[j * dd..(j + 1) * dd]);
         }
         m
+    }
+
+    /// The eigenvalues (re, im) of the stage pencil C = K_s⁻¹ G_s that the Kronecker solver
+    /// decouples (module docs of the solvers): rows 0…n−2 and columns 1…n−1 of the kinetic
+    /// matrix K and of the mass Gram matrix G_ab = Σ_j b_j φ_a(c_j) φ_b(c_j). They depend on
+    /// the approximation space and the quadrature only, so every polynomial basis of the same
+    /// n gives the same values. `None` when the Schur form could not be computed.
+    ///
+    /// ```
+    /// use galerkin_vi::prelude::*;
+    ///
+    /// let cheb = GalerkinIntegrator::from_kinds(BasisKind::Chebyshev, 8, QuadratureKind::default(), None, 1.0)?;
+    /// let leg = GalerkinIntegrator::from_kinds(BasisKind::Legendre, 8, QuadratureKind::default(), None, 1.0)?;
+    /// let (mut a, mut b) = (cheb.stage_pencil_eigenvalues().unwrap(), leg.stage_pencil_eigenvalues().unwrap());
+    /// a.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.total_cmp(&y.1)));
+    /// b.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.total_cmp(&y.1)));
+    /// for (x, y) in a.iter().zip(&b) {
+    ///     assert!((x.0 - y.0).abs() < 1e-12 && (x.1 - y.1).abs() < 1e-12);
+    /// }
+    /// # Ok::<(), galerkin_vi::GviError>(())
+    /// ```
+    pub fn stage_pencil_eigenvalues(&self) -> Option<Vec<(f64, f64)>> {
+        self.tables().kron.as_ref().map(KroneckerTables::eigenvalues)
     }
 
     /// The solver `NewtonOptions::solver` names, with `Auto` resolved for this workspace.

@@ -35,7 +35,6 @@ pub use elements::{longitude_of_perihelion, wrap};
 
 use crate::baselines::{GaussCollocationBaseline, OneStepMethod};
 use crate::error::{GviError, Result};
-use crate::integrator::GalerkinIntegrator;
 use crate::lagrangian::Lagrangian;
 use crate::plot::{Chart, Series};
 use crate::scene::Scene;
@@ -127,7 +126,7 @@ pub fn nbody_report(scene: &Scene, options: ReportOptions) -> Result<NBodyReport
     let d = system.dim();
     crate::error::ensure_len("initial q", d, init.q.len())?;
     crate::error::ensure_len("initial p", d, init.p.len())?;
-    let gvi = GalerkinIntegrator::from_kinds(m.basis, m.n, m.quadrature, m.quad_points, m.h)?;
+    let gvi = m.integrator()?;
     let start = Instant::now();
     let traj = gvi
         .integrate(&system, init.t0, &init.q, &init.p, m.steps)
