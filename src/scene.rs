@@ -219,8 +219,12 @@ impl MethodSpec {
     /// The fixed-n integrator this method names (basis, n, quadrature, points, h and solver).
     pub fn integrator(
         &self,
-    ) -> Result<crate::integrator::GalerkinIntegrator<crate::basis::AnyBasis, crate::quadrature::QuadratureRule>>
-    {
+    ) -> Result<
+        crate::integrator::GalerkinIntegrator<
+            crate::basis::AnyBasis,
+            crate::quadrature::QuadratureRule,
+        >,
+    > {
         let gvi = crate::integrator::GalerkinIntegrator::from_kinds(
             self.basis,
             self.n,

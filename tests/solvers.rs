@@ -41,9 +41,10 @@ unsafe impl GlobalAlloc for Counting {
 static GLOBAL: Counting = Counting;
 
 /// The structured solvers and `Auto`, each compared with `Exact`.
-const SOLVERS: [StageSolver; 3] = [
+const SOLVERS: [StageSolver; 4] = [
     StageSolver::Kronecker,
     StageSolver::NewtonKrylov,
+    StageSolver::FixedPoint,
     StageSolver::Auto,
 ];
 
@@ -130,7 +131,11 @@ fn agreement<L: Lagrangian>(c: &Case<'_, L>, bases: &[BasisKind]) -> f64 {
             let dist = final_state_distance(&exact, &traj);
             let inner: usize = traj.stats.iter().map(|s| s.inner_iterations).sum();
             if solver == StageSolver::NewtonKrylov {
-                assert!(inner > 0, "{}: Newton–Krylov ran no GMRES iteration", c.name);
+                assert!(
+                    inner > 0,
+                    "{}: Newton–Krylov ran no GMRES iteration",
+                    c.name
+                );
             }
             println!(
                 "{} {basis} {solver}: relative distance {dist:.2e}, {:.2} iterations/step, {} inner",
@@ -236,7 +241,11 @@ fn non_separable_lagrangians_use_the_exact_solver() {
 }
 
 /// Central-difference Jacobian of a one-step map (2D×2D).
-fn fd_jacobian(step: impl Fn(&[f64], &[f64]) -> (Vec<f64>, Vec<f64>), q: &[f64], p: &[f64]) -> DMatrix<f64> {
+fn fd_jacobian(
+    step: impl Fn(&[f64], &[f64]) -> (Vec<f64>, Vec<f64>),
+    q: &[f64],
+    p: &[f64],
+) -> DMatrix<f64> {
     let d = q.len();
     let eps = 1e-5;
     let mut j = DMatrix::zeros(2 * d, 2 * d);
@@ -313,11 +322,12 @@ fn every_solver_conserves_the_noether_momenta() {
     ];
     // The round-off scale of the momenta: Σ|p| (linear) and Σ|q||p| (angular), since the
     // totals themselves are near zero in the barycentric frame.
-    let scale = p0
-        .iter()
-        .map(|x| x.abs())
-        .sum::<f64>()
-        .max(q0.iter().zip(p0.iter()).map(|(q, p)| (q * p).abs()).sum::<f64>());
+    let scale = p0.iter().map(|x| x.abs()).sum::<f64>().max(
+        q0.iter()
+            .zip(p0.iter())
+            .map(|(q, p)| (q * p).abs())
+            .sum::<f64>(),
+    );
     let bound = 1000.0 * f64::EPSILON * (steps as f64).sqrt() * scale;
     let drift = |opts: Option<NewtonOptions>, solver| {
         let mut gvi = with_solver(BasisKind::Chebyshev, 12, scene.method.h, solver);

@@ -14,8 +14,7 @@ pub fn run_check(args: RunArgs) -> Result<(), GviError> {
         type Output = CheckReport;
         fn visit<S: System + Sync>(self, system: &S) -> Result<CheckReport, GviError> {
             let m = &self.0.method;
-            let gvi =
-                m.integrator()?;
+            let gvi = m.integrator()?;
             check_report(&gvi, system, &self.0.initial.q, &self.0.initial.p, m.steps)
         }
     }

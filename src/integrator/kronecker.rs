@@ -22,7 +22,6 @@
 use crate::error::{GviError, Result};
 use crate::linalg::{Lu, Strided, gemm};
 
-
 use super::Tables;
 
 /// The (basis, quadrature, n)-dependent part of the Kronecker solver.
@@ -243,13 +242,37 @@ impl KroneckerWork {
         let (d, k) = (self.d, kt.k);
         let rd = Strided::rows(0, d);
         // Ĥ = L⁻¹ H̄ L⁻ᵀ, symmetrised (H̄ is symmetric up to round-off).
-        gemm(d, d, d, 1.0, &self.linv, rd, &self.hbar, rd, 0.0, &mut self.w, rd);
+        gemm(
+            d,
+            d,
+            d,
+            1.0,
+            &self.linv,
+            rd,
+            &self.hbar,
+            rd,
+            0.0,
+            &mut self.w,
+            rd,
+        );
         let lt = Strided {
             offset: 0,
             row_stride: 1,
             col_stride: d,
         };
-        gemm(d, d, d, 1.0, &self.w, rd, &self.linv, lt, 0.0, &mut self.hhat, rd);
+        gemm(
+            d,
+            d,
+            d,
+            1.0,
+            &self.w,
+            rd,
+            &self.linv,
+            lt,
+            0.0,
+            &mut self.hhat,
+            rd,
+        );
         for i in 0..d {
             for j in 0..i {
                 let s = 0.5 * (self.hhat[i * d + j] + self.hhat[j * d + i]);
@@ -259,7 +282,19 @@ impl KroneckerWork {
         }
         crate::linalg::symmetric_eigen(&mut self.hhat, d, &mut self.mu, &mut self.w);
         // V = L⁻ᵀ W.
-        gemm(d, d, d, 1.0, &self.linv, lt, &self.w, rd, 0.0, &mut self.v, rd);
+        gemm(
+            d,
+            d,
+            d,
+            1.0,
+            &self.linv,
+            lt,
+            &self.w,
+            rd,
+            0.0,
+            &mut self.v,
+            rd,
+        );
         for i in 0..d {
             for j in 0..d {
                 self.vt[j * d + i] = self.v[i * d + j];
@@ -288,7 +323,12 @@ impl KroneckerWork {
                     if det == 0.0 || !det.is_finite() {
                         return Err(singular(i));
                     }
-                    self.inv[base..base + 4].copy_from_slice(&[e / det, -b / det, -c / det, a / det]);
+                    self.inv[base..base + 4].copy_from_slice(&[
+                        e / det,
+                        -b / det,
+                        -c / det,
+                        a / det,
+                    ]);
                 }
             }
         }
@@ -300,7 +340,19 @@ impl KroneckerWork {
         let (d, k) = (self.d, kt.k);
         let (rd, rk) = (Strided::rows(0, d), Strided::rows(0, k));
         gemm(k, k, d, 1.0, &kt.r, rk, rhs, rd, 0.0, &mut self.y, rd);
-        gemm(k, d, d, 1.0, &self.y, rd, &self.v, rd, 0.0, &mut self.yh, rd);
+        gemm(
+            k,
+            d,
+            d,
+            1.0,
+            &self.y,
+            rd,
+            &self.v,
+            rd,
+            0.0,
+            &mut self.yh,
+            rd,
+        );
         // Back-substitution over the diagonal blocks of T, last first, elementwise in r:
         // ζ_i = inv_i (ŷ_i − h μ ∘ Σ_{j beyond the block} T_ij ζ_j).
         for &(i, s) in kt.blocks.iter().rev() {
@@ -332,7 +384,19 @@ impl KroneckerWork {
             }
         }
         // z = ζ Vᵀ (into y), x = U z.
-        gemm(k, d, d, 1.0, &self.zeta, rd, &self.vt, rd, 0.0, &mut self.y, rd);
+        gemm(
+            k,
+            d,
+            d,
+            1.0,
+            &self.zeta,
+            rd,
+            &self.vt,
+            rd,
+            0.0,
+            &mut self.y,
+            rd,
+        );
         gemm(k, k, d, 1.0, &kt.u, rk, &self.y, rd, 0.0, rhs, rd);
     }
 }
@@ -340,22 +404,27 @@ impl KroneckerWork {
 impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIntegrator<B, Q> {
     /// Freeze the force Jacobian at its quadrature-weighted mean H̄ = Σ_j b_j L_qq(q(c_j)) over
     /// the curve last evaluated in `ws`, and factorise the Kronecker solver's diagonal blocks.
-    /// Returns the Hessian evaluations.
+    /// Returns the Hessian evaluations. With `kinetic_only` H̄ = 0 (the fixed-point
+    /// iteration) and no Hessian is evaluated.
     pub(super) fn freeze_hessian<L: crate::lagrangian::Lagrangian>(
         &self,
         lag: &L,
         ws: &mut super::Workspace,
+        kinetic_only: bool,
     ) -> Result<usize> {
         let t = self.tables();
         let (m, d, h) = (t.m, ws.d, self.step_size());
         let dd = d * d;
-        let (Some(kt), Some(kw)) = (t.kron.as_ref(), ws.kron.as_mut())
-        else {
+        let (Some(kt), Some(kw)) = (t.kron.as_ref(), ws.kron.as_mut()) else {
             return Err(GviError::Unsupported(
                 "the Kronecker solver needs a separable Lagrangian".into(),
             ));
         };
         kw.hbar.iter_mut().for_each(|x| *x = 0.0);
+        if kinetic_only {
+            kw.factor(kt, h)?;
+            return Ok(0);
+        }
         for j in 0..m {
             let hj = &mut ws.hall[j * dd..(j + 1) * dd];
             lag.force_jacobian(&ws.qj[j * d..(j + 1) * d], hj);
@@ -380,7 +449,10 @@ impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIn
         let (m, d) = (self.tables().m, ws.d);
         let dd = d * d;
         for j in 0..m {
-            lag.force_jacobian(&ws.qj[j * d..(j + 1) * d], &mut ws.hall[j * dd..(j + 1) * dd]);
+            lag.force_jacobian(
+                &ws.qj[j * d..(j + 1) * d],
+                &mut ws.hall[j * dd..(j + 1) * dd],
+            );
         }
         m
     }
@@ -405,7 +477,10 @@ impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIn
     /// # Ok::<(), galerkin_vi::GviError>(())
     /// ```
     pub fn stage_pencil_eigenvalues(&self) -> Option<Vec<(f64, f64)>> {
-        self.tables().kron.as_ref().map(KroneckerTables::eigenvalues)
+        self.tables()
+            .kron
+            .as_ref()
+            .map(KroneckerTables::eigenvalues)
     }
 
     /// The solver `NewtonOptions::solver` names, with `Auto` resolved for this workspace.
@@ -415,10 +490,12 @@ impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIn
             StageSolver::Auto => {
                 if ws.kron.is_none() || (ws.n - 1) * ws.d <= AUTO_DENSE_SIZE {
                     StageSolver::Exact
-                } else if ws.frozen_holdoff > 0 {
-                    StageSolver::NewtonKrylov
                 } else {
-                    StageSolver::Kronecker
+                    match ws.auto_level {
+                        0 => StageSolver::FixedPoint,
+                        1 => StageSolver::Kronecker,
+                        _ => StageSolver::NewtonKrylov,
+                    }
                 }
             }
             s => s,

@@ -154,8 +154,9 @@ enum Linear {
     Krylov,
 }
 
-/// Steps for which `Auto` skips the frozen-Hessian solver after it stalled.
-const AUTO_FROZEN_HOLDOFF: usize = 32;
+/// Solves for which `Auto` stays on the rung it escalated to before it tries the cheaper rung
+/// below again.
+const AUTO_HOLDOFF: usize = 32;
 
 /// Contraction per iteration above which the Kronecker solver's frozen Hessian is refrozen
 /// (once) and then abandoned for exact Newton within the step.
@@ -208,9 +209,27 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             && ws.krylov.is_some()
             && self.tables().kron.is_some();
         let auto = opts.solver == StageSolver::Auto;
-        ws.frozen_holdoff = ws.frozen_holdoff.saturating_sub(1);
+        if auto {
+            // Try the cheaper rung again once the hold-off has passed.
+            if ws.auto_holdoff == 0 && ws.auto_level > 0 {
+                ws.auto_level -= 1;
+                ws.auto_holdoff = AUTO_HOLDOFF;
+            }
+            ws.auto_holdoff = ws.auto_holdoff.saturating_sub(1);
+        }
+        let escalate = |ws: &mut Workspace, level: usize| {
+            if auto && level > ws.auto_level {
+                ws.auto_level = level;
+                ws.auto_holdoff = AUTO_HOLDOFF;
+            }
+        };
+        let mut fixed_point = false;
         let mut linear = match (structured, self.resolve_solver(ws)) {
             (true, StageSolver::Kronecker) => Linear::Frozen,
+            (true, StageSolver::FixedPoint) => {
+                fixed_point = true;
+                Linear::Frozen
+            }
             (true, StageSolver::NewtonKrylov) => Linear::Krylov,
             _ => Linear::Dense,
         };
@@ -247,7 +266,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             }
             if !have_lu && linear != Linear::Dense {
                 stats.factorizations += 1;
-                match self.freeze_hessian(lag, ws) {
+                match self.freeze_hessian(lag, ws, fixed_point) {
                     Ok(evals) => {
                         stats.hessian_evaluations += evals;
                         have_lu = true;
@@ -323,7 +342,10 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 ws.lu_valid = false;
                 return Err(fail(f64::INFINITY, it, "non-finite Newton update"));
             }
-            // θ estimates the contraction; undefined on the first iteration.
+            // θ estimates the contraction; undefined on the first iteration. A slow contraction
+            // at small increments means the round-off floor for Newton's quadratic iteration,
+            // but only a stall for the linearly converging frozen-Hessian and fixed-point
+            // iterations (they escalate instead).
             let theta = if previous_increment.is_finite() {
                 delta / previous_increment
             } else {
@@ -332,7 +354,10 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             let converged = delta == 0.0
                 || delta <= opts.tolerance * scale
                 || (theta < 1.0 && theta / (1.0 - theta) * delta <= opts.tolerance * scale)
-                || (theta.is_finite() && theta >= 0.5 && delta <= opts.floor_tolerance * scale);
+                || (theta.is_finite()
+                    && theta >= 0.5
+                    && linear != Linear::Frozen
+                    && delta <= opts.floor_tolerance * scale);
             if converged {
                 stats.gradient_evaluations += self.action_gradient(lag, ws, false);
                 stats.residual = self.residual(ws, mode, p_k);
@@ -345,13 +370,19 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                     // varies over the step: keep it while it contracts, refreeze once at the
                     // current iterate when it does not, then continue with exact Newton.
                     let stalled = growing || (theta.is_finite() && theta > KRONECKER_STALL);
-                    if stalled && auto {
+                    if stalled && fixed_point {
+                        // No Hessian was used: continue with the frozen one.
+                        fixed_point = false;
+                        have_lu = false;
+                        stats.fallbacks += 1;
+                        escalate(ws, 1);
+                    } else if stalled && auto {
                         // `Auto`: continue with Newton–Krylov (the frozen Hessian is too far
                         // from the step's), and start the next steps with it too.
                         linear = Linear::Krylov;
                         have_lu = true;
-                        ws.frozen_holdoff = AUTO_FROZEN_HOLDOFF;
                         stats.fallbacks += 1;
+                        escalate(ws, 2);
                     } else if stalled {
                         have_lu = false;
                         if refrozen {

@@ -101,8 +101,10 @@ pub struct Workspace {
     pub(crate) kron: Option<super::kronecker::KroneckerWork>,
     /// Buffers of the Newton–Krylov solver (present with `kron`).
     pub(crate) krylov: Option<super::krylov::KrylovWork>,
-    /// Steps left for which `StageSolver::Auto` skips the frozen-Hessian solver (it stalled).
-    pub(crate) frozen_holdoff: usize,
+    /// `StageSolver::Auto`'s current rung (0 fixed point, 1 frozen Hessian, 2 Newton–Krylov)
+    /// and the solves left before it tries the rung below again.
+    pub(crate) auto_level: usize,
+    pub(crate) auto_holdoff: usize,
 }
 
 /// The constant kinetic part of a separable Lagrangian.
@@ -255,7 +257,8 @@ impl Workspace {
                 .is_some()
                 .then(|| super::krylov::KrylovWork::new(n - 1, m, d)),
             kron,
-            frozen_holdoff: 0,
+            auto_level: 0,
+            auto_holdoff: 0,
         })
     }
 
