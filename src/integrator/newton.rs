@@ -234,6 +234,8 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             _ => Linear::Dense,
         };
         let mut refrozen = false;
+        // The iteration at which Newton–Krylov took over (its growth test starts there).
+        let mut krylov_start = 0;
         if linear != Linear::Dense {
             have_lu = false;
         }
@@ -381,8 +383,11 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                         // from the step's), and start the next steps with it too.
                         linear = Linear::Krylov;
                         have_lu = true;
+                        krylov_start = it;
                         stats.fallbacks += 1;
                         escalate(ws, 2);
+                        previous_increment = f64::INFINITY;
+                        continue;
                     } else if stalled {
                         have_lu = false;
                         if refrozen {
@@ -397,7 +402,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 Linear::Krylov => {
                     // Exact Newton directions (to the forcing term): an iteration that grows
                     // after the first has left the basin the dense solver would keep.
-                    if growing && it >= 3 {
+                    if growing && it >= krylov_start + 3 {
                         have_lu = false;
                         linear = Linear::Dense;
                         stats.fallbacks += 1;
