@@ -111,6 +111,15 @@ pub trait Lagrangian {
         self.gradient(q, &zeros, out, &mut lv);
     }
 
+    /// The size b of the coordinate blocks whose mutual coupling in the force Jacobian is weak
+    /// relative to the mass matrix (N-body: b = the body dimension, since the M-scaled
+    /// coupling of bodies i and j is √(mᵢ mⱼ)/max(mᵢ, mⱼ) times a body's own term), or
+    /// `None`. The structured stage solvers then precondition with the diagonal blocks of the
+    /// frozen Hessian only, at O(D b²) instead of O(D³) per step; the map is unchanged.
+    fn coordinate_blocks(&self) -> Option<usize> {
+        None
+    }
+
     /// For separable Lagrangians: L_qq(q) = −∇²V(q), row-major D×D.
     fn force_jacobian(&self, q: &[f64], out: &mut [f64]) {
         let d = self.dim();
@@ -169,6 +178,10 @@ pub trait Mechanical {
     /// ∇V(q). Default: automatic differentiation.
     fn potential_gradient(&self, q: &[f64], out: &mut [f64]) {
         ad::gradient(|y| self.potential(y), q, out);
+    }
+    /// See [`Lagrangian::coordinate_blocks`]. Default `None`.
+    fn coordinate_blocks(&self) -> Option<usize> {
+        None
     }
     /// ∇²V(q), row-major D×D. Default: automatic differentiation.
     fn potential_hessian(&self, q: &[f64], out: &mut [f64]) {
@@ -234,6 +247,10 @@ impl<S: Mechanical> Lagrangian for S {
     fn force_jacobian(&self, q: &[f64], out: &mut [f64]) {
         self.potential_hessian(q, out);
         out.iter_mut().for_each(|x| *x = -*x);
+    }
+
+    fn coordinate_blocks(&self) -> Option<usize> {
+        Mechanical::coordinate_blocks(self)
     }
 }
 

@@ -165,6 +165,9 @@ impl KroneckerTables {
 #[derive(Debug, Clone)]
 pub(crate) struct KroneckerWork {
     d: usize,
+    /// Coordinate block size b (b = D: the full frozen Hessian; b < D: its diagonal blocks
+    /// only, V block diagonal).
+    block: usize,
     /// H̄, D×D.
     pub hbar: Vec<f64>,
     /// L⁻¹ for M = L Lᵀ (D×D, lower triangular).
@@ -189,7 +192,21 @@ pub(crate) struct KroneckerWork {
 impl KroneckerWork {
     /// Buffers for dimension `d` and the constant mass matrix `mass` (D×D); `None` when M is
     /// not symmetric positive definite.
-    pub(crate) fn new(kt: &KroneckerTables, d: usize, mass: &[f64]) -> Option<Self> {
+    pub(crate) fn new(
+        kt: &KroneckerTables,
+        d: usize,
+        mass: &[f64],
+        blocks: Option<usize>,
+    ) -> Option<Self> {
+        // Block mode needs b | D and a block-diagonal M (then L⁻¹ is block diagonal too).
+        let block = match blocks {
+            Some(b) if b > 0 && b < d && d % b == 0 => {
+                let diagonal_blocks =
+                    (0..d).all(|r| (0..d).all(|s| r / b == s / b || mass[r * d + s] == 0.0));
+                if diagonal_blocks { b } else { d }
+            }
+            _ => d,
+        };
         // Cholesky M = L Lᵀ, then L⁻¹ by forward substitution.
         let mut l = vec![0.0; d * d];
         for i in 0..d {
@@ -221,6 +238,7 @@ impl KroneckerWork {
         let k = kt.k;
         Some(KroneckerWork {
             d,
+            block,
             hbar: vec![0.0; d * d],
             linv,
             hhat: vec![0.0; d * d],
@@ -240,8 +258,51 @@ impl KroneckerWork {
     /// blocks 1/h + h T_ii μ_r (and the 2×2 blocks of complex pairs).
     pub(crate) fn factor(&mut self, kt: &KroneckerTables, h: f64) -> Result<()> {
         let (d, k) = (self.d, kt.k);
+        if self.block < d {
+            self.decompose_blocks();
+        } else {
+            self.decompose_full();
+        }
+        let singular = |i: usize| GviError::InvalidParameter {
+            name: "frozen stage Jacobian".into(),
+            value: f64::NAN,
+            reason: format!("singular diagonal block {i}"),
+        };
+        for &(i, s) in &kt.blocks {
+            for r in 0..d {
+                let mu = self.mu[r];
+                let a = 1.0 / h + h * kt.t[i * k + i] * mu;
+                let base = 4 * (i * d + r);
+                if s == 1 {
+                    if a == 0.0 || !a.is_finite() {
+                        return Err(singular(i));
+                    }
+                    self.inv[base] = 1.0 / a;
+                } else {
+                    let b = h * kt.t[i * k + i + 1] * mu;
+                    let c = h * kt.t[(i + 1) * k + i] * mu;
+                    let e = 1.0 / h + h * kt.t[(i + 1) * k + i + 1] * mu;
+                    let det = a * e - b * c;
+                    if det == 0.0 || !det.is_finite() {
+                        return Err(singular(i));
+                    }
+                    self.inv[base..base + 4].copy_from_slice(&[
+                        e / det,
+                        -b / det,
+                        -c / det,
+                        a / det,
+                    ]);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Ĥ = L⁻¹ H̄ L⁻ᵀ (symmetrised: H̄ is symmetric up to round-off) = W diag(μ) Wᵀ, and
+    /// V = L⁻ᵀ W, Vᵀ.
+    fn decompose_full(&mut self) {
+        let d = self.d;
         let rd = Strided::rows(0, d);
-        // Ĥ = L⁻¹ H̄ L⁻ᵀ, symmetrised (H̄ is symmetric up to round-off).
         gemm(
             d,
             d,
@@ -281,7 +342,6 @@ impl KroneckerWork {
             }
         }
         crate::linalg::symmetric_eigen(&mut self.hhat, d, &mut self.mu, &mut self.w);
-        // V = L⁻ᵀ W.
         gemm(
             d,
             d,
@@ -300,39 +360,79 @@ impl KroneckerWork {
                 self.vt[j * d + i] = self.v[i * d + j];
             }
         }
-        let singular = |i: usize| GviError::InvalidParameter {
-            name: "frozen stage Jacobian".into(),
-            value: f64::NAN,
-            reason: format!("singular diagonal block {i}"),
-        };
-        for &(i, s) in &kt.blocks {
-            for r in 0..d {
-                let mu = self.mu[r];
-                let a = 1.0 / h + h * kt.t[i * k + i] * mu;
-                let base = 4 * (i * d + r);
-                if s == 1 {
-                    if a == 0.0 || !a.is_finite() {
-                        return Err(singular(i));
+    }
+
+    /// As [`Self::decompose_full`] for the diagonal b×b blocks of Ĥ only: V is block
+    /// diagonal, stored as b×b blocks at the start of `v` (and transposed in `vt`).
+    fn decompose_blocks(&mut self) {
+        let (d, b) = (self.d, self.block);
+        let bb = b * b;
+        for c in 0..d / b {
+            let o = c * b;
+            // Ĥ_cc = L⁻¹_cc H̄_cc L⁻ᵀ_cc into hhat[..bb] (w[..bb] as scratch).
+            for i in 0..b {
+                for j in 0..b {
+                    let mut s = 0.0;
+                    for k in 0..b {
+                        s += self.linv[(o + i) * d + o + k] * self.hbar[(o + k) * d + o + j];
                     }
-                    self.inv[base] = 1.0 / a;
-                } else {
-                    let b = h * kt.t[i * k + i + 1] * mu;
-                    let c = h * kt.t[(i + 1) * k + i] * mu;
-                    let e = 1.0 / h + h * kt.t[(i + 1) * k + i + 1] * mu;
-                    let det = a * e - b * c;
-                    if det == 0.0 || !det.is_finite() {
-                        return Err(singular(i));
+                    self.w[i * b + j] = s;
+                }
+            }
+            for i in 0..b {
+                for j in 0..b {
+                    let mut s = 0.0;
+                    for k in 0..b {
+                        s += self.w[i * b + k] * self.linv[(o + j) * d + o + k];
                     }
-                    self.inv[base..base + 4].copy_from_slice(&[
-                        e / det,
-                        -b / det,
-                        -c / det,
-                        a / det,
-                    ]);
+                    self.hhat[i * b + j] = s;
+                }
+            }
+            for i in 0..b {
+                for j in 0..i {
+                    let s = 0.5 * (self.hhat[i * b + j] + self.hhat[j * b + i]);
+                    self.hhat[i * b + j] = s;
+                    self.hhat[j * b + i] = s;
+                }
+            }
+            let (hb, wb) = (&mut self.hhat[..bb], &mut self.w[..bb]);
+            crate::linalg::symmetric_eigen(hb, b, &mut self.mu[o..o + b], wb);
+            // V_c = L⁻ᵀ_cc W_c.
+            for i in 0..b {
+                for j in 0..b {
+                    let mut s = 0.0;
+                    for k in 0..b {
+                        s += self.linv[(o + k) * d + o + i] * wb[k * b + j];
+                    }
+                    self.v[c * bb + i * b + j] = s;
+                    self.vt[c * bb + j * b + i] = s;
                 }
             }
         }
-        Ok(())
+    }
+
+    /// out (k×D) = x (k×D) · m, for m = V or Vᵀ, full (b = D) or block diagonal with b×b
+    /// blocks stored one after another.
+    fn transform(d: usize, b: usize, m: &[f64], k: usize, x: &[f64], out: &mut [f64]) {
+        if b == d {
+            let rd = Strided::rows(0, d);
+            gemm(k, d, d, 1.0, x, rd, m, rd, 0.0, out, rd);
+            return;
+        }
+        let bb = b * b;
+        for (xr, or) in x.chunks_exact(d).zip(out.chunks_exact_mut(d)) {
+            for c in 0..d / b {
+                let blk = &m[c * bb..(c + 1) * bb];
+                let (xs, os) = (&xr[c * b..(c + 1) * b], &mut or[c * b..(c + 1) * b]);
+                for (j, o) in os.iter_mut().enumerate() {
+                    let mut s = 0.0;
+                    for (i, &xv) in xs.iter().enumerate() {
+                        s += xv * blk[i * b + j];
+                    }
+                    *o = s;
+                }
+            }
+        }
     }
 
     /// Solve J̃ x = r in place (`rhs` holds k×D values, block-row-major).
@@ -340,19 +440,7 @@ impl KroneckerWork {
         let (d, k) = (self.d, kt.k);
         let (rd, rk) = (Strided::rows(0, d), Strided::rows(0, k));
         gemm(k, k, d, 1.0, &kt.r, rk, rhs, rd, 0.0, &mut self.y, rd);
-        gemm(
-            k,
-            d,
-            d,
-            1.0,
-            &self.y,
-            rd,
-            &self.v,
-            rd,
-            0.0,
-            &mut self.yh,
-            rd,
-        );
+        Self::transform(d, self.block, &self.v, k, &self.y, &mut self.yh);
         // Back-substitution over the diagonal blocks of T, last first, elementwise in r:
         // ζ_i = inv_i (ŷ_i − h μ ∘ Σ_{j beyond the block} T_ij ζ_j).
         for &(i, s) in kt.blocks.iter().rev() {
@@ -384,19 +472,7 @@ impl KroneckerWork {
             }
         }
         // z = ζ Vᵀ (into y), x = U z.
-        gemm(
-            k,
-            d,
-            d,
-            1.0,
-            &self.zeta,
-            rd,
-            &self.vt,
-            rd,
-            0.0,
-            &mut self.y,
-            rd,
-        );
+        Self::transform(d, self.block, &self.vt, k, &self.zeta, &mut self.y);
         gemm(k, k, d, 1.0, &kt.u, rk, &self.y, rd, 0.0, rhs, rd);
     }
 }

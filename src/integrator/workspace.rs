@@ -194,7 +194,12 @@ impl Workspace {
             }
         };
         let kron = match (&t.kron, &separable) {
-            (Some(kt), Some(sep)) => super::kronecker::KroneckerWork::new(kt, d, &sep.mass),
+            (Some(kt), Some(sep)) => super::kronecker::KroneckerWork::new(
+                kt,
+                d,
+                &sep.mass,
+                lagrangian.coordinate_blocks(),
+            ),
             _ => None,
         };
         Ok(Workspace {

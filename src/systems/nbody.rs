@@ -239,6 +239,10 @@ impl Mechanical for NBody {
         }
     }
 
+    fn coordinate_blocks(&self) -> Option<usize> {
+        Some(self.dim)
+    }
+
     fn potential_hessian(&self, q: &[f64], out: &mut [f64]) {
         // Pair (i, j) with d = qᵢ − qⱼ, r = |d|, κ = G mᵢ mⱼ:
         // B = κ (I/r³ − 3 d dᵀ/r⁵) adds to blocks (i,i), (j,j) and subtracts from (i,j), (j,i).
