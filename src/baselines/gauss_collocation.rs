@@ -137,9 +137,10 @@ impl<'a, L: Lagrangian> GaussCollocationBaseline<'a, L> {
             }
             self.lagrangian
                 .force(&self.stage_q, &mut self.f[i * d..(i + 1) * d]);
-            let fi = self.f[i * d..(i + 1) * d].to_vec();
-            self.parts
-                .velocity(&fi, &mut self.minv_f[i * d..(i + 1) * d]);
+            self.parts.velocity(
+                &self.f[i * d..(i + 1) * d],
+                &mut self.minv_f[i * d..(i + 1) * d],
+            );
         }
         self.evaluations += self.s;
     }

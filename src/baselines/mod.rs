@@ -90,11 +90,22 @@ pub fn integrate_one_step<M: OneStepMethod + ?Sized>(
     Ok((qs, ps))
 }
 
+/// M⁻¹ in the form that makes v = M⁻¹p cheapest: the identity (Kepler, oscillator, pendulum
+/// with unit mass), a diagonal (N bodies), or a dense row-major matrix.
+#[derive(Debug, Clone)]
+pub(crate) enum InverseMass {
+    Identity,
+    Diagonal(Vec<f64>),
+    Dense(Vec<f64>),
+}
+
 /// The pieces of a mechanical Lagrangian the classical methods need: D and M⁻¹.
 #[derive(Debug, Clone)]
 pub(crate) struct CanonicalParts {
     pub d: usize,
     pub inverse_mass: DMatrix<f64>,
+    /// The same M⁻¹, stored for a cheap matrix–vector product.
+    pub inverse: InverseMass,
 }
 
 impl CanonicalParts {
@@ -123,13 +134,40 @@ impl CanonicalParts {
                 value: f64::NAN,
                 reason: "singular".into(),
             })?;
-        Ok(CanonicalParts { d, inverse_mass })
+        let off_diagonal_zero =
+            (0..d).all(|r| (0..d).all(|s| r == s || inverse_mass[(r, s)] == 0.0));
+        let inverse = if !off_diagonal_zero {
+            InverseMass::Dense((0..d * d).map(|k| inverse_mass[(k / d, k % d)]).collect())
+        } else if (0..d).all(|r| inverse_mass[(r, r)] == 1.0) {
+            InverseMass::Identity
+        } else {
+            InverseMass::Diagonal((0..d).map(|r| inverse_mass[(r, r)]).collect())
+        };
+        Ok(CanonicalParts {
+            d,
+            inverse_mass,
+            inverse,
+        })
     }
 
-    /// v = M⁻¹ p.
+    /// v = M⁻¹ p (a copy for M = I, d multiplications for a diagonal M; bit-for-bit the dense
+    /// product in both cases, whose other terms are exact zeros).
+    #[inline]
     pub fn velocity(&self, p: &[f64], v: &mut [f64]) {
-        for r in 0..self.d {
-            v[r] = (0..self.d).map(|s| self.inverse_mass[(r, s)] * p[s]).sum();
+        let d = self.d;
+        let (p, v) = (&p[..d], &mut v[..d]);
+        match &self.inverse {
+            InverseMass::Identity => v.copy_from_slice(p),
+            InverseMass::Diagonal(m) => {
+                for ((v, p), m) in v.iter_mut().zip(p).zip(m) {
+                    *v = m * p;
+                }
+            }
+            InverseMass::Dense(m) => {
+                for (v, row) in v.iter_mut().zip(m.chunks_exact(d)) {
+                    *v = row.iter().zip(p).map(|(a, b)| a * b).sum();
+                }
+            }
         }
     }
 
