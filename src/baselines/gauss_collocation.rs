@@ -12,7 +12,7 @@
 //! The sD equations are solved by simplified Newton (Jacobian I − h²(A²⊗M⁻¹)·(I⊗∂f(q)),
 //! factorised once per step) iterated until the increment stops decreasing at round-off level.
 
-use super::{CanonicalParts, OneStepMethod};
+use super::{CanonicalParts, OneStepMethod, StaticKernel, force_static};
 use crate::error::{GviError, Result};
 use crate::lagrangian::Lagrangian;
 use crate::quadrature::{GaussLegendre, Quadrature};
@@ -190,7 +190,6 @@ impl<L: Lagrangian> GaussCollocationBaseline<'_, L> {
         dp_out: &mut [f64],
     ) -> Result<()> {
         self.parts.check(q, p, dq_out, dp_out)?;
-        let (d, s, h) = (self.parts.d, self.s, self.h);
         let mut v0 = std::mem::take(&mut self.v0);
         self.parts.velocity(p, &mut v0);
         self.v0 = v0;
@@ -198,6 +197,13 @@ impl<L: Lagrangian> GaussCollocationBaseline<'_, L> {
             self.finish(dq_out, dp_out);
             return Ok(());
         }
+        self.newton(t, q, dq_out, dp_out)
+    }
+
+    /// The simplified Newton iteration from Z = 0 (with `v0` = M⁻¹p already set), for steps
+    /// where the fixed-point iteration does not contract.
+    fn newton(&mut self, t: f64, q: &[f64], dq_out: &mut [f64], dp_out: &mut [f64]) -> Result<()> {
+        let (d, s, h) = (self.parts.d, self.s, self.h);
         // Simplified Newton matrix I − h² (A² ⊗ M⁻¹ ∂f(q)).
         self.lagrangian.force_jacobian(q, &mut self.jac);
         let minv = &self.parts.inverse_mass;
@@ -384,4 +390,98 @@ fn kahan(x: &mut f64, c: &mut f64, dx: f64) {
     let t = *x + y;
     *c = (t - *x) - y;
     *x = t;
+}
+
+impl<L: Lagrangian> GaussCollocationBaseline<'_, L> {
+    /// Stage forces F_i and M⁻¹F_i at the current Z, fixed-size (as `eval_forces`).
+    #[inline(always)]
+    fn eval_forces_static<const D: usize>(
+        &mut self,
+        q: &[f64; D],
+        v0: &[f64; D],
+        z: &[[f64; D]; MAX_GAUSS_STAGES],
+        f: &mut [[f64; D]; MAX_GAUSS_STAGES],
+        minv_f: &mut [[f64; D]; MAX_GAUSS_STAGES],
+    ) {
+        let h = self.h;
+        for i in 0..self.s {
+            let stage_q: [f64; D] = std::array::from_fn(|r| q[r] + h * self.c[i] * v0[r] + z[i][r]);
+            f[i] = force_static(self.lagrangian, &stage_q);
+            minv_f[i] = self.parts.velocity_static(&f[i]);
+        }
+        self.evaluations += self.s;
+    }
+}
+
+impl<L: Lagrangian> StaticKernel for GaussCollocationBaseline<'_, L> {
+    fn dim(&self) -> usize {
+        self.parts.d
+    }
+
+    /// The fixed-point iteration of `fixed_point` on fixed-size stages; when it does not
+    /// contract, the general step (fixed point again, then simplified Newton) takes over.
+    fn advance<const D: usize>(
+        &mut self,
+        t: f64,
+        q: &mut [f64; D],
+        p: &mut [f64; D],
+        _fsal: &mut Option<[f64; D]>,
+    ) -> Result<()> {
+        let (s, h) = (self.s, self.h);
+        let v0 = self.parts.velocity_static(p);
+        let mut z = [[0.0; D]; MAX_GAUSS_STAGES];
+        let mut f = [[0.0; D]; MAX_GAUSS_STAGES];
+        let mut minv_f = [[0.0; D]; MAX_GAUSS_STAGES];
+        let scale = q.iter().fold(1e-300f64, |m, x| m.max(x.abs()));
+        let mut previous = f64::INFINITY;
+        let mut converged = false;
+        for it in 0..30 {
+            self.eval_forces_static(q, &v0, &z, &mut f, &mut minv_f);
+            self.iterations += 1;
+            let mut change = 0.0f64;
+            for i in 0..s {
+                for r in 0..D {
+                    let sum: f64 = (0..s).map(|j| self.a2[i * s + j] * minv_f[j][r]).sum();
+                    let zn = h * h * sum;
+                    change = change.max((zn - z[i][r]).abs());
+                    z[i][r] = zn;
+                }
+            }
+            if !change.is_finite() || (it >= 2 && change > 0.5 * previous) {
+                if change.is_finite() && change <= 1e-14 * scale {
+                    self.eval_forces_static(q, &v0, &z, &mut f, &mut minv_f);
+                    converged = true;
+                }
+                break;
+            }
+            if change <= 1e-15 * scale {
+                self.eval_forces_static(q, &v0, &z, &mut f, &mut minv_f);
+                converged = true;
+                break;
+            }
+            previous = change;
+        }
+        if !converged {
+            // As the general step: the simplified Newton iteration from Z = 0.
+            self.v0.copy_from_slice(&v0);
+            let (mut dq, mut dp) = ([0.0; D], [0.0; D]);
+            self.newton(t, q, &mut dq, &mut dp)?;
+            for r in 0..D {
+                q[r] += dq[r];
+                p[r] += dp[r];
+            }
+            return Ok(());
+        }
+        for r in 0..D {
+            let mut dq = 0.0;
+            let mut dp = 0.0;
+            for i in 0..s {
+                dq += self.ba[i] * minv_f[i][r];
+                dp += self.b[i] * f[i][r];
+            }
+            q[r] += h * v0[r] + h * h * dq;
+            p[r] += h * dp;
+        }
+        Ok(())
+    }
 }

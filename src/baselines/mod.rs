@@ -171,6 +171,23 @@ impl CanonicalParts {
         }
     }
 
+    /// v = M⁻¹ p for a fixed-size state, with the same arithmetic as
+    /// [`velocity`](Self::velocity).
+    #[inline(always)]
+    pub fn velocity_static<const D: usize>(&self, p: &[f64; D]) -> [f64; D] {
+        match &self.inverse {
+            InverseMass::Identity => *p,
+            InverseMass::Diagonal(m) => std::array::from_fn(|r| m[r] * p[r]),
+            InverseMass::Dense(m) => std::array::from_fn(|r| {
+                m[r * D..(r + 1) * D]
+                    .iter()
+                    .zip(p)
+                    .map(|(a, b)| a * b)
+                    .sum()
+            }),
+        }
+    }
+
     pub fn check(&self, q: &[f64], p: &[f64], qn: &[f64], pn: &[f64]) -> Result<()> {
         ensure_len("q", self.d, q.len())?;
         ensure_len("p", self.d, p.len())?;
@@ -178,6 +195,35 @@ impl CanonicalParts {
         ensure_len("p_next", self.d, pn.len())?;
         Ok(())
     }
+}
+
+/// The force f(q) = −∇V(q) of a fixed-size position.
+#[inline(always)]
+pub(crate) fn force_static<L: Lagrangian, const D: usize>(
+    lagrangian: &L,
+    q: &[f64; D],
+) -> [f64; D] {
+    let mut f = [0.0; D];
+    lagrangian.force(q, &mut f);
+    f
+}
+
+/// The fixed-size-state kernel of a fixed-step baseline: the same step as
+/// [`OneStepMethod::step`], bit for bit, on `[f64; D]` positions and momenta updated in place
+/// (the study's loop runs it for the dimensions of the built-in scenes). The caller owns the
+/// first-same-as-last force: `fsal` holds f(q) when known and receives f at the new q from the
+/// methods that end with it.
+pub(crate) trait StaticKernel: OneStepMethod {
+    /// Dimension D the method was built for.
+    fn dim(&self) -> usize;
+    /// One step from (q, p) at time t, in place.
+    fn advance<const D: usize>(
+        &mut self,
+        t: f64,
+        q: &mut [f64; D],
+        p: &mut [f64; D],
+        fsal: &mut Option<[f64; D]>,
+    ) -> Result<()>;
 }
 
 /// The Galerkin variational integrator behind the [`OneStepMethod`] interface (owns a
