@@ -15,8 +15,8 @@
 use super::{CanonicalParts, OneStepMethod, StaticKernel, force_static};
 use crate::error::{GviError, Result};
 use crate::lagrangian::Lagrangian;
+use crate::linalg::Lu;
 use crate::quadrature::{GaussLegendre, Quadrature};
-use nalgebra::{DMatrix, DVector};
 
 /// The largest number of stages accepted.
 pub const MAX_GAUSS_STAGES: usize = 8;
@@ -61,6 +61,12 @@ pub struct GaussCollocationBaseline<'a, L: Lagrangian> {
     minv_f: Vec<f64>,
     stage_q: Vec<f64>,
     jac: Vec<f64>,
+    // Simplified Newton: M⁻¹∂f, the iteration matrix and its LU, residual and scratch.
+    mj: Vec<f64>,
+    newton_matrix: Vec<f64>,
+    lu: Lu,
+    res: Vec<f64>,
+    scratch: Vec<f64>,
 }
 
 impl<'a, L: Lagrangian> GaussCollocationBaseline<'a, L> {
@@ -115,6 +121,11 @@ impl<'a, L: Lagrangian> GaussCollocationBaseline<'a, L> {
             minv_f: vec![0.0; s * d],
             stage_q: vec![0.0; d],
             jac: vec![0.0; d * d],
+            mj: vec![0.0; d * d],
+            newton_matrix: vec![0.0; s * d * s * d],
+            lu: Lu::with_capacity(s * d),
+            res: vec![0.0; s * d],
+            scratch: vec![0.0; s * d],
         })
     }
 
@@ -204,28 +215,31 @@ impl<L: Lagrangian> GaussCollocationBaseline<'_, L> {
     /// where the fixed-point iteration does not contract.
     fn newton(&mut self, t: f64, q: &[f64], dq_out: &mut [f64], dp_out: &mut [f64]) -> Result<()> {
         let (d, s, h) = (self.parts.d, self.s, self.h);
-        // Simplified Newton matrix I − h² (A² ⊗ M⁻¹ ∂f(q)).
+        // Simplified Newton matrix I − h² (A² ⊗ M⁻¹ ∂f(q)), factorised in place.
         self.lagrangian.force_jacobian(q, &mut self.jac);
         let minv = &self.parts.inverse_mass;
-        let mut mj = vec![0.0; d * d];
         for r in 0..d {
             for c in 0..d {
-                mj[r * d + c] = (0..d).map(|k| minv[(r, k)] * self.jac[k * d + c]).sum();
+                self.mj[r * d + c] = (0..d).map(|k| minv[(r, k)] * self.jac[k * d + c]).sum();
             }
         }
         let size = s * d;
-        let mut matrix = DMatrix::<f64>::identity(size, size);
+        self.newton_matrix.iter_mut().for_each(|x| *x = 0.0);
+        for k in 0..size {
+            self.newton_matrix[k * size + k] = 1.0;
+        }
         for i in 0..s {
             for j in 0..s {
                 let w = h * h * self.a2[i * s + j];
                 for r in 0..d {
                     for c in 0..d {
-                        matrix[(i * d + r, j * d + c)] -= w * mj[r * d + c];
+                        self.newton_matrix[(i * d + r) * size + j * d + c] -=
+                            w * self.mj[r * d + c];
                     }
                 }
             }
         }
-        let lu = matrix.lu();
+        let singular = self.lu.refactor(&self.newton_matrix).is_err();
         self.z.iter_mut().for_each(|x| *x = 0.0);
         let scale = q.iter().fold(1e-300f64, |m, x| m.max(x.abs()));
         let fail = |residual: f64, iterations: usize, reason: &str| GviError::NewtonFailure {
@@ -235,6 +249,7 @@ impl<L: Lagrangian> GaussCollocationBaseline<'_, L> {
             iterations,
             reason: format!("Gauss collocation (s = {s}): {reason}"),
         };
+        let amax = |v: &[f64]| v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
         let mut previous = f64::INFINITY;
         let mut converged = false;
         let mut refresh = true;
@@ -242,24 +257,26 @@ impl<L: Lagrangian> GaussCollocationBaseline<'_, L> {
             self.eval_forces(q);
             self.iterations += 1;
             // Residual R = h² (A² ⊗ I) M⁻¹F − Z.
-            let mut res = DVector::<f64>::zeros(size);
             for i in 0..s {
                 for r in 0..d {
                     let sum: f64 = (0..s)
                         .map(|j| self.a2[i * s + j] * self.minv_f[j * d + r])
                         .sum();
-                    res[i * d + r] = h * h * sum - self.z[i * d + r];
+                    self.res[i * d + r] = h * h * sum - self.z[i * d + r];
                 }
             }
-            let delta = lu
-                .solve(&res)
-                .ok_or_else(|| fail(res.amax(), it, "singular iteration matrix"))?;
-            let size_delta = delta.amax();
+            let residual = amax(&self.res);
+            if singular {
+                return Err(fail(residual, it, "singular iteration matrix"));
+            }
+            // The increment, in place of the residual.
+            self.lu.solve_in_place(&mut self.res, &mut self.scratch);
+            let size_delta = amax(&self.res);
             if !size_delta.is_finite() {
-                return Err(fail(res.amax(), it, "non-finite iterate"));
+                return Err(fail(residual, it, "non-finite iterate"));
             }
             for k in 0..size {
-                self.z[k] += delta[k];
+                self.z[k] += self.res[k];
             }
             // Converged at round-off: the increment is at machine level of q (then the forces of
             // the last iterate are the converged ones), or it has stopped decreasing while
@@ -274,7 +291,7 @@ impl<L: Lagrangian> GaussCollocationBaseline<'_, L> {
                 break;
             }
             if it > 8 && size_delta > 2.0 * previous {
-                return Err(fail(res.amax(), it, "iteration diverges"));
+                return Err(fail(residual, it, "iteration diverges"));
             }
             previous = size_delta;
         }
