@@ -318,6 +318,7 @@ struct Case {
 }
 
 fn cases() -> Vec<Case> {
+    #[cfg_attr(not(feature = "dop853"), allow(unused_mut))]
     let mut cases = vec![
         Case {
             label: "stormer-verlet",
