@@ -155,3 +155,179 @@ fn dop853_meets_its_tolerance_on_kepler() {
         last = e;
     }
 }
+
+/// The study's metric for Kepler e = 0.6: max position error over the samples t = 2k,
+/// k ≤ 100 (T = 200), of a DOP853 run through `run_peer`.
+#[cfg(feature = "dop853")]
+fn dop853_study_error(tol: f64) -> f64 {
+    use galerkin_vi::scene::InitialState;
+    use galerkin_vi::studies::peers::{Peer, run_peer};
+    let exact = KEPLER.exact_solution(0.0, &Q0, &P0).unwrap().unwrap();
+    let initial = InitialState {
+        t0: 0.0,
+        q: Q0.to_vec(),
+        p: P0.to_vec(),
+    };
+    let run = run_peer(
+        &*KEPLER,
+        &initial,
+        Peer::Dop853 { tolerance: tol },
+        2.0,
+        1,
+        100,
+    )
+    .unwrap();
+    assert!(run.failure.is_none(), "{:?}", run.failure);
+    assert_eq!(run.q.len(), 101);
+    run.q
+        .iter()
+        .enumerate()
+        .map(|(k, q)| {
+            let e = exact.position(2.0 * k as f64);
+            (q[0] - e[0]).abs().max((q[1] - e[1]).abs())
+        })
+        .fold(0.0, f64::max)
+}
+
+/// The fast DOP853 (fixed-size state, one reused method, no stored history) takes the same
+/// steps as the previous `Vec<f64>`/`IVP::solve` wrapper: its T = 200 errors are the ones that
+/// wrapper recorded in docs/studies/work_precision.csv (tol 1e-8: 5.00616867940118e-4,
+/// 1e-12: 2.4581763846676097e-8, 1e-14: 1.4432652295504056e-10), to round-off.
+#[cfg(feature = "dop853")]
+#[test]
+fn fast_dop853_matches_the_previous_wrapper() {
+    for (tol, before) in [
+        (1e-8, 5.00616867940118e-4),
+        (1e-12, 2.4581763846676097e-8),
+        (1e-14, 1.4432652295504056e-10),
+    ] {
+        let e = dop853_study_error(tol);
+        eprintln!("dop853 tol {tol:e}: T = 200 error {e:e} (before: {before:e})");
+        assert!(
+            (e - before).abs() <= 1e-6 * before,
+            "tol {tol:e}: error {e:e}, the previous wrapper's {before:e}"
+        );
+    }
+}
+
+/// The fixed-size-state dispatch and the `Vec<f64>` fallback give the same states, bit for
+/// bit, and the same costs; a dimension outside the built-in ones falls back.
+#[cfg(feature = "dop853")]
+#[test]
+fn dop853_static_and_dynamic_states_agree() {
+    use galerkin_vi::baselines::Dop853Baseline;
+    use galerkin_vi::systems::NBody;
+    fn compare<L: galerkin_vi::Lagrangian>(lag: &L, q0: &[f64], p0: &[f64], h: f64, static_: bool) {
+        let mut a = Dop853Baseline::new(lag, h, 1e-10).unwrap();
+        let mut b = Dop853Baseline::new_dynamic(lag, h, 1e-10).unwrap();
+        assert_eq!(a.has_static_state(), static_);
+        assert!(!b.has_static_state());
+        let (qa, pa) = integrate_one_step(&mut a, q0, p0, 20).unwrap();
+        let (qb, pb) = integrate_one_step(&mut b, q0, p0, 20).unwrap();
+        assert_eq!(qa, qb);
+        assert_eq!(pa, pb);
+        assert_eq!(a.force_evaluations(), b.force_evaluations());
+        assert_eq!(a.adaptive_steps(), b.adaptive_steps());
+        assert!(qa.iter().flatten().all(|x| x.is_finite()));
+    }
+    compare(&*KEPLER, &Q0, &P0, 2.0, true);
+    compare(&HarmonicOscillator::unit(), &[1.0], &[0.0], 0.7, true);
+    // Two bodies in the plane (D = 4), mass ½ each: the Kepler orbit in absolute coordinates.
+    let two = NBody::new(vec![0.5, 0.5], 1.0, 2).unwrap();
+    compare(
+        &two,
+        &[0.2, 0.0, -0.2, 0.0],
+        &[0.0, 0.5, 0.0, -0.5],
+        1.0,
+        true,
+    );
+    // Four bodies on a rotating square (D = 8): no fixed-size instance, the fallback.
+    let four = NBody::new(vec![1.0; 4], 1.0, 2).unwrap();
+    compare(
+        &four,
+        &[1.0, 0.0, 0.0, 1.0, -1.0, 0.0, 0.0, -1.0],
+        &[0.0, 1.0, -1.0, 0.0, 0.0, -1.0, 1.0, 0.0],
+        0.5,
+        false,
+    );
+}
+
+/// The study's fixed-size kernels (`run_peer` for D = 1, 2, 4, 6, 18, 30) take the same steps
+/// as the generic `OneStepMethod::step`, bit for bit, with the same force evaluation counts.
+#[test]
+fn static_kernels_match_the_generic_step() {
+    use galerkin_vi::scene::InitialState;
+    use galerkin_vi::studies::peers::{Peer, run_peer};
+    use galerkin_vi::systems::NBody;
+    fn compare<S: System>(system: &S, q0: &[f64], p0: &[f64], h: f64) {
+        let (divisor, samples) = (8, 12);
+        let initial = InitialState {
+            t0: 0.0,
+            q: q0.to_vec(),
+            p: p0.to_vec(),
+        };
+        let peers = [
+            Peer::StormerVerlet,
+            Peer::Rk4,
+            Peer::Gauss { s: 2 },
+            Peer::Gauss { s: 4 },
+            Peer::Composition {
+                scheme: CompositionScheme::Yoshida6,
+            },
+            Peer::Composition {
+                scheme: CompositionScheme::KahanLi8,
+            },
+        ];
+        for peer in peers {
+            let run =
+                run_peer(system, &initial, peer, h * divisor as f64, divisor, samples).unwrap();
+            assert!(run.failure.is_none(), "{peer:?}: {:?}", run.failure);
+            let steps = divisor * samples;
+            let (qs, ps, evaluations) = match peer {
+                Peer::StormerVerlet => {
+                    let mut m = StormerVerlet::new(system, h).unwrap();
+                    let (q, p) = integrate_one_step(&mut m, q0, p0, steps).unwrap();
+                    (q, p, m.force_evaluations())
+                }
+                Peer::Rk4 => {
+                    let mut m = Rk4::new(system, h).unwrap();
+                    let (q, p) = integrate_one_step(&mut m, q0, p0, steps).unwrap();
+                    (q, p, m.force_evaluations())
+                }
+                Peer::Gauss { s } => {
+                    let mut m = GaussCollocationBaseline::new(system, s, h).unwrap();
+                    let (q, p) = integrate_one_step(&mut m, q0, p0, steps).unwrap();
+                    (q, p, m.force_evaluations())
+                }
+                Peer::Composition { scheme } => {
+                    let mut m = Composition::new(system, scheme, h).unwrap();
+                    let (q, p) = integrate_one_step(&mut m, q0, p0, steps).unwrap();
+                    (q, p, m.force_evaluations())
+                }
+                _ => unreachable!(),
+            };
+            for k in 0..=samples {
+                assert_eq!(run.q[k], qs[k * divisor], "{peer:?} q at sample {k}");
+                assert_eq!(run.p[k], ps[k * divisor], "{peer:?} p at sample {k}");
+            }
+            assert_eq!(run.force_evaluations, evaluations, "{peer:?}");
+        }
+    }
+    // D = 2 (identity mass), D = 1.
+    compare(&*KEPLER, &Q0, &P0, 0.05);
+    compare(&HarmonicOscillator::unit(), &[1.0], &[0.0], 0.3);
+    // D = 4 with a diagonal mass matrix (two bodies of mass ½), and a large step where Gauss
+    // needs its Newton fallback.
+    let two = NBody::new(vec![0.5, 0.5], 1.0, 2).unwrap();
+    let (q2, p2) = ([0.2, 0.0, -0.2, 0.0], [0.0, 0.5, 0.0, -0.5]);
+    compare(&two, &q2, &p2, 0.02);
+    compare(&HarmonicOscillator::unit(), &[1.0], &[0.0], 1.5);
+    // D = 8: the generic loop.
+    let four = NBody::new(vec![1.0; 4], 1.0, 2).unwrap();
+    compare(
+        &four,
+        &[1.0, 0.0, 0.0, 1.0, -1.0, 0.0, 0.0, -1.0],
+        &[0.0, 0.6, -0.6, 0.0, 0.0, -0.6, 0.6, 0.0],
+        0.01,
+    );
+}

@@ -14,7 +14,7 @@
 //! step is reused at the start of the next (first same as last), so a step costs s force
 //! evaluations.
 
-use super::{CanonicalParts, OneStepMethod};
+use super::{CanonicalParts, OneStepMethod, StaticKernel, force_static};
 use crate::error::Result;
 use crate::lagrangian::Lagrangian;
 
@@ -182,6 +182,51 @@ impl<L: Lagrangian> OneStepMethod for Composition<'_, L> {
         self.cached_q.copy_from_slice(q_next);
         self.cached_force.copy_from_slice(&self.force);
         self.has_cache = true;
+        Ok(())
+    }
+}
+
+impl<L: Lagrangian> StaticKernel for Composition<'_, L> {
+    fn dim(&self) -> usize {
+        self.parts.d
+    }
+
+    #[inline]
+    fn advance<const D: usize>(
+        &mut self,
+        _t: f64,
+        q: &mut [f64; D],
+        p: &mut [f64; D],
+        fsal: &mut Option<[f64; D]>,
+    ) -> Result<()> {
+        let h = self.h;
+        let mut f = match fsal {
+            Some(f) => *f,
+            None => {
+                self.evaluations += 1;
+                force_static(self.lagrangian, q)
+            }
+        };
+        let gamma = &self.gamma;
+        let s = gamma.len();
+        let mut kick = 0.5 * gamma[0] * h;
+        for k in 0..s {
+            for r in 0..D {
+                p[r] += kick * f[r];
+            }
+            let vel = self.parts.velocity_static(p);
+            let drift = gamma[k] * h;
+            for r in 0..D {
+                q[r] += drift * vel[r];
+            }
+            f = force_static(self.lagrangian, q);
+            kick = 0.5 * h * (gamma[k] + gamma.get(k + 1).copied().unwrap_or(0.0));
+        }
+        self.evaluations += s;
+        for r in 0..D {
+            p[r] += kick * f[r];
+        }
+        *fsal = Some(f);
         Ok(())
     }
 }

@@ -12,11 +12,11 @@
 //! The sD equations are solved by simplified Newton (Jacobian I − h²(A²⊗M⁻¹)·(I⊗∂f(q)),
 //! factorised once per step) iterated until the increment stops decreasing at round-off level.
 
-use super::{CanonicalParts, OneStepMethod};
+use super::{CanonicalParts, OneStepMethod, StaticKernel, force_static};
 use crate::error::{GviError, Result};
 use crate::lagrangian::Lagrangian;
+use crate::linalg::Lu;
 use crate::quadrature::{GaussLegendre, Quadrature};
-use nalgebra::{DMatrix, DVector};
 
 /// The largest number of stages accepted.
 pub const MAX_GAUSS_STAGES: usize = 8;
@@ -61,6 +61,12 @@ pub struct GaussCollocationBaseline<'a, L: Lagrangian> {
     minv_f: Vec<f64>,
     stage_q: Vec<f64>,
     jac: Vec<f64>,
+    // Simplified Newton: M⁻¹∂f, the iteration matrix and its LU, residual and scratch.
+    mj: Vec<f64>,
+    newton_matrix: Vec<f64>,
+    lu: Lu,
+    res: Vec<f64>,
+    scratch: Vec<f64>,
 }
 
 impl<'a, L: Lagrangian> GaussCollocationBaseline<'a, L> {
@@ -115,6 +121,11 @@ impl<'a, L: Lagrangian> GaussCollocationBaseline<'a, L> {
             minv_f: vec![0.0; s * d],
             stage_q: vec![0.0; d],
             jac: vec![0.0; d * d],
+            mj: vec![0.0; d * d],
+            newton_matrix: vec![0.0; s * d * s * d],
+            lu: Lu::with_capacity(s * d),
+            res: vec![0.0; s * d],
+            scratch: vec![0.0; s * d],
         })
     }
 
@@ -137,9 +148,10 @@ impl<'a, L: Lagrangian> GaussCollocationBaseline<'a, L> {
             }
             self.lagrangian
                 .force(&self.stage_q, &mut self.f[i * d..(i + 1) * d]);
-            let fi = self.f[i * d..(i + 1) * d].to_vec();
-            self.parts
-                .velocity(&fi, &mut self.minv_f[i * d..(i + 1) * d]);
+            self.parts.velocity(
+                &self.f[i * d..(i + 1) * d],
+                &mut self.minv_f[i * d..(i + 1) * d],
+            );
         }
         self.evaluations += self.s;
     }
@@ -189,7 +201,6 @@ impl<L: Lagrangian> GaussCollocationBaseline<'_, L> {
         dp_out: &mut [f64],
     ) -> Result<()> {
         self.parts.check(q, p, dq_out, dp_out)?;
-        let (d, s, h) = (self.parts.d, self.s, self.h);
         let mut v0 = std::mem::take(&mut self.v0);
         self.parts.velocity(p, &mut v0);
         self.v0 = v0;
@@ -197,28 +208,38 @@ impl<L: Lagrangian> GaussCollocationBaseline<'_, L> {
             self.finish(dq_out, dp_out);
             return Ok(());
         }
-        // Simplified Newton matrix I − h² (A² ⊗ M⁻¹ ∂f(q)).
+        self.newton(t, q, dq_out, dp_out)
+    }
+
+    /// The simplified Newton iteration from Z = 0 (with `v0` = M⁻¹p already set), for steps
+    /// where the fixed-point iteration does not contract.
+    fn newton(&mut self, t: f64, q: &[f64], dq_out: &mut [f64], dp_out: &mut [f64]) -> Result<()> {
+        let (d, s, h) = (self.parts.d, self.s, self.h);
+        // Simplified Newton matrix I − h² (A² ⊗ M⁻¹ ∂f(q)), factorised in place.
         self.lagrangian.force_jacobian(q, &mut self.jac);
         let minv = &self.parts.inverse_mass;
-        let mut mj = vec![0.0; d * d];
         for r in 0..d {
             for c in 0..d {
-                mj[r * d + c] = (0..d).map(|k| minv[(r, k)] * self.jac[k * d + c]).sum();
+                self.mj[r * d + c] = (0..d).map(|k| minv[(r, k)] * self.jac[k * d + c]).sum();
             }
         }
         let size = s * d;
-        let mut matrix = DMatrix::<f64>::identity(size, size);
+        self.newton_matrix.iter_mut().for_each(|x| *x = 0.0);
+        for k in 0..size {
+            self.newton_matrix[k * size + k] = 1.0;
+        }
         for i in 0..s {
             for j in 0..s {
                 let w = h * h * self.a2[i * s + j];
                 for r in 0..d {
                     for c in 0..d {
-                        matrix[(i * d + r, j * d + c)] -= w * mj[r * d + c];
+                        self.newton_matrix[(i * d + r) * size + j * d + c] -=
+                            w * self.mj[r * d + c];
                     }
                 }
             }
         }
-        let lu = matrix.lu();
+        let singular = self.lu.refactor(&self.newton_matrix).is_err();
         self.z.iter_mut().for_each(|x| *x = 0.0);
         let scale = q.iter().fold(1e-300f64, |m, x| m.max(x.abs()));
         let fail = |residual: f64, iterations: usize, reason: &str| GviError::NewtonFailure {
@@ -228,6 +249,7 @@ impl<L: Lagrangian> GaussCollocationBaseline<'_, L> {
             iterations,
             reason: format!("Gauss collocation (s = {s}): {reason}"),
         };
+        let amax = |v: &[f64]| v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
         let mut previous = f64::INFINITY;
         let mut converged = false;
         let mut refresh = true;
@@ -235,24 +257,26 @@ impl<L: Lagrangian> GaussCollocationBaseline<'_, L> {
             self.eval_forces(q);
             self.iterations += 1;
             // Residual R = h² (A² ⊗ I) M⁻¹F − Z.
-            let mut res = DVector::<f64>::zeros(size);
             for i in 0..s {
                 for r in 0..d {
                     let sum: f64 = (0..s)
                         .map(|j| self.a2[i * s + j] * self.minv_f[j * d + r])
                         .sum();
-                    res[i * d + r] = h * h * sum - self.z[i * d + r];
+                    self.res[i * d + r] = h * h * sum - self.z[i * d + r];
                 }
             }
-            let delta = lu
-                .solve(&res)
-                .ok_or_else(|| fail(res.amax(), it, "singular iteration matrix"))?;
-            let size_delta = delta.amax();
+            let residual = amax(&self.res);
+            if singular {
+                return Err(fail(residual, it, "singular iteration matrix"));
+            }
+            // The increment, in place of the residual.
+            self.lu.solve_in_place(&mut self.res, &mut self.scratch);
+            let size_delta = amax(&self.res);
             if !size_delta.is_finite() {
-                return Err(fail(res.amax(), it, "non-finite iterate"));
+                return Err(fail(residual, it, "non-finite iterate"));
             }
             for k in 0..size {
-                self.z[k] += delta[k];
+                self.z[k] += self.res[k];
             }
             // Converged at round-off: the increment is at machine level of q (then the forces of
             // the last iterate are the converged ones), or it has stopped decreasing while
@@ -267,7 +291,7 @@ impl<L: Lagrangian> GaussCollocationBaseline<'_, L> {
                 break;
             }
             if it > 8 && size_delta > 2.0 * previous {
-                return Err(fail(res.amax(), it, "iteration diverges"));
+                return Err(fail(residual, it, "iteration diverges"));
             }
             previous = size_delta;
         }
@@ -383,4 +407,98 @@ fn kahan(x: &mut f64, c: &mut f64, dx: f64) {
     let t = *x + y;
     *c = (t - *x) - y;
     *x = t;
+}
+
+impl<L: Lagrangian> GaussCollocationBaseline<'_, L> {
+    /// Stage forces F_i and M⁻¹F_i at the current Z, fixed-size (as `eval_forces`).
+    #[inline(always)]
+    fn eval_forces_static<const D: usize>(
+        &mut self,
+        q: &[f64; D],
+        v0: &[f64; D],
+        z: &[[f64; D]; MAX_GAUSS_STAGES],
+        f: &mut [[f64; D]; MAX_GAUSS_STAGES],
+        minv_f: &mut [[f64; D]; MAX_GAUSS_STAGES],
+    ) {
+        let h = self.h;
+        for i in 0..self.s {
+            let stage_q: [f64; D] = std::array::from_fn(|r| q[r] + h * self.c[i] * v0[r] + z[i][r]);
+            f[i] = force_static(self.lagrangian, &stage_q);
+            minv_f[i] = self.parts.velocity_static(&f[i]);
+        }
+        self.evaluations += self.s;
+    }
+}
+
+impl<L: Lagrangian> StaticKernel for GaussCollocationBaseline<'_, L> {
+    fn dim(&self) -> usize {
+        self.parts.d
+    }
+
+    /// The fixed-point iteration of `fixed_point` on fixed-size stages; when it does not
+    /// contract, the general step (fixed point again, then simplified Newton) takes over.
+    fn advance<const D: usize>(
+        &mut self,
+        t: f64,
+        q: &mut [f64; D],
+        p: &mut [f64; D],
+        _fsal: &mut Option<[f64; D]>,
+    ) -> Result<()> {
+        let (s, h) = (self.s, self.h);
+        let v0 = self.parts.velocity_static(p);
+        let mut z = [[0.0; D]; MAX_GAUSS_STAGES];
+        let mut f = [[0.0; D]; MAX_GAUSS_STAGES];
+        let mut minv_f = [[0.0; D]; MAX_GAUSS_STAGES];
+        let scale = q.iter().fold(1e-300f64, |m, x| m.max(x.abs()));
+        let mut previous = f64::INFINITY;
+        let mut converged = false;
+        for it in 0..30 {
+            self.eval_forces_static(q, &v0, &z, &mut f, &mut minv_f);
+            self.iterations += 1;
+            let mut change = 0.0f64;
+            for i in 0..s {
+                for r in 0..D {
+                    let sum: f64 = (0..s).map(|j| self.a2[i * s + j] * minv_f[j][r]).sum();
+                    let zn = h * h * sum;
+                    change = change.max((zn - z[i][r]).abs());
+                    z[i][r] = zn;
+                }
+            }
+            if !change.is_finite() || (it >= 2 && change > 0.5 * previous) {
+                if change.is_finite() && change <= 1e-14 * scale {
+                    self.eval_forces_static(q, &v0, &z, &mut f, &mut minv_f);
+                    converged = true;
+                }
+                break;
+            }
+            if change <= 1e-15 * scale {
+                self.eval_forces_static(q, &v0, &z, &mut f, &mut minv_f);
+                converged = true;
+                break;
+            }
+            previous = change;
+        }
+        if !converged {
+            // As the general step: the simplified Newton iteration from Z = 0.
+            self.v0.copy_from_slice(&v0);
+            let (mut dq, mut dp) = ([0.0; D], [0.0; D]);
+            self.newton(t, q, &mut dq, &mut dp)?;
+            for r in 0..D {
+                q[r] += dq[r];
+                p[r] += dp[r];
+            }
+            return Ok(());
+        }
+        for r in 0..D {
+            let mut dq = 0.0;
+            let mut dp = 0.0;
+            for i in 0..s {
+                dq += self.ba[i] * minv_f[i][r];
+                dp += self.b[i] * f[i][r];
+            }
+            q[r] += h * v0[r] + h * h * dq;
+            p[r] += h * dp;
+        }
+        Ok(())
+    }
 }

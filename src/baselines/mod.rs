@@ -90,11 +90,22 @@ pub fn integrate_one_step<M: OneStepMethod + ?Sized>(
     Ok((qs, ps))
 }
 
+/// M⁻¹ in the form that makes v = M⁻¹p cheapest: the identity (Kepler, oscillator, pendulum
+/// with unit mass), a diagonal (N bodies), or a dense row-major matrix.
+#[derive(Debug, Clone)]
+pub(crate) enum InverseMass {
+    Identity,
+    Diagonal(Vec<f64>),
+    Dense(Vec<f64>),
+}
+
 /// The pieces of a mechanical Lagrangian the classical methods need: D and M⁻¹.
 #[derive(Debug, Clone)]
 pub(crate) struct CanonicalParts {
     pub d: usize,
     pub inverse_mass: DMatrix<f64>,
+    /// The same M⁻¹, stored for a cheap matrix–vector product.
+    pub inverse: InverseMass,
 }
 
 impl CanonicalParts {
@@ -123,13 +134,57 @@ impl CanonicalParts {
                 value: f64::NAN,
                 reason: "singular".into(),
             })?;
-        Ok(CanonicalParts { d, inverse_mass })
+        let off_diagonal_zero =
+            (0..d).all(|r| (0..d).all(|s| r == s || inverse_mass[(r, s)] == 0.0));
+        let inverse = if !off_diagonal_zero {
+            InverseMass::Dense((0..d * d).map(|k| inverse_mass[(k / d, k % d)]).collect())
+        } else if (0..d).all(|r| inverse_mass[(r, r)] == 1.0) {
+            InverseMass::Identity
+        } else {
+            InverseMass::Diagonal((0..d).map(|r| inverse_mass[(r, r)]).collect())
+        };
+        Ok(CanonicalParts {
+            d,
+            inverse_mass,
+            inverse,
+        })
     }
 
-    /// v = M⁻¹ p.
+    /// v = M⁻¹ p (a copy for M = I, d multiplications for a diagonal M; bit-for-bit the dense
+    /// product in both cases, whose other terms are exact zeros).
+    #[inline]
     pub fn velocity(&self, p: &[f64], v: &mut [f64]) {
-        for r in 0..self.d {
-            v[r] = (0..self.d).map(|s| self.inverse_mass[(r, s)] * p[s]).sum();
+        let d = self.d;
+        let (p, v) = (&p[..d], &mut v[..d]);
+        match &self.inverse {
+            InverseMass::Identity => v.copy_from_slice(p),
+            InverseMass::Diagonal(m) => {
+                for ((v, p), m) in v.iter_mut().zip(p).zip(m) {
+                    *v = m * p;
+                }
+            }
+            InverseMass::Dense(m) => {
+                for (v, row) in v.iter_mut().zip(m.chunks_exact(d)) {
+                    *v = row.iter().zip(p).map(|(a, b)| a * b).sum();
+                }
+            }
+        }
+    }
+
+    /// v = M⁻¹ p for a fixed-size state, with the same arithmetic as
+    /// [`velocity`](Self::velocity).
+    #[inline(always)]
+    pub fn velocity_static<const D: usize>(&self, p: &[f64; D]) -> [f64; D] {
+        match &self.inverse {
+            InverseMass::Identity => *p,
+            InverseMass::Diagonal(m) => std::array::from_fn(|r| m[r] * p[r]),
+            InverseMass::Dense(m) => std::array::from_fn(|r| {
+                m[r * D..(r + 1) * D]
+                    .iter()
+                    .zip(p)
+                    .map(|(a, b)| a * b)
+                    .sum()
+            }),
         }
     }
 
@@ -140,6 +195,35 @@ impl CanonicalParts {
         ensure_len("p_next", self.d, pn.len())?;
         Ok(())
     }
+}
+
+/// The force f(q) = −∇V(q) of a fixed-size position.
+#[inline(always)]
+pub(crate) fn force_static<L: Lagrangian, const D: usize>(
+    lagrangian: &L,
+    q: &[f64; D],
+) -> [f64; D] {
+    let mut f = [0.0; D];
+    lagrangian.force(q, &mut f);
+    f
+}
+
+/// The fixed-size-state kernel of a fixed-step baseline: the same step as
+/// [`OneStepMethod::step`], bit for bit, on `[f64; D]` positions and momenta updated in place
+/// (the study's loop runs it for the dimensions of the built-in scenes). The caller owns the
+/// first-same-as-last force: `fsal` holds f(q) when known and receives f at the new q from the
+/// methods that end with it.
+pub(crate) trait StaticKernel: OneStepMethod {
+    /// Dimension D the method was built for.
+    fn dim(&self) -> usize;
+    /// One step from (q, p) at time t, in place.
+    fn advance<const D: usize>(
+        &mut self,
+        t: f64,
+        q: &mut [f64; D],
+        p: &mut [f64; D],
+        fsal: &mut Option<[f64; D]>,
+    ) -> Result<()>;
 }
 
 /// The Galerkin variational integrator behind the [`OneStepMethod`] interface (owns a

@@ -1,7 +1,7 @@
 //! Classical fourth-order Runge–Kutta on the canonical equations (not symplectic: the
 //! negative control of the geometric checks).
 
-use super::{CanonicalParts, OneStepMethod};
+use super::{CanonicalParts, OneStepMethod, StaticKernel, force_static};
 use crate::error::Result;
 use crate::lagrangian::Lagrangian;
 
@@ -93,6 +93,45 @@ impl<L: Lagrangian> OneStepMethod for Rk4<'_, L> {
             let comb = |k: &[f64]| k[r] + 2.0 * k[d + r] + 2.0 * k[2 * d + r] + k[3 * d + r];
             q_next[r] = q[r] + h / 6.0 * comb(&self.kq);
             p_next[r] = p[r] + h / 6.0 * comb(&self.kp);
+        }
+        Ok(())
+    }
+}
+
+impl<L: Lagrangian> StaticKernel for Rk4<'_, L> {
+    fn dim(&self) -> usize {
+        self.parts.d
+    }
+
+    #[inline]
+    fn advance<const D: usize>(
+        &mut self,
+        _t: f64,
+        q: &mut [f64; D],
+        p: &mut [f64; D],
+        _fsal: &mut Option<[f64; D]>,
+    ) -> Result<()> {
+        let h = self.h;
+        let c = [0.0, 0.5, 0.5, 1.0];
+        self.evaluations += 4;
+        let mut kq = [[0.0; D]; 4];
+        let mut kp = [[0.0; D]; 4];
+        for s in 0..4 {
+            let (qs, ps) = if s == 0 {
+                (*q, *p)
+            } else {
+                (
+                    std::array::from_fn(|r| q[r] + c[s] * h * kq[s - 1][r]),
+                    std::array::from_fn(|r| p[r] + c[s] * h * kp[s - 1][r]),
+                )
+            };
+            kq[s] = self.parts.velocity_static(&ps);
+            kp[s] = force_static(self.lagrangian, &qs);
+        }
+        for r in 0..D {
+            let comb = |k: &[[f64; D]; 4]| k[0][r] + 2.0 * k[1][r] + 2.0 * k[2][r] + k[3][r];
+            q[r] += h / 6.0 * comb(&kq);
+            p[r] += h / 6.0 * comb(&kp);
         }
         Ok(())
     }

@@ -1,7 +1,7 @@
 //! Störmer–Verlet (leapfrog, kick–drift–kick): second order and symplectic (a positive
 //! control of the geometric checks).
 
-use super::{CanonicalParts, OneStepMethod};
+use super::{CanonicalParts, OneStepMethod, StaticKernel, force_static};
 use crate::error::Result;
 use crate::lagrangian::Lagrangian;
 
@@ -94,6 +94,42 @@ impl<L: Lagrangian> OneStepMethod for StormerVerlet<'_, L> {
         }
         self.cached_q.copy_from_slice(q_next);
         self.has_cache = true;
+        Ok(())
+    }
+}
+
+impl<L: Lagrangian> StaticKernel for StormerVerlet<'_, L> {
+    fn dim(&self) -> usize {
+        self.parts.d
+    }
+
+    #[inline]
+    fn advance<const D: usize>(
+        &mut self,
+        _t: f64,
+        q: &mut [f64; D],
+        p: &mut [f64; D],
+        fsal: &mut Option<[f64; D]>,
+    ) -> Result<()> {
+        let h = self.h;
+        let f = match fsal {
+            Some(f) => *f,
+            None => {
+                self.evaluations += 1;
+                force_static(self.lagrangian, q)
+            }
+        };
+        let half: [f64; D] = std::array::from_fn(|r| p[r] + 0.5 * h * f[r]);
+        let vel = self.parts.velocity_static(&half);
+        for r in 0..D {
+            q[r] += h * vel[r];
+        }
+        let f = force_static(self.lagrangian, q);
+        self.evaluations += 1;
+        for r in 0..D {
+            p[r] = half[r] + 0.5 * h * f[r];
+        }
+        *fsal = Some(f);
         Ok(())
     }
 }

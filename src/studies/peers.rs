@@ -3,7 +3,7 @@
 
 use crate::baselines::{
     Composition, CompositionScheme, GalerkinMethod, GaussCollocationBaseline, OneStepMethod, Rk4,
-    StormerVerlet,
+    StaticKernel, StormerVerlet,
 };
 use crate::basis::BasisKind;
 use crate::error::{GviError, Result};
@@ -102,16 +102,16 @@ pub fn run_peer<S: System>(
         }
         Peer::StormerVerlet => {
             let mut m = StormerVerlet::new(system, h)?;
-            sampled(&mut m, initial, divisor, samples)
+            sampled_fixed(&mut m, initial, divisor, samples)
         }
-        Peer::Rk4 => sampled(&mut Rk4::new(system, h)?, initial, divisor, samples),
-        Peer::Gauss { s } => sampled(
+        Peer::Rk4 => sampled_fixed(&mut Rk4::new(system, h)?, initial, divisor, samples),
+        Peer::Gauss { s } => sampled_fixed(
             &mut GaussCollocationBaseline::new(system, s, h)?,
             initial,
             divisor,
             samples,
         ),
-        Peer::Composition { scheme } => sampled(
+        Peer::Composition { scheme } => sampled_fixed(
             &mut Composition::new(system, scheme, h)?,
             initial,
             divisor,
@@ -181,6 +181,70 @@ fn sampled<M: OneStepMethod>(
         }
         run.q.push(q.clone());
         run.p.push(p.clone());
+    }
+    run.force_evaluations = m.force_evaluations();
+    run
+}
+
+/// A fixed-step baseline on the sampling grid: for the dimensions of the built-in scenes
+/// (D = 1, 2, 4, 6, 18, 30) the fixed-size kernel on `[f64; D]` states (the same arithmetic
+/// as [`OneStepMethod::step`]), otherwise the generic loop.
+pub(crate) fn sampled_fixed<M: StaticKernel>(
+    m: &mut M,
+    initial: &InitialState,
+    divisor: usize,
+    samples: usize,
+) -> SampledRun {
+    let d = initial.q.len();
+    if initial.p.len() != d || m.dim() != d {
+        // The generic loop reports the mismatch.
+        return sampled(m, initial, divisor, samples);
+    }
+    match d {
+        1 => sampled_static::<M, 1>(m, initial, divisor, samples),
+        2 => sampled_static::<M, 2>(m, initial, divisor, samples),
+        4 => sampled_static::<M, 4>(m, initial, divisor, samples),
+        6 => sampled_static::<M, 6>(m, initial, divisor, samples),
+        18 => sampled_static::<M, 18>(m, initial, divisor, samples),
+        30 => sampled_static::<M, 30>(m, initial, divisor, samples),
+        _ => sampled(m, initial, divisor, samples),
+    }
+}
+
+/// [`sampled`] with `[f64; D]` states (the caller has checked the lengths).
+fn sampled_static<M: StaticKernel, const D: usize>(
+    m: &mut M,
+    initial: &InitialState,
+    divisor: usize,
+    samples: usize,
+) -> SampledRun {
+    let mut run = SampledRun {
+        q: Vec::with_capacity(samples + 1),
+        p: Vec::with_capacity(samples + 1),
+        force_evaluations: 0,
+        failure: None,
+    };
+    run.q.push(initial.q.clone());
+    run.p.push(initial.p.clone());
+    let (mut q, mut p) = ([0.0; D], [0.0; D]);
+    q.copy_from_slice(&initial.q);
+    p.copy_from_slice(&initial.p);
+    let h = m.step_size();
+    let mut fsal = None;
+    'outer: for k in 0..samples {
+        for j in 0..divisor {
+            let t = initial.t0 + (k * divisor + j) as f64 * h;
+            if let Err(e) = m.advance(t, &mut q, &mut p, &mut fsal) {
+                run.failure = Some(e.to_string());
+                break 'outer;
+            }
+        }
+        if q.iter().chain(&p).any(|x| !x.is_finite()) {
+            run.failure = Some(format!("non-finite state at sample {}", k + 1));
+            break;
+        }
+        run.q.push(q.to_vec());
+        run.p.push(p.to_vec());
     }
     run.force_evaluations = m.force_evaluations();
     run
