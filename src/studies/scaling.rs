@@ -1,0 +1,664 @@
+//! Stage-solver scaling: wall-clock time per step of every [`StageSolver`] against the number
+//! n of basis functions (Kepler e = 0.6 and the outer solar system) and against the number N
+//! of bodies (a synthetic planetesimal ring, [`RingConfig`], at fixed n), with fitted log-log
+//! exponents and the ratio of `auto` to the fastest explicit solver at every point.
+//!
+//! Each point integrates a fixed number of steps with an integrator built once: one untimed
+//! 1-step warm-up, then the median of `repeats` timed [`GalerkinIntegrator::integrate`] calls.
+//! A point predicted to exceed `budget_seconds` (a dense LU of size s = (n − 1)·D costs ~⅔s³
+//! flops; the prediction extrapolates the same solver's previous point as s³ for `exact` and s²
+//! otherwise, or assumes 1 GFlop/s and two factorisations per step for a first `exact` point) is
+//! recorded as skipped with the reason. Every solver must give the same one-step map: the max
+//! position difference of the final state from the `exact` solver's is recorded, relative to
+//! the largest |q| of that state.
+
+use super::write_file;
+use crate::error::{GviError, Result};
+use crate::fit::log_linear_fit;
+use crate::integrator::{GalerkinIntegrator, NewtonOptions, StageSolver};
+use crate::lagrangian::Lagrangian;
+use crate::plot::{Chart, Series};
+use crate::scene::{InitialState, Scene};
+use crate::systems::{Kepler, RingConfig, planetesimal_ring};
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Solvers in the order they run (`exact` first: it is the reference of the others).
+pub const SOLVERS: [StageSolver; 4] = [
+    StageSolver::Exact,
+    StageSolver::Kronecker,
+    StageSolver::NewtonKrylov,
+    StageSolver::Auto,
+];
+
+/// Settings of [`solver_scaling`].
+#[derive(Debug, Clone, Serialize)]
+pub struct ScalingConfig {
+    /// Values of n for the n sweeps.
+    pub ns: Vec<usize>,
+    /// Values of N (bodies) for the ring sweep.
+    pub bodies: Vec<usize>,
+    /// n of the ring sweep.
+    pub ring_n: usize,
+    /// Step of the Kepler sweep.
+    pub kepler_h: f64,
+    /// Steps per run: Kepler, outer solar system, ring.
+    pub steps: [usize; 3],
+    /// Timed runs per point (the median is reported).
+    pub repeats: usize,
+    /// Points predicted to take longer (all runs) are skipped.
+    pub budget_seconds: f64,
+}
+
+impl ScalingConfig {
+    /// The full study: n ∈ {8, 12, 16, 24, 32, 48, 64}, N ∈ {2, 4, …, 64}, median of 3.
+    pub fn full() -> Self {
+        ScalingConfig {
+            ns: vec![8, 12, 16, 24, 32, 48, 64],
+            bodies: vec![2, 4, 8, 16, 32, 64],
+            ring_n: 16,
+            kepler_h: 1.0,
+            steps: [32, 8, 8],
+            repeats: 3,
+            budget_seconds: 8.0,
+        }
+    }
+
+    /// A seconds-long version for tests and `--quick`.
+    pub fn quick() -> Self {
+        ScalingConfig {
+            ns: vec![8, 16, 32],
+            bodies: vec![2, 4, 8],
+            ring_n: 16,
+            kepler_h: 1.0,
+            steps: [8, 2, 2],
+            repeats: 1,
+            budget_seconds: 2.0,
+        }
+    }
+
+    fn validate(&self) -> Result<()> {
+        let bad = |name: &str, reason: String| GviError::InvalidArgument {
+            name: name.into(),
+            reason,
+        };
+        if self.ns.is_empty() || self.ns.iter().any(|&n| n < 2) || self.ring_n < 2 {
+            return Err(bad("n", "every n must be at least 2".into()));
+        }
+        if self.bodies.is_empty() || self.bodies.iter().any(|&b| b < 2) {
+            return Err(bad("bodies", "every N must be at least 2".into()));
+        }
+        if !(self.kepler_h.is_finite() && self.kepler_h > 0.0) {
+            return Err(GviError::InvalidStepSize { h: self.kepler_h });
+        }
+        if self.steps.contains(&0) || self.repeats == 0 {
+            return Err(bad("steps", "steps and repeats must be positive".into()));
+        }
+        if !(self.budget_seconds.is_finite() && self.budget_seconds > 0.0) {
+            return Err(bad("budget", "must be finite and positive".into()));
+        }
+        Ok(())
+    }
+}
+
+/// One (family, size, solver) point.
+#[derive(Debug, Clone, Serialize)]
+pub struct ScalingPoint {
+    /// `kepler`, `outer-solar-system` or `ring`.
+    pub family: String,
+    /// Solver.
+    pub solver: String,
+    /// Basis functions.
+    pub n: usize,
+    /// Bodies (1 for Kepler's relative coordinate).
+    pub bodies: usize,
+    /// Configuration dimension D.
+    pub dim: usize,
+    /// Step size.
+    pub h: f64,
+    /// Steps per run.
+    pub steps: usize,
+    /// Timed runs.
+    pub runs: usize,
+    /// Median seconds per step (NaN if skipped or failed).
+    pub seconds_per_step: f64,
+    /// Newton iterations per step.
+    pub iterations: f64,
+    /// Inner (GMRES) iterations per step.
+    pub inner_iterations: f64,
+    /// Factorisations (dense LU or Kronecker freezes) per step.
+    pub factorizations: f64,
+    /// Fallbacks per step.
+    pub fallbacks: f64,
+    /// Max |q − q_exact| of the final state over max |q_exact| (None where exact did not run).
+    pub map_difference: Option<f64>,
+    /// Why the point was skipped.
+    pub skipped: Option<String>,
+    /// The integration error, if a run failed.
+    pub failure: Option<String>,
+}
+
+/// A fitted exponent: seconds per step ≈ C·xᵖ.
+#[derive(Debug, Clone, Serialize)]
+pub struct ExponentFit {
+    /// Family.
+    pub family: String,
+    /// `n` or `N`.
+    pub variable: String,
+    /// Solver.
+    pub solver: String,
+    /// The exponent p (None with fewer than 2 points).
+    pub exponent: Option<f64>,
+    /// Points used.
+    pub points: usize,
+    /// RMS residual in decades.
+    pub residual: Option<f64>,
+}
+
+/// `auto` against the fastest explicit solver at one point.
+#[derive(Debug, Clone, Serialize)]
+pub struct AutoRatio {
+    /// Family.
+    pub family: String,
+    /// n.
+    pub n: usize,
+    /// N.
+    pub bodies: usize,
+    /// The fastest of exact, kronecker, newton-krylov.
+    pub best: String,
+    /// Its seconds per step.
+    pub best_seconds: f64,
+    /// auto's seconds per step.
+    pub auto_seconds: f64,
+    /// auto / best.
+    pub ratio: f64,
+}
+
+/// The study's results.
+#[derive(Debug, Clone, Serialize)]
+pub struct ScalingStudy {
+    /// Settings.
+    pub config: ScalingConfig,
+    /// Every point, in run order.
+    pub points: Vec<ScalingPoint>,
+    /// Fitted exponents.
+    pub fits: Vec<ExponentFit>,
+    /// auto / best at every point where auto and another solver ran.
+    pub ratios: Vec<AutoRatio>,
+}
+
+struct Case {
+    family: &'static str,
+    n: usize,
+    bodies: usize,
+    h: f64,
+    steps: usize,
+}
+
+/// Run the study (`progress`: show a bar on a terminal).
+pub fn solver_scaling(config: &ScalingConfig, progress: bool) -> Result<ScalingStudy> {
+    config.validate()?;
+    let kepler_scene = Scene::load("kepler")?;
+    let kepler = Kepler::new(1.0)?;
+    let outer_scene = Scene::load("outer-solar-system")?;
+    let (outer, outer_init) = outer_scene
+        .system
+        .nbody()?
+        .ok_or_else(|| GviError::Unsupported("outer-solar-system is not an N-body scene".into()))?;
+    let mut cases = Vec::new();
+    for &n in &config.ns {
+        cases.push(Case {
+            family: "kepler",
+            n,
+            bodies: 1,
+            h: config.kepler_h,
+            steps: config.steps[0],
+        });
+    }
+    for &n in &config.ns {
+        let (h, steps) = (outer_scene.method.h, config.steps[1]);
+        cases.push(Case {
+            family: "outer-solar-system",
+            n,
+            bodies: outer.bodies(),
+            h,
+            steps,
+        });
+    }
+    for &b in &config.bodies {
+        let h = RingConfig::with_bodies(b).step();
+        cases.push(Case {
+            family: "ring",
+            n: config.ring_n,
+            bodies: b,
+            h,
+            steps: config.steps[2],
+        });
+    }
+    let pb = progress.then(|| crate::progress::bar(cases.len() * SOLVERS.len(), "solver-scaling"));
+    let mut points = Vec::new();
+    // Previous measured (size, seconds per step) per (family, solver), for the skip prediction.
+    let mut last: std::collections::HashMap<(&str, StageSolver), (f64, f64)> = Default::default();
+    for case in &cases {
+        let ring;
+        let (init, run): (&InitialState, &dyn Fn(&Runner) -> Outcome) = match case.family {
+            "kepler" => (&kepler_scene.initial, &|r: &Runner| r.run(&kepler)),
+            "outer-solar-system" => (&outer_init, &|r: &Runner| r.run(&outer)),
+            _ => {
+                ring = planetesimal_ring(&RingConfig::with_bodies(case.bodies))?;
+                (&ring.1, &|r: &Runner| r.run(&ring.0))
+            }
+        };
+        let dim = init.q.len();
+        let size = ((case.n - 1) * dim) as f64;
+        let mut reference: Option<Vec<f64>> = None;
+        for solver in SOLVERS {
+            if let Some(pb) = &pb {
+                pb.set_message(format!("{} n={} N={}", case.family, case.n, case.bodies));
+            }
+            let mut point = ScalingPoint {
+                family: case.family.into(),
+                solver: solver.to_string(),
+                n: case.n,
+                bodies: case.bodies,
+                dim,
+                h: case.h,
+                steps: case.steps,
+                runs: 0,
+                seconds_per_step: f64::NAN,
+                iterations: f64::NAN,
+                inner_iterations: f64::NAN,
+                factorizations: f64::NAN,
+                fallbacks: f64::NAN,
+                map_difference: None,
+                skipped: None,
+                failure: None,
+            };
+            let predicted = predict(last.get(&(case.family, solver)).copied(), solver, size);
+            let per_run = predicted * case.steps as f64;
+            let runs = if per_run * (config.repeats + 1) as f64 <= config.budget_seconds {
+                config.repeats
+            } else if per_run <= config.budget_seconds {
+                1
+            } else {
+                0
+            };
+            if runs == 0 {
+                point.skipped = Some(format!(
+                    "predicted {per_run:.1} s per {}-step run (Newton size {size}) exceeds the \
+                     {} s budget",
+                    case.steps, config.budget_seconds
+                ));
+            } else {
+                let options = NewtonOptions {
+                    solver,
+                    ..NewtonOptions::default()
+                };
+                let runner = Runner {
+                    n: case.n,
+                    h: case.h,
+                    steps: case.steps,
+                    runs,
+                    init,
+                    options,
+                };
+                match run(&runner) {
+                    Outcome::Done { seconds, stats, q } => {
+                        let per = |x: usize| x as f64 / case.steps as f64;
+                        point.runs = runs;
+                        point.seconds_per_step = seconds / case.steps as f64;
+                        (point.iterations, point.inner_iterations) = (per(stats[0]), per(stats[1]));
+                        (point.factorizations, point.fallbacks) = (per(stats[2]), per(stats[3]));
+                        last.insert((case.family, solver), (size, point.seconds_per_step));
+                        match &reference {
+                            Some(r) => point.map_difference = Some(relative_difference(&q, r)),
+                            None if solver == StageSolver::Exact => {
+                                point.map_difference = Some(0.0);
+                                reference = Some(q);
+                            }
+                            None => {}
+                        }
+                    }
+                    Outcome::Failed(e) => point.failure = Some(e),
+                }
+            }
+            points.push(point);
+            if let Some(pb) = &pb {
+                pb.inc(1);
+            }
+        }
+    }
+    if let Some(pb) = pb {
+        pb.finish_and_clear();
+    }
+    let fits = fit_exponents(&points);
+    let ratios = auto_ratios(&points);
+    Ok(ScalingStudy {
+        config: config.clone(),
+        points,
+        fits,
+        ratios,
+    })
+}
+
+/// Predicted seconds per step.
+fn predict(previous: Option<(f64, f64)>, solver: StageSolver, size: f64) -> f64 {
+    let power = if solver == StageSolver::Exact {
+        3.0
+    } else {
+        2.0
+    };
+    match previous {
+        Some((s0, t0)) if s0 > 0.0 && t0.is_finite() => t0 * (size / s0).max(1.0).powf(power),
+        _ if solver == StageSolver::Exact => 2.0 * (2.0 / 3.0) * size.powi(3) / 1e9,
+        _ => 0.0,
+    }
+}
+
+fn relative_difference(q: &[f64], reference: &[f64]) -> f64 {
+    let scale = reference
+        .iter()
+        .fold(0.0f64, |m, x| m.max(x.abs()))
+        .max(f64::MIN_POSITIVE);
+    super::max_norm_diff(q, reference) / scale
+}
+
+struct Runner<'a> {
+    n: usize,
+    h: f64,
+    steps: usize,
+    runs: usize,
+    init: &'a InitialState,
+    options: NewtonOptions,
+}
+
+enum Outcome {
+    /// Median seconds of a run, summed [iterations, inner, factorizations, fallbacks] of the
+    /// last run and its final position.
+    Done {
+        seconds: f64,
+        stats: [usize; 4],
+        q: Vec<f64>,
+    },
+    Failed(String),
+}
+
+impl Runner<'_> {
+    fn run<L: Lagrangian>(&self, lag: &L) -> Outcome {
+        let gvi = match GalerkinIntegrator::spectral(self.n, self.h) {
+            Ok(g) => g.with_options(self.options.clone()),
+            Err(e) => return Outcome::Failed(e.to_string()),
+        };
+        let (t0, q0, p0) = (self.init.t0, &self.init.q, &self.init.p);
+        if let Err(f) = gvi.integrate(lag, t0, q0, p0, 1) {
+            return Outcome::Failed(f.error.to_string());
+        }
+        let mut times = Vec::with_capacity(self.runs);
+        let mut last = None;
+        for _ in 0..self.runs {
+            let start = Instant::now();
+            let result = gvi.integrate(lag, t0, q0, p0, self.steps);
+            times.push(start.elapsed().as_secs_f64());
+            match result {
+                Ok(t) => last = Some(t),
+                Err(f) => return Outcome::Failed(f.error.to_string()),
+            }
+        }
+        let Some(traj) = last else {
+            return Outcome::Failed("no run".into());
+        };
+        times.sort_by(f64::total_cmp);
+        let mut stats = [0usize; 4];
+        for s in &traj.stats {
+            stats[0] += s.iterations;
+            stats[1] += s.inner_iterations;
+            stats[2] += s.factorizations;
+            stats[3] += s.fallbacks;
+        }
+        let q = traj.q.last().cloned().unwrap_or_default();
+        Outcome::Done {
+            seconds: times[times.len() / 2],
+            stats,
+            q,
+        }
+    }
+}
+
+fn ran(p: &ScalingPoint) -> bool {
+    p.seconds_per_step.is_finite() && p.seconds_per_step > 0.0
+}
+
+fn fit_exponents(points: &[ScalingPoint]) -> Vec<ExponentFit> {
+    let mut fits = Vec::new();
+    for (family, variable) in [("kepler", "n"), ("outer-solar-system", "n"), ("ring", "N")] {
+        for solver in SOLVERS {
+            let pts: Vec<&ScalingPoint> = points
+                .iter()
+                .filter(|p| p.family == family && p.solver == solver.as_str() && ran(p))
+                .collect();
+            let x: Vec<f64> = pts
+                .iter()
+                .map(|p| (if variable == "n" { p.n } else { p.bodies } as f64).log10())
+                .collect();
+            let y: Vec<f64> = pts.iter().map(|p| p.seconds_per_step).collect();
+            let fit = log_linear_fit(&x, &y).ok();
+            fits.push(ExponentFit {
+                family: family.into(),
+                variable: variable.into(),
+                solver: solver.to_string(),
+                exponent: fit.map(|f| f.0),
+                points: pts.len(),
+                residual: fit.map(|f| f.2),
+            });
+        }
+    }
+    fits
+}
+
+fn auto_ratios(points: &[ScalingPoint]) -> Vec<AutoRatio> {
+    let mut out = Vec::new();
+    for auto in points.iter().filter(|p| p.solver == "auto" && ran(p)) {
+        let best = points
+            .iter()
+            .filter(|p| {
+                p.family == auto.family
+                    && p.n == auto.n
+                    && p.bodies == auto.bodies
+                    && p.solver != "auto"
+                    && ran(p)
+            })
+            .min_by(|a, b| a.seconds_per_step.total_cmp(&b.seconds_per_step));
+        if let Some(best) = best {
+            out.push(AutoRatio {
+                family: auto.family.clone(),
+                n: auto.n,
+                bodies: auto.bodies,
+                best: best.solver.clone(),
+                best_seconds: best.seconds_per_step,
+                auto_seconds: auto.seconds_per_step,
+                ratio: auto.seconds_per_step / best.seconds_per_step,
+            });
+        }
+    }
+    out
+}
+
+fn opt(x: Option<f64>) -> String {
+    x.map(|v| format!("{v:e}")).unwrap_or_default()
+}
+
+impl ScalingStudy {
+    /// Every point as CSV.
+    pub fn csv(&self) -> String {
+        let mut s = String::from(
+            "family,solver,n,bodies,dim,h,steps,runs,seconds_per_step,iterations,\
+             inner_iterations,factorizations,fallbacks,map_difference,skipped,failure\n",
+        );
+        let quote = |x: &Option<String>| {
+            x.as_deref()
+                .map(|f| format!("\"{}\"", f.replace('"', "'")))
+                .unwrap_or_default()
+        };
+        for p in &self.points {
+            s.push_str(&format!(
+                "{},{},{},{},{},{:e},{},{},{:e},{},{},{},{},{},{},{}\n",
+                p.family,
+                p.solver,
+                p.n,
+                p.bodies,
+                p.dim,
+                p.h,
+                p.steps,
+                p.runs,
+                p.seconds_per_step,
+                p.iterations,
+                p.inner_iterations,
+                p.factorizations,
+                p.fallbacks,
+                opt(p.map_difference),
+                quote(&p.skipped),
+                quote(&p.failure)
+            ));
+        }
+        s
+    }
+
+    /// Largest relative map difference from exact over all points.
+    pub fn max_map_difference(&self) -> f64 {
+        self.points
+            .iter()
+            .filter_map(|p| p.map_difference)
+            .fold(0.0, f64::max)
+    }
+
+    /// Markdown summary: exponents, auto / best, the point table.
+    pub fn summary(&self) -> String {
+        let mut s = String::from(
+            "# Stage-solver scaling\n\n## Fitted exponents (seconds per step ∝ xᵖ)\n\n",
+        );
+        s.push_str("| family | x | solver | p | points | rms residual (decades) |\n|---|---|---|---|---|---|\n");
+        for f in &self.fits {
+            let p = f
+                .exponent
+                .map(|v| format!("{v:.2}"))
+                .unwrap_or_else(|| "—".into());
+            let r = f
+                .residual
+                .map(|v| format!("{v:.3}"))
+                .unwrap_or_else(|| "—".into());
+            s.push_str(&format!(
+                "| {} | {} | {} | {p} | {} | {r} |\n",
+                f.family, f.variable, f.solver, f.points
+            ));
+        }
+        let within = self.ratios.iter().filter(|r| r.ratio <= 1.2).count();
+        s.push_str(&format!(
+            "\n## auto against the fastest explicit solver\n\nWithin 1.2×: {within} of {} points.\n\n\
+             | family | n | N | best | best s/step | auto s/step | auto / best |\n|---|---|---|---|---|---|---|\n",
+            self.ratios.len()
+        ));
+        for r in &self.ratios {
+            let flag = if r.ratio > 1.2 { " **>1.2**" } else { "" };
+            s.push_str(&format!(
+                "| {} | {} | {} | {} | {:.3e} | {:.3e} | {:.2}{flag} |\n",
+                r.family, r.n, r.bodies, r.best, r.best_seconds, r.auto_seconds, r.ratio
+            ));
+        }
+        s.push_str(&format!(
+            "\n## Points\n\nLargest final-state difference from exact (relative): {:.2e}.\n\n\
+             | family | solver | n | N | s/step | Newton it/step | inner it/step | factorisations/step | fallbacks/step | Δ vs exact | note |\n\
+             |---|---|---|---|---|---|---|---|---|---|---|\n",
+            self.max_map_difference()
+        ));
+        for p in &self.points {
+            let note = p.skipped.as_deref().or(p.failure.as_deref()).unwrap_or("");
+            s.push_str(&format!(
+                "| {} | {} | {} | {} | {:.3e} | {:.2} | {:.1} | {:.2} | {:.2} | {} | {note} |\n",
+                p.family,
+                p.solver,
+                p.n,
+                p.bodies,
+                p.seconds_per_step,
+                p.iterations,
+                p.inner_iterations,
+                p.factorizations,
+                p.fallbacks,
+                p.map_difference
+                    .map(|v| format!("{v:.1e}"))
+                    .unwrap_or_else(|| "—".into())
+            ));
+        }
+        s
+    }
+
+    /// Time per step against n (Kepler solid, outer solar system dashed) and against N.
+    pub fn charts(&self) -> (Chart, Chart) {
+        let series = |family: &str, solver: StageSolver, by_n: bool| -> Vec<(f64, f64)> {
+            self.points
+                .iter()
+                .filter(|p| p.family == family && p.solver == solver.as_str() && ran(p))
+                .map(|p| {
+                    (
+                        (if by_n { p.n } else { p.bodies }) as f64,
+                        p.seconds_per_step,
+                    )
+                })
+                .collect()
+        };
+        let mut by_n = Chart::new("Time per step against n", "n", "seconds per step")
+            .log_x()
+            .log_y();
+        let mut by_bodies = Chart::new(
+            format!(
+                "Time per step against N (planetesimal ring, n = {})",
+                self.config.ring_n
+            ),
+            "bodies N",
+            "seconds per step",
+        )
+        .log_x()
+        .log_y();
+        for (i, solver) in SOLVERS.into_iter().enumerate() {
+            by_n.push(
+                Series::line_markers(format!("{solver} (Kepler)"), series("kepler", solver, true))
+                    .with_color(i),
+            );
+            by_n.push(
+                Series::dashed(
+                    format!("{solver} (outer solar system)"),
+                    series("outer-solar-system", solver, true),
+                )
+                .with_color(i),
+            );
+            by_bodies.push(
+                Series::line_markers(solver.as_str(), series("ring", solver, false)).with_color(i),
+            );
+        }
+        (by_n, by_bodies)
+    }
+
+    /// Write `solver_scaling.{csv,json,md}`, `scaling_n.svg` and `scaling_bodies.svg`.
+    pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>> {
+        let names = [
+            "solver_scaling.csv",
+            "solver_scaling.json",
+            "solver_scaling.md",
+            "scaling_n.svg",
+            "scaling_bodies.svg",
+        ];
+        let paths: Vec<PathBuf> = names.iter().map(|n| dir.join(n)).collect();
+        write_file(&paths[0], &self.csv())?;
+        let json =
+            serde_json::to_string_pretty(self).map_err(|e| GviError::Serialize(e.to_string()))?;
+        write_file(&paths[1], &json)?;
+        write_file(&paths[2], &self.summary())?;
+        let (a, b) = self.charts();
+        for (chart, path) in [(a, &paths[3]), (b, &paths[4])] {
+            chart
+                .save_svg(path)
+                .map_err(|e| GviError::Plot(e.to_string()))?;
+        }
+        Ok(paths)
+    }
+}
