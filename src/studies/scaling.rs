@@ -560,7 +560,8 @@ impl ScalingStudy {
     /// Every point as CSV.
     pub fn csv(&self) -> String {
         let mut s = String::from(
-            "family,solver,n,bodies,dim,h,steps,samples,batch,seconds_per_step,min_seconds_per_step,\
+            "family,solver,n,bodies,dim,h,steps,samples,batch,seconds_per_step,\
+             min_seconds_per_step,\
              iterations,\
              inner_iterations,factorizations,fallbacks,map_difference,skipped,failure\n",
         );
@@ -608,7 +609,10 @@ impl ScalingStudy {
         let mut s = String::from(
             "# Stage-solver scaling\n\n## Fitted exponents (seconds per step ∝ xᵖ)\n\n",
         );
-        s.push_str("| family | x | solver | p | points | rms residual (decades) |\n|---|---|---|---|---|---|\n");
+        s.push_str(
+            "| family | x | solver | p | points | rms residual (decades) |\n\
+             |---|---|---|---|---|---|\n",
+        );
         for f in &self.fits {
             let p = f
                 .exponent
@@ -652,7 +656,8 @@ impl ScalingStudy {
         }
         s.push_str(&format!(
             "\n## Points\n\nLargest final-state difference from exact (relative): {:.2e}.\n\n\
-             | family | solver | n | N | s/step | Newton it/step | inner it/step | factorisations/step | fallbacks/step | Δ vs exact | note |\n\
+             | family | solver | n | N | s/step | Newton it/step | inner it/step | \
+             factorisations/step | fallbacks/step | Δ vs exact | note |\n\
              |---|---|---|---|---|---|---|---|---|---|---|\n",
             self.max_map_difference()
         ));
