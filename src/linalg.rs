@@ -569,8 +569,7 @@ mod eigen_tests {
         let mut a = vec![0.0; n * n];
         for i in 0..n {
             for j in 0..n {
-                a[i * n + j] =
-                    1.0 / (1.0 + (i + j) as f64) + if i == j { (i as f64) - 2.0 } else { 0.0 };
+                a[i * n + j] = 1.0 / (1.0 + (i + j) as f64) + if i == j { (i as f64) - 2.0 } else { 0.0 };
             }
         }
         let orig = a.clone();

@@ -22,6 +22,7 @@
 use crate::error::{GviError, Result};
 use crate::linalg::{Lu, Strided, gemm};
 
+
 use super::Tables;
 
 /// The (basis, quadrature, n)-dependent part of the Kronecker solver.
@@ -242,37 +243,13 @@ impl KroneckerWork {
         let (d, k) = (self.d, kt.k);
         let rd = Strided::rows(0, d);
         // Ĥ = L⁻¹ H̄ L⁻ᵀ, symmetrised (H̄ is symmetric up to round-off).
-        gemm(
-            d,
-            d,
-            d,
-            1.0,
-            &self.linv,
-            rd,
-            &self.hbar,
-            rd,
-            0.0,
-            &mut self.w,
-            rd,
-        );
+        gemm(d, d, d, 1.0, &self.linv, rd, &self.hbar, rd, 0.0, &mut self.w, rd);
         let lt = Strided {
             offset: 0,
             row_stride: 1,
             col_stride: d,
         };
-        gemm(
-            d,
-            d,
-            d,
-            1.0,
-            &self.w,
-            rd,
-            &self.linv,
-            lt,
-            0.0,
-            &mut self.hhat,
-            rd,
-        );
+        gemm(d, d, d, 1.0, &self.w, rd, &self.linv, lt, 0.0, &mut self.hhat, rd);
         for i in 0..d {
             for j in 0..i {
                 let s = 0.5 * (self.hhat[i * d + j] + self.hhat[j * d + i]);
@@ -282,19 +259,7 @@ impl KroneckerWork {
         }
         crate::linalg::symmetric_eigen(&mut self.hhat, d, &mut self.mu, &mut self.w);
         // V = L⁻ᵀ W.
-        gemm(
-            d,
-            d,
-            d,
-            1.0,
-            &self.linv,
-            lt,
-            &self.w,
-            rd,
-            0.0,
-            &mut self.v,
-            rd,
-        );
+        gemm(d, d, d, 1.0, &self.linv, lt, &self.w, rd, 0.0, &mut self.v, rd);
         for i in 0..d {
             for j in 0..d {
                 self.vt[j * d + i] = self.v[i * d + j];
@@ -323,12 +288,7 @@ impl KroneckerWork {
                     if det == 0.0 || !det.is_finite() {
                         return Err(singular(i));
                     }
-                    self.inv[base..base + 4].copy_from_slice(&[
-                        e / det,
-                        -b / det,
-                        -c / det,
-                        a / det,
-                    ]);
+                    self.inv[base..base + 4].copy_from_slice(&[e / det, -b / det, -c / det, a / det]);
                 }
             }
         }
@@ -340,19 +300,7 @@ impl KroneckerWork {
         let (d, k) = (self.d, kt.k);
         let (rd, rk) = (Strided::rows(0, d), Strided::rows(0, k));
         gemm(k, k, d, 1.0, &kt.r, rk, rhs, rd, 0.0, &mut self.y, rd);
-        gemm(
-            k,
-            d,
-            d,
-            1.0,
-            &self.y,
-            rd,
-            &self.v,
-            rd,
-            0.0,
-            &mut self.yh,
-            rd,
-        );
+        gemm(k, d, d, 1.0, &self.y, rd, &self.v, rd, 0.0, &mut self.yh, rd);
         // Back-substitution over the diagonal blocks of T, last first, elementwise in r:
         // ζ_i = inv_i (ŷ_i − h μ ∘ Σ_{j beyond the block} T_ij ζ_j).
         for &(i, s) in kt.blocks.iter().rev() {
@@ -384,19 +332,7 @@ impl KroneckerWork {
             }
         }
         // z = ζ Vᵀ (into y), x = U z.
-        gemm(
-            k,
-            d,
-            d,
-            1.0,
-            &self.zeta,
-            rd,
-            &self.vt,
-            rd,
-            0.0,
-            &mut self.y,
-            rd,
-        );
+        gemm(k, d, d, 1.0, &self.zeta, rd, &self.vt, rd, 0.0, &mut self.y, rd);
         gemm(k, k, d, 1.0, &kt.u, rk, &self.y, rd, 0.0, rhs, rd);
     }
 }
@@ -413,7 +349,8 @@ impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIn
         let t = self.tables();
         let (m, d, h) = (t.m, ws.d, self.step_size());
         let dd = d * d;
-        let (Some(kt), Some(kw)) = (t.kron.as_ref(), ws.kron.as_mut()) else {
+        let (Some(kt), Some(kw)) = (t.kron.as_ref(), ws.kron.as_mut())
+        else {
             return Err(GviError::Unsupported(
                 "the Kronecker solver needs a separable Lagrangian".into(),
             ));
@@ -443,10 +380,7 @@ impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIn
         let (m, d) = (self.tables().m, ws.d);
         let dd = d * d;
         for j in 0..m {
-            lag.force_jacobian(
-                &ws.qj[j * d..(j + 1) * d],
-                &mut ws.hall[j * dd..(j + 1) * dd],
-            );
+            lag.force_jacobian(&ws.qj[j * d..(j + 1) * d], &mut ws.hall[j * dd..(j + 1) * dd]);
         }
         m
     }

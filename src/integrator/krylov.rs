@@ -258,12 +258,7 @@ impl Workspace {
     /// The Newton–Krylov buffers, if this workspace has them.
     pub(crate) fn krylov_parts(
         &mut self,
-    ) -> Option<(
-        &mut KroneckerWork,
-        &mut KrylovWork,
-        Operands<'_>,
-        &mut [f64],
-    )> {
+    ) -> Option<(&mut KroneckerWork, &mut KrylovWork, Operands<'_>, &mut [f64])> {
         let sep = self.separable.as_ref()?;
         let kw = self.kron.as_mut()?;
         let kv = self.krylov.as_mut()?;
