@@ -5,7 +5,7 @@
 //! (15·96)² LU makes longer ring runs slow). Asserts nothing about time; the scaling
 //! study with fitted exponents is `gvi solver-scaling` (docs/studies/solver-scaling/).
 //!
-//! Run: `cargo bench --bench solvers` (about a minute and a half).
+//! Run: `cargo bench --bench solvers` (about a minute after compiling).
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use galerkin_vi::prelude::*;
