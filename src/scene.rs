@@ -1,8 +1,8 @@
 //! Scenes: small TOML files naming a system, its parameters, an initial state and a method.
 //!
 //! Built-in scenes (`harmonic`, `kepler`, `pendulum`, and the N-body scenes `solar-system`,
-//! `outer-solar-system`, `two-body`, `figure-eight`) are compiled into the crate from the
-//! `scenes/` directory; any other argument is read as a path to a user's TOML file. Unknown
+//! `outer-solar-system`, `two-body`, `figure-eight` and the synthetic `planetesimal-ring`) are
+//! compiled into the crate from the `scenes/` directory; any other argument is read as a path to a user's TOML file. Unknown
 //! keys are rejected so that a typo is an error, not a silently ignored setting.
 //!
 //! ```
@@ -30,7 +30,7 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 /// The built-in scenes: (name, TOML text).
-pub const BUILTIN_SCENES: [(&str, &str); 7] = [
+pub const BUILTIN_SCENES: [(&str, &str); 8] = [
     ("harmonic", include_str!("../scenes/harmonic.toml")),
     ("kepler", include_str!("../scenes/kepler.toml")),
     ("pendulum", include_str!("../scenes/pendulum.toml")),
@@ -41,6 +41,10 @@ pub const BUILTIN_SCENES: [(&str, &str); 7] = [
     ),
     ("two-body", include_str!("../scenes/two-body.toml")),
     ("figure-eight", include_str!("../scenes/figure-eight.toml")),
+    (
+        "planetesimal-ring",
+        include_str!("../scenes/planetesimal-ring.toml"),
+    ),
 ];
 
 /// A complete experiment: system, initial state and method.

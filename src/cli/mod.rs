@@ -3,6 +3,7 @@
 mod check;
 mod nbody;
 mod run;
+mod scaling;
 mod study;
 mod study2;
 mod tolerance;
@@ -48,6 +49,10 @@ enum Command {
     /// the oracle bound (best per-step n with every one-step error known): achieved error
     /// and force evaluations against tol (CSV, Markdown, SVG in --out).
     ToleranceStudy(Box<tolerance::ToleranceArgs>),
+    /// Time per step of every stage solver against n (Kepler, outer solar system) and the
+    /// number of bodies (planetesimal ring), with fitted exponents and auto / best ratios
+    /// (CSV, JSON, Markdown, SVG in --out).
+    SolverScaling(Box<scaling::ScalingArgs>),
     /// List the built-in scenes.
     Scenes,
 }
@@ -65,6 +70,7 @@ pub fn main_with(cli: Cli) -> Result<(), GviError> {
         Command::CompareRefinement(args) => study2::run_compare_refinement(*args),
         Command::NbodyReport(args) => nbody::run_nbody_report(*args),
         Command::ToleranceStudy(args) => tolerance::run_tolerance_study(*args),
+        Command::SolverScaling(args) => scaling::run_solver_scaling(*args),
         Command::Scenes => {
             for name in galerkin_vi::scene::Scene::builtin_names() {
                 let scene = galerkin_vi::scene::Scene::load(name)?;

@@ -12,6 +12,7 @@ pub mod compare_refinement;
 pub mod peers;
 pub mod refine;
 pub mod reproduce;
+pub mod scaling;
 pub mod stability;
 pub mod tolerance;
 pub mod work_precision;

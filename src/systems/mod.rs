@@ -12,11 +12,13 @@ pub mod kepler_orbit;
 mod nbody;
 pub(crate) mod nbody_scene;
 mod pendulum;
+mod ring;
 
 pub use harmonic::HarmonicOscillator;
 pub use kepler::Kepler;
 pub use nbody::NBody;
 pub use pendulum::Pendulum;
+pub use ring::{RingConfig, planetesimal_ring};
 
 use crate::error::Result;
 use crate::lagrangian::Lagrangian;
