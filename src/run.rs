@@ -215,7 +215,9 @@ pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> 
             if let Some(c) = m.control {
                 opts.control = c;
             }
-            opts.solver = m.solver;
+            if m.solver != crate::integrator::StageSolver::Auto {
+                opts.solver = m.solver;
+            }
             let mut steps = steps;
             if m.auto_h {
                 let c = crate::adaptive::choose_step(

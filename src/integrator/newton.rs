@@ -154,6 +154,11 @@ enum Linear {
     Krylov,
 }
 
+/// Contraction per iteration above which the fixed-point iteration hands over to the frozen
+/// Hessian: slower, it needs more than ~20 cheap iterations where the frozen Hessian needs a
+/// few more expensive ones.
+const FIXED_POINT_STALL: f64 = 0.2;
+
 /// Solves for which `Auto` stays on the rung it escalated to before it tries the cheaper rung
 /// below again.
 const AUTO_HOLDOFF: usize = 32;
@@ -370,17 +375,28 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 Linear::Frozen => {
                     // A frozen Hessian contracts at a rate set by how much the force Jacobian
                     // varies over the step: keep it while it contracts, refreeze once at the
-                    // current iterate when it does not, then continue with exact Newton.
-                    let stalled = growing || (theta.is_finite() && theta > KRONECKER_STALL);
+                    // current iterate when it does not, then continue with Newton–Krylov
+                    // (`Auto`) or exact Newton. The fixed-point iteration (no Hessian) is
+                    // kept only while it contracts fast; its iterations are cheap but many.
+                    let limit = if fixed_point {
+                        FIXED_POINT_STALL
+                    } else {
+                        KRONECKER_STALL
+                    };
+                    let stalled = growing || (theta.is_finite() && theta > limit);
                     if stalled && fixed_point {
-                        // No Hessian was used: continue with the frozen one.
+                        // Continue with a frozen Hessian.
                         fixed_point = false;
                         have_lu = false;
                         stats.fallbacks += 1;
                         escalate(ws, 1);
+                    } else if stalled && !refrozen {
+                        have_lu = false;
+                        refrozen = true;
                     } else if stalled && auto {
-                        // `Auto`: continue with Newton–Krylov (the frozen Hessian is too far
-                        // from the step's), and start the next steps with it too.
+                        // `Auto`: the frozen Hessian is too far from the step's even when
+                        // refrozen; continue with Newton–Krylov, and start the next steps
+                        // with it too.
                         linear = Linear::Krylov;
                         have_lu = true;
                         krylov_start = it;
@@ -390,11 +406,8 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                         continue;
                     } else if stalled {
                         have_lu = false;
-                        if refrozen {
-                            linear = Linear::Dense;
-                            stats.fallbacks += 1;
-                        }
-                        refrozen = true;
+                        linear = Linear::Dense;
+                        stats.fallbacks += 1;
                     }
                     previous_increment = delta;
                     continue;
