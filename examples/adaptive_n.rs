@@ -1,5 +1,6 @@
 //! Tolerance-driven n against the cheapest fixed n meeting the same tolerance, on Kepler
-//! e = 0.6 and e = 0.9 (h = 1, 100 steps). Prints the table quoted in the README.
+//! e = 0.6 and e = 0.9 (h = 1, 100 steps). Prints the table quoted in
+//! docs/guide/tolerance-driven-n.md.
 //!
 //! Run: `cargo run --release --example adaptive_n`
 

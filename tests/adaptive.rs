@@ -277,7 +277,8 @@ fn cheapest_fixed_cost(
 #[test]
 fn embedded_control_meets_tolerance_and_beats_fixed_n_on_kepler_09() {
     // The default control (ErrorControl::Embedded: warm-started pairs, unchecked steps, local
-    // extrapolation), 100 steps, tol = 1e-6 and 1e-9 (`gvi tolerance-study`, README).
+    // extrapolation), 100 steps, tol = 1e-6 and 1e-9 (`gvi tolerance-study`,
+    // docs/guide/tolerance-driven-n.md).
     // Measured achieved / tol and cost (force evaluations, the RK4 predictor's included) /
     // cheapest fixed n meeting tol:
     // - e = 0.6, h = 0.25: 0.025, 0.0004; cost 0.77, 0.75 (cheaper);
@@ -489,7 +490,8 @@ fn oracle_allocation_finds_savings_only_where_the_need_varies() {
     // of the cheapest fixed n. Measured (tol = 1e-6, 100 steps): Kepler e = 0.9, h = 0.25,
     // 5.5× cheaper than the fixed n = 38 (the need peaks at periapsis); the oscillator at
     // h = 20, whose every step is the same rotation, 1.01× (negative control: the bound
-    // must not invent savings); the outer solar system 1.01–1.02× (README).
+    // must not invent savings); the outer solar system 1.01–1.02×
+    // (docs/guide/tolerance-driven-n.md).
     use galerkin_vi::scene::Scene;
     use galerkin_vi::studies::tolerance::{ToleranceConfig, tolerance_study};
     let config = ToleranceConfig {

@@ -193,7 +193,7 @@ fn paper_solar_system_run() {
     }
     let max25 = rep.max_position_errors();
     let worst25 = max25.iter().map(|(_, e)| *e).fold(0.0, f64::max);
-    // Measured bound (README, nbody_report docs).
+    // Measured bound (docs/guide/nbody.md, nbody_report docs).
     assert!(worst25 < 1e-3, "n = 25 position error {worst25:e} AU");
     let mut coarse = scene.clone();
     coarse.method.n = 15;

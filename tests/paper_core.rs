@@ -147,7 +147,7 @@ fn kepler_one_step_map_converges_at_the_papers_rate() {
 /// the Galerkin variational integrator is superconvergent: global order 2(n − 1) at a fixed
 /// horizon, hence error ∝ h^(2n−1) over a fixed number of steps (the paper's protocol, 10
 /// steps). The paper states 2⌈n/2⌉ in its own convention; with ours the two agree for n ≤ 3
-/// only — see the README ("h-refinement") for the measured table.
+/// only — see docs/guide/reproducing-the-paper.md ("h-refinement") for the measured table.
 #[test]
 fn kepler_h_refinement_order() {
     let kepler = Kepler::new(1.0).unwrap();

@@ -108,7 +108,8 @@ fn pareto_marks_by_hand() {
 /// The long-run preset sweeps only Legendre and Chebyshev–Lagrange and the accurate end of
 /// the peers; at a shortened horizon (T = 400) its Legendre runs already beat every peer's
 /// best error (DOP853 at 1e-14, Gauss s = 4 and Kahan–Li-8 at Δ/128), the ordering that
-/// `gvi work-precision kepler --long` shows at T = 20,000 (README).
+/// `gvi work-precision kepler --long` shows at T = 20,000
+/// (docs/guide/long-runs.md).
 #[test]
 fn long_preset_at_a_short_horizon() {
     let scene = Scene::load("kepler").unwrap();

@@ -60,8 +60,9 @@
 //!     differences between solves at n ≥ 14 are 3e-13…1e-12 AU whatever n; without this the
 //!     run climbed to n = 24–28 and stayed there, 3.7× the cost of the fixed n).
 //!
-//!   Measured (`gvi tolerance-study`, 100 steps, tol = 1e-6…1e-12, see the README; "saving" =
-//!   cost of the cheapest fixed n meeting tol / adaptive cost): Kepler e = 0.6 at h = 0.25
+//!   Measured (`gvi tolerance-study`, 100 steps, tol = 1e-6…1e-12, see
+//!   docs/guide/tolerance-driven-n.md; "saving" = cost of the cheapest fixed n meeting tol /
+//!   adaptive cost): Kepler e = 0.6 at h = 0.25
 //!   (Legendre): achieved/tol ≤ 0.05, saving 1.27–1.48×; at h = 1 (≈ 6 steps per orbit, the
 //!   needed n changes 4× from step to step, so most steps are a fresh search): achieved/tol
 //!   ≤ 0.16, saving 0.97–1.07×; at the scene's h = 2 (Chebyshev): 0.75–0.92× (oracle
