@@ -5,7 +5,7 @@
 //! overrides them with hand-written ones. [`Mechanical`] is the separable special case
 //! L = ½ vᵀ M v − V(q) with a constant mass matrix; every `Mechanical` is a `Lagrangian` through
 //! a blanket implementation, and the integrator exploits the constant kinetic part of the
-//! Jacobian (DESIGN.md §2) for it.
+//! Jacobian (docs/DESIGN.md §2) for it.
 
 use crate::ad;
 use nalgebra::DMatrix;

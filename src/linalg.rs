@@ -2,7 +2,7 @@
 //!
 //! The Newton solve of every step factorises an ((n−1)D)² matrix. nalgebra's LU allocates its
 //! result; this LU with partial pivoting works in buffers owned by the integrator's workspace,
-//! so the step loop stays allocation-free (DESIGN.md §4).
+//! so the step loop stays allocation-free (docs/DESIGN.md §4).
 
 /// The matrix was singular to working precision (a zero or negligible pivot).
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -1,4 +1,4 @@
-//! The Fourier (sine) basis: linear end functions plus a sine series, DESIGN.md §2.
+//! The Fourier (sine) basis: linear end functions plus a sine series, docs/DESIGN.md §2.
 
 use super::{Basis, BasisKind, check_size};
 use crate::error::Result;

@@ -1,5 +1,5 @@
 //! The Hermite (Hermite–Birkhoff) basis: end values and end derivatives as degrees of freedom,
-//! plus interior nodal values, DESIGN.md §2.
+//! plus interior nodal values, docs/DESIGN.md §2.
 
 use super::{Basis, BasisKind, ChebyshevLagrange, check_size};
 use crate::error::Result;

@@ -1,4 +1,4 @@
-//! The modal boundary-adapted Legendre basis (integrated Legendre polynomials), DESIGN.md §2.
+//! The modal boundary-adapted Legendre basis (integrated Legendre polynomials), docs/DESIGN.md §2.
 
 use super::{Basis, BasisKind, check_size};
 use crate::error::Result;

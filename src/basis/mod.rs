@@ -1,6 +1,6 @@
 //! Basis functions on the reference step τ ∈ [0, 1].
 //!
-//! A [`Basis`] is n functions φ_0 … φ_{n−1} with the *boundary-adapted* contract of DESIGN.md §2:
+//! A [`Basis`] is n functions φ_0 … φ_{n−1} with the *boundary-adapted* contract of docs/DESIGN.md §2:
 //! φ_0(0) = 1, φ_0(1) = 0, φ_{n−1}(0) = 0, φ_{n−1}(1) = 1, and every other φ_i vanishes at both
 //! ends. A Galerkin curve on one step is q(t_k + τh) = Σ Q_i φ_i(τ), so Q_0 = q(t_k) and
 //! Q_{n−1} = q(t_k + h), exactly as with the paper's Lagrange basis (its q¹ and qⁿ).

@@ -41,8 +41,36 @@ pub struct WorkPrecisionArgs {
     /// solution or the study's reference run) to FILE and exit without running the sweep.
     #[arg(long, value_name = "FILE.csv")]
     pub write_reference: Option<PathBuf>,
+    /// Galerkin bases to sweep, comma-separated (default: the preset's; e.g.
+    /// chebyshev,legendre).
+    #[arg(long)]
+    pub bases: Option<String>,
+    /// Galerkin numbers of basis functions, comma-separated (default: the preset's).
+    #[arg(long)]
+    pub ns: Option<String>,
+    /// Galerkin steps per sample interval, comma-separated (h = Δ/m; default: the preset's).
+    #[arg(long)]
+    pub divisors: Option<String>,
     #[command(flatten)]
     pub run: RunArgs,
+}
+
+/// A comma-separated list of whole numbers ≥ 1.
+fn parse_counts(name: &str, text: &str) -> Result<Vec<usize>, GviError> {
+    text.split(',')
+        .map(|s| {
+            let s = s.trim();
+            s.parse::<usize>()
+                .ok()
+                .filter(|&v| v >= 1)
+                .ok_or_else(|| GviError::InvalidArgument {
+                    name: name.to_string(),
+                    reason: format!(
+                        "'{s}' is not a whole number ≥ 1 (expected a comma-separated list)"
+                    ),
+                })
+        })
+        .collect()
 }
 
 pub fn run_work_precision(args: WorkPrecisionArgs) -> Result<(), GviError> {
@@ -58,6 +86,18 @@ pub fn run_work_precision(args: WorkPrecisionArgs) -> Result<(), GviError> {
         config.horizon = args.horizon;
     }
     config.repeats = args.repeats.unwrap_or(if args.long { 1 } else { 5 }).max(1);
+    if let Some(b) = &args.bases {
+        config.bases = b
+            .split(',')
+            .map(str::parse)
+            .collect::<Result<Vec<_>, _>>()?;
+    }
+    if let Some(n) = &args.ns {
+        config.ns = parse_counts("--ns", n)?;
+    }
+    if let Some(m) = &args.divisors {
+        config.galerkin_divisors = parse_counts("--divisors", m)?;
+    }
     if let Some(path) = &args.write_reference {
         let reference = reference_csv(&scene, &config)?;
         write_file(path, &reference.csv())?;

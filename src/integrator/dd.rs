@@ -1,5 +1,5 @@
 //! Double-double helpers: error-free sums and products (TwoSum, Fast2Sum, FMA) used to keep
-//! the stage residuals and the state increments free of rounding bias (DESIGN.md §4).
+//! the stage residuals and the state increments free of rounding bias (docs/DESIGN.md §4).
 
 /// Knuth's TwoSum: s = fl(a + b) and the exact rounding error e, a + b = s + e.
 #[inline]

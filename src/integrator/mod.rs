@@ -1,4 +1,4 @@
-//! The Galerkin variational integrator (DESIGN.md §2; paper §3).
+//! The Galerkin variational integrator (docs/DESIGN.md §2; paper §3).
 //!
 //! [`GalerkinIntegrator`] is built once per (basis, quadrature, h): it tabulates the basis and
 //! its derivative at the quadrature nodes, the kinetic matrix K_ab = Σ_j b_j φ_a'(c_j) φ_b'(c_j),
@@ -14,7 +14,7 @@
 //!
 //! # Round-off
 //!
-//! Round-off sets the floor of a spectral method (DESIGN.md §4), so the step is formulated
+//! Round-off sets the floor of a spectral method (docs/DESIGN.md §4), so the step is formulated
 //! for it. The Newton unknowns are the increments ΔQ_i = Q_i − u_i q_k (u: the coefficients
 //! of the constant curve, Σ u_i φ_i ≡ 1): the curve at the nodes is q_k + Φ ΔQ, its velocity
 //! Φ' ΔQ / h, the kinetic residual (1/h) K M ΔQ, and q_{k+1} = q_k + ΔQ_{n−1}, an increment
@@ -308,7 +308,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let mut p = p0.to_vec();
         let mut q_next = vec![0.0; d];
         let mut p_next = vec![0.0; d];
-        // Compensation terms of the running sums q and p (DESIGN.md §4), kept across steps.
+        // Compensation terms of the running sums q and p (docs/DESIGN.md §4), kept across steps.
         let (mut q_err, mut p_err) = (vec![0.0; d], vec![0.0; d]);
         let compensated = self.options.compensated;
         for k in 0..steps {

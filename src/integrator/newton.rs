@@ -67,7 +67,7 @@ pub struct NewtonOptions {
     pub reuse_across_steps: bool,
     /// Accumulate q and p across steps with compensated (Kahan–Babuška/TwoSum) summation of
     /// the step increments, in [`integrate`](GalerkinIntegrator::integrate) and the
-    /// [`GalerkinMethod`](crate::baselines::GalerkinMethod) adapter (DESIGN.md §4). Costs 2D
+    /// [`GalerkinMethod`](crate::baselines::GalerkinMethod) adapter (docs/DESIGN.md §4). Costs 2D
     /// extra additions per step; removes the O(√N ε) (or O(N ε)) round-off drift of the
     /// naive sums over N steps.
     #[serde(default = "default_true")]

@@ -101,7 +101,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         ws.grad.iter_mut().for_each(|x| *x = 0.0);
         if let Some(sep) = &ws.separable {
             // Kinetic part (1/h) Σ_b K_ab M ΔQ_b with ΔQ_b = Q_b − u_b q_k: constants applied to
-            // the increments, never to Q (DESIGN.md §4).
+            // the increments, never to Q (docs/DESIGN.md §4).
             let coeffs = if cand { &ws.cand } else { &ws.coeffs };
             for b in 0..n {
                 for r in 0..d {
@@ -215,7 +215,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
     /// arithmetic it is p_k + Σ_{a<n−1} u_a ∂S/∂Q_a = 0, the paper's eq. (3.2) plus
     /// u-weighted stage equations.
     ///
-    /// Round-off (DESIGN.md §4): the terms p_k, the impulse, and both parts of ∂S/∂ΔQ_{n−1}
+    /// Round-off (docs/DESIGN.md §4): the terms p_k, the impulse, and both parts of ∂S/∂ΔQ_{n−1}
     /// are O(|p|) each (near periapsis of an eccentric orbit the impulse of a large step is as
     /// large as p) and cancel to O(ε). Rounding them in working precision leaves an error
     /// ε|p| in the row, i.e. in q_{k+1}, every step — and, measured, not a random one: it
@@ -351,7 +351,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         }
         if ws.separable.is_some() {
             // Potential part Σ_j h b_j φ_a(c_j) φ_b(c_j) L_qq(c_j) as d² weighted Gram
-            // products Φᵀ diag(g_rs) Φ (one GEMM each) instead of scalar loops (DESIGN.md §4).
+            // products Φᵀ diag(g_rs) Φ (one GEMM each) instead of scalar loops (docs/DESIGN.md §4).
             let dd = d * d;
             for j in 0..m {
                 let q = &ws.qj[j * d..(j + 1) * d];

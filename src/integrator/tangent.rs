@@ -12,7 +12,7 @@
 //! dp_{k+1} = dp_k + h Σ_j b_j (L_qq δq(c_j) + L_qv δq̇(c_j)) — the derivative of
 //! p_{k+1} = p_k + h Σ_j b_j L_q(c_j), which is how [`GalerkinIntegrator::step`] computes
 //! p_{k+1} — because it does not subtract the large kinetic terms of the row n−1 of the
-//! Hessian (DESIGN.md §4). The two agree on the solution manifold of the stage equations.
+//! Hessian (docs/DESIGN.md §4). The two agree on the solution manifold of the stage equations.
 
 use super::{GalerkinIntegrator, MAX_STEPS, Workspace};
 use crate::basis::Basis;

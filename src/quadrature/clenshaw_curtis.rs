@@ -1,4 +1,4 @@
-//! Clenshaw–Curtis quadrature: interpolatory at the Chebyshev extrema (DESIGN.md §2).
+//! Clenshaw–Curtis quadrature: interpolatory at the Chebyshev extrema (docs/DESIGN.md §2).
 
 use super::{Quadrature, QuadratureKind, QuadratureRule};
 use crate::error::Result;

@@ -1,5 +1,5 @@
 //! Gauss–Lobatto (Legendre–Gauss–Lobatto) quadrature: both ends plus the Gauss–Jacobi(1, 1)
-//! nodes, exact to degree 2m − 3 (DESIGN.md §2, quadrature choices).
+//! nodes, exact to degree 2m − 3 (docs/DESIGN.md §2, quadrature choices).
 
 use super::{Quadrature, QuadratureKind, QuadratureRule};
 use crate::error::{GviError, Result};

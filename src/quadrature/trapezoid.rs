@@ -1,4 +1,4 @@
-//! The composite trapezoid rule (DESIGN.md §2): degree 1, but spectrally accurate for smooth
+//! The composite trapezoid rule (docs/DESIGN.md §2): degree 1, but spectrally accurate for smooth
 //! periodic integrands.
 
 use super::{Quadrature, QuadratureKind, QuadratureRule};
