@@ -22,8 +22,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let d = ws.d;
         if let Some(sep) = &ws.separable {
             ws.vel.copy_from_slice(p);
-            sep.mass_lu
-                .solve_in_place(&mut ws.vel, &mut ws.small_scratch);
+            sep.solve_mass(&mut ws.vel, &mut ws.small_scratch);
             return;
         }
         // Newton on L_v(q, v) = p with Jacobian L_vv.
@@ -68,8 +67,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         // State y = (q, v) at every substep end, v = M⁻¹p at the start.
         ws.rk_states[..d].copy_from_slice(q);
         ws.vel.copy_from_slice(p);
-        sep.mass_lu
-            .solve_in_place(&mut ws.vel, &mut ws.small_scratch);
+        sep.solve_mass(&mut ws.vel, &mut ws.small_scratch);
         ws.rk_states[d..w].copy_from_slice(&ws.vel);
         for s in 0..sub {
             let (done, rest) = ws.rk_states.split_at_mut((s + 1) * w);
@@ -94,8 +92,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 k[..d].copy_from_slice(&ws.rk_tmp[d..w]);
                 lag.force(&ws.rk_tmp[..d], &mut k[d..w]);
                 ws.guess_force_evaluations += 1;
-                sep.mass_lu
-                    .solve_in_place(&mut k[d..w], &mut ws.small_scratch);
+                sep.solve_mass(&mut k[d..w], &mut ws.small_scratch);
             }
             for r in 0..w {
                 let k = &ws.rk_k;

@@ -159,6 +159,11 @@ enum Linear {
 /// few more expensive ones.
 const FIXED_POINT_STALL: f64 = 0.2;
 
+/// Relative increment below which a linearly converging (frozen-Hessian or fixed-point)
+/// iteration that stops shrinking is at the round-off floor of its residual, not stalled
+/// (Newton's quadratic iteration uses `NewtonOptions::floor_tolerance`, 1e-10, instead).
+const LINEAR_FLOOR: f64 = 1e-13;
+
 /// Solves for which `Auto` stays on the rung it escalated to before it tries the cheaper rung
 /// below again.
 const AUTO_HOLDOFF: usize = 32;
@@ -384,6 +389,13 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                         KRONECKER_STALL
                     };
                     let stalled = growing || (theta.is_finite() && theta > limit);
+                    if stalled && delta <= LINEAR_FLOOR * scale {
+                        // Increments at the noise level of the residual no longer shrink:
+                        // converged to round-off, not stalled.
+                        stats.gradient_evaluations += self.action_gradient(lag, ws, false);
+                        stats.residual = self.residual(ws, mode, p_k);
+                        return Ok(());
+                    }
                     if stalled && fixed_point {
                         // Continue with a frozen Hessian.
                         fixed_point = false;
