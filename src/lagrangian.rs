@@ -120,6 +120,26 @@ pub trait Lagrangian {
         None
     }
 
+    /// [`force`](Lagrangian::force) at many points: row j of `q` (D values) into row j of
+    /// `out` — the m quadrature nodes of a step. The default calls `force` point by point;
+    /// systems with expensive forces evaluate the points in parallel (N-body above
+    /// [`crate::systems::nbody::PARALLEL_BODIES`] bodies).
+    fn force_at_points(&self, q: &[f64], out: &mut [f64]) {
+        let d = self.dim().max(1);
+        for (qj, oj) in q.chunks_exact(d).zip(out.chunks_exact_mut(d)) {
+            self.force(qj, oj);
+        }
+    }
+
+    /// [`force_jacobian`](Lagrangian::force_jacobian) at many points: row j of `q` (D values)
+    /// into block j of `out` (D×D values), as [`force_at_points`](Lagrangian::force_at_points).
+    fn force_jacobian_at_points(&self, q: &[f64], out: &mut [f64]) {
+        let d = self.dim().max(1);
+        for (qj, oj) in q.chunks_exact(d).zip(out.chunks_exact_mut(d * d)) {
+            self.force_jacobian(qj, oj);
+        }
+    }
+
     /// For separable Lagrangians: L_qq(q) = −∇²V(q), row-major D×D.
     fn force_jacobian(&self, q: &[f64], out: &mut [f64]) {
         let d = self.dim();
@@ -182,6 +202,22 @@ pub trait Mechanical {
     /// See [`Lagrangian::coordinate_blocks`]. Default `None`.
     fn coordinate_blocks(&self) -> Option<usize> {
         None
+    }
+    /// ∇V at many points (row j of `q` into row j of `out`), for
+    /// [`Lagrangian::force_at_points`]. Default: point by point.
+    fn potential_gradient_at_points(&self, q: &[f64], out: &mut [f64]) {
+        let d = self.degrees_of_freedom().max(1);
+        for (qj, oj) in q.chunks_exact(d).zip(out.chunks_exact_mut(d)) {
+            self.potential_gradient(qj, oj);
+        }
+    }
+    /// ∇²V at many points (row j of `q` into block j of `out`, D×D each), for
+    /// [`Lagrangian::force_jacobian_at_points`]. Default: point by point.
+    fn potential_hessian_at_points(&self, q: &[f64], out: &mut [f64]) {
+        let d = self.degrees_of_freedom().max(1);
+        for (qj, oj) in q.chunks_exact(d).zip(out.chunks_exact_mut(d * d)) {
+            self.potential_hessian(qj, oj);
+        }
     }
     /// ∇²V(q), row-major D×D. Default: automatic differentiation.
     fn potential_hessian(&self, q: &[f64], out: &mut [f64]) {
@@ -251,6 +287,16 @@ impl<S: Mechanical> Lagrangian for S {
 
     fn coordinate_blocks(&self) -> Option<usize> {
         Mechanical::coordinate_blocks(self)
+    }
+
+    fn force_at_points(&self, q: &[f64], out: &mut [f64]) {
+        self.potential_gradient_at_points(q, out);
+        out.iter_mut().for_each(|x| *x = -*x);
+    }
+
+    fn force_jacobian_at_points(&self, q: &[f64], out: &mut [f64]) {
+        self.potential_hessian_at_points(q, out);
+        out.iter_mut().for_each(|x| *x = -*x);
     }
 }
 

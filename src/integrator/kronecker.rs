@@ -501,11 +501,10 @@ impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIn
             kw.factor(kt, h)?;
             return Ok(0);
         }
-        for j in 0..m {
-            let hj = &mut ws.hall[j * dd..(j + 1) * dd];
-            lag.force_jacobian(&ws.qj[j * d..(j + 1) * d], hj);
+        lag.force_jacobian_at_points(&ws.qj, &mut ws.hall);
+        for (j, hj) in ws.hall.chunks_exact(dd).enumerate() {
             let w = t.weights[j];
-            for (x, y) in kw.hbar.iter_mut().zip(hj.iter()) {
+            for (x, y) in kw.hbar.iter_mut().zip(hj) {
                 *x += w * y;
             }
         }
@@ -522,15 +521,8 @@ impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIn
         lag: &L,
         ws: &mut super::Workspace,
     ) -> usize {
-        let (m, d) = (self.tables().m, ws.d);
-        let dd = d * d;
-        for j in 0..m {
-            lag.force_jacobian(
-                &ws.qj[j * d..(j + 1) * d],
-                &mut ws.hall[j * dd..(j + 1) * dd],
-            );
-        }
-        m
+        lag.force_jacobian_at_points(&ws.qj, &mut ws.hall);
+        self.tables().m
     }
 
     /// The eigenvalues (re, im) of the stage pencil C = K_s⁻¹ G_s that the Kronecker solver

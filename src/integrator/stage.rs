@@ -156,8 +156,8 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                     }
                 }
             }
+            lag.force_at_points(&ws.qj, &mut ws.lq);
             for j in 0..m {
-                lag.force(&ws.qj[j * d..(j + 1) * d], &mut ws.lq[j * d..(j + 1) * d]);
                 let w = t.weights[j] * h;
                 for r in 0..d {
                     ws.scaled[j * d + r] = w * ws.lq[j * d + r];
@@ -353,10 +353,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             // Potential part Σ_j h b_j φ_a(c_j) φ_b(c_j) L_qq(c_j) as d² weighted Gram
             // products Φᵀ diag(g_rs) Φ (one GEMM each) instead of scalar loops (docs/DESIGN.md §4).
             let dd = d * d;
-            for j in 0..m {
-                let q = &ws.qj[j * d..(j + 1) * d];
-                lag.force_jacobian(q, &mut ws.hall[j * dd..(j + 1) * dd]);
-            }
+            lag.force_jacobian_at_points(&ws.qj, &mut ws.hall);
             if d <= 4 && dd <= m {
                 // Few coordinates: all d² blocks in one pass over the nodes (the same products
                 // and the same order of summation as the per-block products below).

@@ -243,6 +243,34 @@ impl Mechanical for NBody {
         Some(self.dim)
     }
 
+    fn potential_gradient_at_points(&self, q: &[f64], out: &mut [f64]) {
+        let d = self.degrees_of_freedom();
+        if self.masses.len() >= PARALLEL_BODIES {
+            use rayon::prelude::*;
+            q.par_chunks_exact(d)
+                .zip(out.par_chunks_exact_mut(d))
+                .for_each(|(qj, oj)| self.potential_gradient(qj, oj));
+        } else {
+            for (qj, oj) in q.chunks_exact(d).zip(out.chunks_exact_mut(d)) {
+                self.potential_gradient(qj, oj);
+            }
+        }
+    }
+
+    fn potential_hessian_at_points(&self, q: &[f64], out: &mut [f64]) {
+        let d = self.degrees_of_freedom();
+        if self.masses.len() >= PARALLEL_BODIES {
+            use rayon::prelude::*;
+            q.par_chunks_exact(d)
+                .zip(out.par_chunks_exact_mut(d * d))
+                .for_each(|(qj, oj)| self.potential_hessian(qj, oj));
+        } else {
+            for (qj, oj) in q.chunks_exact(d).zip(out.chunks_exact_mut(d * d)) {
+                self.potential_hessian(qj, oj);
+            }
+        }
+    }
+
     fn potential_hessian(&self, q: &[f64], out: &mut [f64]) {
         // Pair (i, j) with d = qᵢ − qⱼ, r = |d|, κ = G mᵢ mⱼ:
         // B = κ (I/r³ − 3 d dᵀ/r⁵) adds to blocks (i,i), (j,j) and subtracts from (i,j), (j,i).
@@ -271,6 +299,13 @@ impl Mechanical for NBody {
         }
     }
 }
+
+/// Number of bodies from which forces and Hessians at the quadrature nodes of a step are
+/// evaluated in parallel (rayon, one node per task). Measured on a 2-core machine with the
+/// planetesimal ring (n = 16, Newton–Krylov, 64 steps): forces and Hessians are 30 % of a step
+/// at N = 128, and the parallel evaluation saves 5 % there (50.3 against 52.7 ms per step) and
+/// nothing measurable at N = 16…64 (0.8, 3.0, 12.2 ms per step either way).
+pub const PARALLEL_BODIES: usize = 128;
 
 const NAMES_2D: [&str; 4] = ["energy", "px", "py", "angular_momentum"];
 const NAMES_3D: [&str; 7] = ["energy", "px", "py", "pz", "lx", "ly", "lz"];
