@@ -560,8 +560,7 @@ impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIn
                     StageSolver::Exact
                 } else {
                     match ws.auto_level {
-                        0 => StageSolver::FixedPoint,
-                        1 => StageSolver::Kronecker,
+                        0 | 1 => StageSolver::Kronecker,
                         _ => StageSolver::NewtonKrylov,
                     }
                 }

@@ -154,6 +154,10 @@ enum Linear {
     Krylov,
 }
 
+/// Solves without a frozen-Hessian failure after which `Auto` forgets the earlier ones (two
+/// failures within this window make it start the next solves with Newton–Krylov).
+const AUTO_CALM: usize = 8;
+
 /// Contraction per iteration above which the fixed-point iteration hands over to the frozen
 /// Hessian: slower, it needs more than ~20 cheap iterations where the frozen Hessian needs a
 /// few more expensive ones.
@@ -221,11 +225,15 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let auto = opts.solver == StageSolver::Auto;
         if auto {
             // Try the cheaper rung again once the hold-off has passed.
-            if ws.auto_holdoff == 0 && ws.auto_level > 0 {
+            if ws.auto_holdoff == 0 && ws.auto_level > 1 {
                 ws.auto_level -= 1;
                 ws.auto_holdoff = AUTO_HOLDOFF;
             }
             ws.auto_holdoff = ws.auto_holdoff.saturating_sub(1);
+            ws.auto_calm += 1;
+            if ws.auto_calm > AUTO_CALM {
+                ws.auto_recent = 0;
+            }
         }
         let escalate = |ws: &mut Workspace, level: usize| {
             if auto && level > ws.auto_level {
@@ -413,7 +421,15 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                         have_lu = true;
                         krylov_start = it;
                         stats.fallbacks += 1;
-                        escalate(ws, 2);
+                        // Start the next solves with Newton–Krylov only when the frozen
+                        // Hessian fails repeatedly, not at an occasional hard step (Kepler's
+                        // periapsis).
+                        ws.auto_calm = 0;
+                        ws.auto_recent += 1;
+                        if ws.auto_recent >= 2 {
+                            escalate(ws, 2);
+                            ws.auto_recent = 0;
+                        }
                         previous_increment = f64::INFINITY;
                         continue;
                     } else if stalled {

@@ -30,8 +30,10 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
 #[serde(rename_all = "kebab-case")]
 pub enum StageSolver {
-    /// Choose per system: the Kronecker simplified Newton for separable Lagrangians (falling
-    /// back to exact Newton within a step whose iteration stalls), exact Newton otherwise.
+    /// Choose per system: dense exact Newton up to a Newton-system size (n − 1)·D of 64; above
+    /// it the frozen-Hessian solver, refrozen once when it stalls, then Newton–Krylov (kept for
+    /// the next 32 solves), then dense — escalating within a step. Non-separable Lagrangians
+    /// always use exact Newton.
     #[default]
     Auto,
     /// Newton's method with the exact Jacobian, assembled and LU-factorised densely

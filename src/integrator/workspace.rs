@@ -101,10 +101,15 @@ pub struct Workspace {
     pub(crate) kron: Option<super::kronecker::KroneckerWork>,
     /// Buffers of the Newton–Krylov solver (present with `kron`).
     pub(crate) krylov: Option<super::krylov::KrylovWork>,
-    /// `StageSolver::Auto`'s current rung (0 fixed point, 1 frozen Hessian, 2 Newton–Krylov)
+    /// `StageSolver::Auto`'s current rung (1 frozen Hessian, 2 Newton–Krylov; the fixed-point
+    /// iteration, rung 0, is never faster than the frozen Hessian in the scaling study and is
+    /// left to an explicit choice)
     /// and the solves left before it tries the rung below again.
     pub(crate) auto_level: usize,
     pub(crate) auto_holdoff: usize,
+    /// Frozen-Hessian failures of `Auto` in the recent solves, and solves since the last one.
+    pub(crate) auto_recent: usize,
+    pub(crate) auto_calm: usize,
 }
 
 /// The constant kinetic part of a separable Lagrangian.
@@ -273,8 +278,10 @@ impl Workspace {
                 .is_some()
                 .then(|| super::krylov::KrylovWork::new(n - 1, m, d)),
             kron,
-            auto_level: 0,
+            auto_level: 1,
             auto_holdoff: 0,
+            auto_recent: 0,
+            auto_calm: 0,
         })
     }
 
