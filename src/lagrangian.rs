@@ -122,8 +122,8 @@ pub trait Lagrangian {
 
     /// [`force`](Lagrangian::force) at many points: row j of `q` (D values) into row j of
     /// `out` — the m quadrature nodes of a step. The default calls `force` point by point;
-    /// systems with expensive forces evaluate the points in parallel (N-body above
-    /// [`crate::systems::nbody::PARALLEL_BODIES`] bodies).
+    /// systems with expensive forces evaluate the points in parallel ([`crate::systems::NBody`]
+    /// from 128 bodies).
     fn force_at_points(&self, q: &[f64], out: &mut [f64]) {
         let d = self.dim().max(1);
         for (qj, oj) in q.chunks_exact(d).zip(out.chunks_exact_mut(d)) {

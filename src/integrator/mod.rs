@@ -30,6 +30,7 @@ mod guess;
 mod kronecker;
 mod krylov;
 mod newton;
+mod options;
 mod solver;
 mod stage;
 mod tangent;

@@ -1,0 +1,136 @@
+//! Newton settings ([`NewtonOptions`]), how each step's iteration starts ([`InitialGuess`])
+//! and what a step cost ([`StepStats`]).
+
+use super::solver::StageSolver;
+use serde::{Deserialize, Serialize};
+
+/// How the Newton iteration of each step is started.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum InitialGuess {
+    /// The constant curve q(t) = q_k.
+    Constant,
+    /// The straight line q_k + (t − t_k) v_k, with v_k the end velocity of the previous curve
+    /// (or the inverse Legendre transform of p_k on the first step).
+    Linear,
+    /// The previous step's Galerkin curve continued over the new step.
+    Extrapolate,
+    /// A cheap explicit predictor: classical Runge–Kutta 4 on the Euler–Lagrange equations
+    /// q̈ = M⁻¹ L_q(q) over the step (separable Lagrangians only), sampled at the basis's
+    /// interpolation nodes by cubic Hermite interpolation and fitted in the basis.
+    Predictor,
+    /// Whichever of the three has the smallest stage residual (with very large steps
+    /// extrapolation can be worse than a constant guess, so it is measured, not assumed).
+    #[default]
+    BestResidual,
+    /// Coefficients supplied for one step by [`Workspace::warm_start`](crate::integrator::Workspace::warm_start) (reported in
+    /// [`StepStats::guess`]; as an option it behaves like `BestResidual`).
+    Warm,
+}
+
+/// Newton iteration settings.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct NewtonOptions {
+    /// Iteration limit per step.
+    pub max_iterations: usize,
+    /// Stop when the estimated remaining error of the Newton unknowns (the increments
+    /// ΔQ_i = Q_i − u_i q_k) is below `tolerance · max|ΔQ|` (error estimated from the
+    /// contraction of successive Newton increments). The default 1e-16 is just below ε: with
+    /// 1e-15 the Hermite and Chebyshev flows of `tests/bases.rs` drift apart by 1.1e-10 in
+    /// 10 steps at n = 22 (the solve error, not the basis); 1e-16 costs 2.61 linear solves per
+    /// step at n = 32, h = 2 with the exactly summed residuals of
+    /// [`exact_kinetic`](Self::exact_kinetic) (2.96 with rounded ones; `tests/counts.rs`). The
+    /// long-run results of `tests/roundoff.rs` are measured with the default.
+    pub tolerance: f64,
+    /// Also stop, as converged at the round-off floor, once increments below
+    /// `floor_tolerance · max|ΔQ|` stop shrinking (iterating further only stirs noise).
+    pub floor_tolerance: f64,
+    /// How each step's iteration starts.
+    pub initial_guess: InitialGuess,
+    /// Substeps of the RK4 predictor guess (`None`: max(n, 8)).
+    pub predictor_substeps: Option<usize>,
+    /// Simplified Newton: reuse the factorised Jacobian across iterations and steps while
+    /// the iteration contracts by at least `reuse_contraction` per iteration.
+    pub reuse_jacobian: bool,
+    /// Contraction factor above which a reused Jacobian is refactorised (full Newton).
+    pub reuse_contraction: f64,
+    /// Also start each step with the previous step's factorisation (pays off when h is small
+    /// compared with the time scale, so that the Newton matrix changes little per step).
+    pub reuse_across_steps: bool,
+    /// Accumulate q and p across steps with compensated (Kahan–Babuška/TwoSum) summation of
+    /// the step increments, in [`integrate`](crate::integrator::GalerkinIntegrator::integrate) and the
+    /// [`GalerkinMethod`](crate::baselines::GalerkinMethod) adapter (docs/DESIGN.md §4). Costs 2D
+    /// extra additions per step; removes the O(√N ε) (or O(N ε)) round-off drift of the
+    /// naive sums over N steps.
+    #[serde(default = "default_true")]
+    pub compensated: bool,
+    /// Sum the kinetic part (1/h) Σ_b K_ab M ΔQ_b of the stage rows in Newton's residuals in
+    /// double-double (exact products by FMA, TwoSum) instead of one rounded matrix product
+    /// (default true; the residuals that only rank initial guesses stay rounded). Rounded,
+    /// those products leave an error ≈ ε·|K|·|ΔQ|/h in the stage rows, which the Newton matrix
+    /// (condition up to 1e8 with nodal bases) turns into a solution error along directions the
+    /// residual barely sees, and which carries a one-signed bias when K's entries are not
+    /// short binary fractions (the Chebyshev–Lagrange basis; the Legendre basis's entries are
+    /// snapped to exact values). Measured, rounded → exact: the symmetric two-body problem
+    /// (Chebyshev n = 24, h = 2, 100 steps) keeps its barycentre to 2.8e-16 instead of 4.5e-13
+    /// and its relative motion within 5.8e-12 of the Kepler run instead of 2.6e-10; Kepler
+    /// e = 0.6 over T = 20,000 with Chebyshev n = 24, h = 0.5 reaches 1.8e-8 instead of
+    /// 1.9e-7; Newton needs 2.61 instead of 2.96 solves per step (n = 32, h = 2). Costs
+    /// ≈ n² D TwoProds per residual (≈ 7 % of the step at n = 10, nothing measurable at
+    /// n = 24).
+    #[serde(default = "default_true")]
+    pub exact_kinetic: bool,
+    /// How the linear systems of the iteration are solved ([`StageSolver`]): the dense exact
+    /// Jacobian, or the Kronecker-structured frozen-Hessian Jacobian.
+    #[serde(default)]
+    pub solver: StageSolver,
+}
+
+fn default_true() -> bool {
+    true
+}
+
+impl Default for NewtonOptions {
+    fn default() -> Self {
+        NewtonOptions {
+            max_iterations: 40,
+            tolerance: 1e-16,
+            floor_tolerance: 1e-10,
+            initial_guess: InitialGuess::BestResidual,
+            predictor_substeps: None,
+            reuse_jacobian: true,
+            reuse_contraction: 0.1,
+            reuse_across_steps: false,
+            exact_kinetic: true,
+            compensated: true,
+            solver: StageSolver::Auto,
+        }
+    }
+}
+
+/// What one step cost.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+pub struct StepStats {
+    /// Newton iterations (Jacobian factorisations) taken.
+    pub iterations: usize,
+    /// Max-norm of the stage residual at the accepted coefficients.
+    pub residual: f64,
+    /// Evaluations of the Lagrangian's first derivatives (or force), counted per quadrature
+    /// point, plus the force evaluations of the RK4 predictor guess: the "right-hand-side
+    /// evaluations" of the step.
+    pub gradient_evaluations: usize,
+    /// Evaluations of second derivatives, per quadrature point.
+    pub hessian_evaluations: usize,
+    /// LU factorisations of the Newton matrix (for the Kronecker solver: freezes of the
+    /// Hessian, each factorising the n − 1 small diagonal blocks).
+    pub factorizations: usize,
+    /// Iterations of the structured (Kronecker) solver that stalled and were continued with
+    /// the exact Jacobian.
+    #[serde(default)]
+    pub fallbacks: usize,
+    /// Krylov (GMRES) iterations of the Newton–Krylov solver.
+    #[serde(default)]
+    pub inner_iterations: usize,
+    /// The initial guess that was used.
+    pub guess: InitialGuess,
+}
