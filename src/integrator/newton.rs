@@ -242,7 +242,14 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             };
             let converged = delta == 0.0
                 || delta <= opts.tolerance * scale
-                || (theta < 1.0 && theta / (1.0 - theta) * delta <= opts.tolerance * scale)
+                // The linearly converging frozen-Hessian and fixed-point iterations may not
+                // stop on the contraction estimate: near round-off it is noisy and leaves a
+                // one-signed remainder that drifts over long runs (measured: Kepler, Legendre
+                // n = 24, h = 0.5, T = 20 000 at 1.6e-8 instead of 2.4e-10), so they iterate
+                // until the increment itself is below the tolerance or stalls at the floor.
+                || (theta < 1.0
+                    && linear != Linear::Frozen
+                    && theta / (1.0 - theta) * delta <= opts.tolerance * scale)
                 || (theta.is_finite()
                     && theta >= 0.5
                     && linear != Linear::Frozen
