@@ -509,15 +509,7 @@ fn fit_exponents(points: &[ScalingPoint]) -> Vec<ExponentFit> {
 fn auto_ratios(points: &[ScalingPoint]) -> Vec<AutoRatio> {
     let mut out = Vec::new();
     for auto in points.iter().filter(|p| p.solver == "auto" && ran(p)) {
-        let best = points
-            .iter()
-            .filter(|p| {
-                p.family == auto.family
-                    && p.n == auto.n
-                    && p.bodies == auto.bodies
-                    && p.solver != "auto"
-                    && ran(p)
-            })
+        let best = explicit_at(points, auto)
             .min_by(|a, b| a.seconds_per_step.total_cmp(&b.seconds_per_step));
         if let Some(best) = best {
             out.push(AutoRatio {
@@ -536,17 +528,23 @@ fn auto_ratios(points: &[ScalingPoint]) -> Vec<AutoRatio> {
     out
 }
 
+/// The points of the explicit solvers (not `auto`) that ran at `auto`'s point.
+fn explicit_at<'a>(
+    points: &'a [ScalingPoint],
+    auto: &'a ScalingPoint,
+) -> impl Iterator<Item = &'a ScalingPoint> {
+    points.iter().filter(move |p| {
+        p.family == auto.family
+            && p.n == auto.n
+            && p.bodies == auto.bodies
+            && p.solver != "auto"
+            && ran(p)
+    })
+}
+
 /// The fastest sample of any explicit solver at `auto`'s point.
 fn best_min(points: &[ScalingPoint], auto: &ScalingPoint) -> Option<f64> {
-    points
-        .iter()
-        .filter(|p| {
-            p.family == auto.family
-                && p.n == auto.n
-                && p.bodies == auto.bodies
-                && p.solver != "auto"
-                && ran(p)
-        })
+    explicit_at(points, auto)
         .map(|p| p.min_seconds_per_step)
         .min_by(f64::total_cmp)
 }
