@@ -103,13 +103,25 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             // Kinetic part (1/h) Σ_b K_ab M ΔQ_b with ΔQ_b = Q_b − u_b q_k: constants applied to
             // the increments, never to Q (docs/DESIGN.md §4).
             let coeffs = if cand { &ws.cand } else { &ws.coeffs };
-            for b in 0..n {
-                for r in 0..d {
-                    let mut s = 0.0;
-                    for c in 0..d {
-                        s += sep.mass[r * d + c] * coeffs[b * d + c];
+            match &sep.mass_diagonal {
+                // M diagonal (N-body): the same products without the D − 1 zero terms.
+                Some(diag) => {
+                    for (mq, x) in ws.mq.chunks_exact_mut(d).zip(coeffs.chunks_exact(d)) {
+                        for ((y, &m), &x) in mq.iter_mut().zip(diag).zip(x) {
+                            *y = m * x;
+                        }
                     }
-                    ws.mq[b * d + r] = s;
+                }
+                None => {
+                    for b in 0..n {
+                        for r in 0..d {
+                            let mut s = 0.0;
+                            for c in 0..d {
+                                s += sep.mass[r * d + c] * coeffs[b * d + c];
+                            }
+                            ws.mq[b * d + r] = s;
+                        }
+                    }
                 }
             }
             let rd = Strided::rows(0, d);
@@ -244,7 +256,6 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         } else {
             &ws.coeffs
         };
-        let nd = n * d;
         for r in 0..d {
             // p_k + impulse …
             let (mut s, mut e) = two_sum(p_k[r], ws.impulse[r]);
@@ -258,13 +269,16 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 e -= phi * w.mul_add(f, -g);
             }
             // … − (1/h) Σ_b K_{n−1,b} M ΔQ_b.
-            let kinetic = &sep.kinetic_last[r * nd..(r + 1) * nd];
-            for (c, v) in kinetic.iter().zip(x) {
-                dd_acc(&mut s, &mut e, -c, *v);
+            let row = sep.kinetic_last_start[r]..sep.kinetic_last_start[r + 1];
+            let (kinetic, index) = (&sep.kinetic_last[row.clone()], &sep.kinetic_last_index[row]);
+            for (c, &i) in kinetic.iter().zip(index) {
+                dd_acc(&mut s, &mut e, -c, x[i]);
             }
             if !ws.curve_from_cand {
-                for (c, lo) in kinetic[last..].iter().zip(&ws.last_lo) {
-                    e -= c * lo;
+                for (c, &i) in kinetic.iter().zip(index) {
+                    if i >= last {
+                        e -= c * ws.last_lo[i - last];
+                    }
                 }
             }
             ws.rhs[r] = s + e;

@@ -122,8 +122,14 @@ pub(crate) struct Separable {
     /// (K_ab / h) M for equations a = 0…n−2 and unknowns b = 1…n−1: ((n−1)D)².
     pub kinetic_jacobian: Vec<f64>,
     /// (K_{n−1,b} / h) M for the last row block against every unknown b = 0…n−1: D×(nD),
-    /// the kinetic part of ∂S/∂ΔQ_{n−1} for its compensated evaluation.
+    /// the kinetic part of ∂S/∂ΔQ_{n−1} for its compensated evaluation, stored by rows as its
+    /// nonzero entries only (for a diagonal M, as in N-body, one in D): the values …
     pub kinetic_last: Vec<f64>,
+    /// … their columns in 0…nD …
+    pub kinetic_last_index: Vec<usize>,
+    /// … and where row r starts (D + 1 offsets). Skipping the zeros leaves the compensated
+    /// sums bit for bit as they were (a zero product adds exactly nothing).
+    pub kinetic_last_start: Vec<usize>,
     /// M's diagonal when M is diagonal.
     pub mass_diagonal: Option<Vec<f64>>,
 }
@@ -190,19 +196,26 @@ impl Workspace {
                         }
                     }
                 }
-                let mut kl = vec![0.0; d * n * d];
-                for b in 0..n {
-                    let kab = t.kinetic[(n - 1) * n + b] / h;
-                    for r in 0..d {
+                let (mut kl, mut kl_index, mut kl_start) = (Vec::new(), Vec::new(), vec![0]);
+                for r in 0..d {
+                    for b in 0..n {
+                        let kab = t.kinetic[(n - 1) * n + b] / h;
                         for s in 0..d {
-                            kl[r * n * d + b * d + s] = kab * flat[r * d + s];
+                            let value = kab * flat[r * d + s];
+                            if value != 0.0 {
+                                kl.push(value);
+                                kl_index.push(b * d + s);
+                            }
                         }
                     }
+                    kl_start.push(kl.len());
                 }
                 let diagonal = (0..d).all(|r| (0..d).all(|s| r == s || flat[r * d + s] == 0.0));
                 Some(Separable {
                     mass_diagonal: diagonal.then(|| (0..d).map(|r| flat[r * d + r]).collect()),
                     kinetic_last: kl,
+                    kinetic_last_index: kl_index,
+                    kinetic_last_start: kl_start,
                     mass: flat,
                     mass_lu,
                     kinetic_jacobian: kj,
