@@ -552,9 +552,13 @@ impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIn
     }
 
     /// The solver `NewtonOptions::solver` names, with `Auto` resolved for this workspace.
-    pub(super) fn resolve_solver(&self, ws: &super::Workspace) -> super::StageSolver {
+    pub(super) fn resolve_solver(
+        &self,
+        ws: &super::Workspace,
+        solver: super::StageSolver,
+    ) -> super::StageSolver {
         use super::StageSolver;
-        match self.options().solver {
+        match solver {
             StageSolver::Auto => {
                 if ws.kron.is_none() || (ws.n - 1) * ws.d <= AUTO_DENSE_SIZE {
                     StageSolver::Exact

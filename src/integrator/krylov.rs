@@ -45,6 +45,11 @@ pub(crate) struct KrylovWork {
 }
 
 impl KrylovWork {
+    /// y = J x with this workspace's buffers.
+    pub(crate) fn product(&mut self, op: &Operator<'_>, x: &[f64], y: &mut [f64]) {
+        op.apply(x, y, &mut self.mx, &mut self.node, &mut self.node_force);
+    }
+
     pub(crate) fn new(k: usize, m: usize, d: usize) -> Self {
         let size = k * d;
         KrylovWork {

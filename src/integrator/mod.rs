@@ -26,6 +26,7 @@
 //! ([`Workspace::coefficients`], `Trajectory::coefficients`) stay absolute Q.
 
 mod dd;
+mod equations;
 mod guess;
 mod kronecker;
 mod krylov;
@@ -36,6 +37,7 @@ mod stage;
 mod tangent;
 mod workspace;
 
+pub use equations::{Correction, StageEquations, StageSolve};
 pub use newton::{DiscreteLagrangian, InitialGuess, NewtonOptions, StepFailure, StepStats};
 pub use solver::StageSolver;
 pub use tangent::StepJacobian;
@@ -69,6 +71,8 @@ pub struct GalerkinIntegrator<B: Basis = ChebyshevLagrange, Q: Quadrature = Gaus
     h: f64,
     options: NewtonOptions,
     tables: Tables,
+    /// A user's stage solver, used instead of `options.solver` when set.
+    stage_solver: Option<std::sync::Arc<dyn StageSolve>>,
 }
 
 /// Precomputed basis tables (row-major).
@@ -153,6 +157,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             h,
             options: NewtonOptions::default(),
             tables,
+            stage_solver: None,
         };
         integrator.check_quadrature_strength()?;
         Ok(integrator)
@@ -162,6 +167,19 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
     pub fn with_options(mut self, options: NewtonOptions) -> Self {
         self.options = options;
         self
+    }
+
+    /// Solve the stage equations of every step with a custom [`StageSolve`] instead of the
+    /// built-in solver `NewtonOptions::solver` names (see [`StageEquations`] for what it can
+    /// use). The discrete Lagrangian's two-point problem keeps the built-in solver.
+    pub fn with_stage_solver<S: StageSolve + 'static>(mut self, solver: S) -> Self {
+        self.stage_solver = Some(std::sync::Arc::new(solver));
+        self
+    }
+
+    /// The custom stage solver, if one was set.
+    pub fn stage_solver(&self) -> Option<&dyn StageSolve> {
+        self.stage_solver.as_deref()
     }
 
     /// The Newton options.

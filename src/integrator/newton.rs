@@ -53,13 +53,14 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
     /// Newton's method on the stage equations of `mode`, from the coefficients in
     /// `ws.coeffs`; on success the coefficients solve them and `ws.grad` holds ∂S/∂Q at the
     /// solution.
-    fn newton<L: Lagrangian>(
+    pub(super) fn newton<L: Lagrangian>(
         &self,
         lag: &L,
         ws: &mut Workspace,
         mode: Mode,
         p_k: &[f64],
         stats: &mut StepStats,
+        solver: StageSolver,
     ) -> std::result::Result<(), StepFailure> {
         let opts = self.options();
         let (n, d) = (ws.n, ws.d);
@@ -91,7 +92,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             && ws.kron.is_some()
             && ws.krylov.is_some()
             && self.tables().kron.is_some();
-        let auto = opts.solver == StageSolver::Auto;
+        let auto = solver == StageSolver::Auto;
         if auto {
             // Try the cheaper rung again once the hold-off has passed.
             if ws.auto_holdoff == 0 && ws.auto_level > 1 {
@@ -111,7 +112,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             }
         };
         let mut fixed_point = false;
-        let mut linear = match (structured, self.resolve_solver(ws)) {
+        let mut linear = match (structured, self.resolve_solver(ws, solver)) {
             (true, StageSolver::Kronecker) => Linear::Frozen,
             (true, StageSolver::FixedPoint) => {
                 fixed_point = true;
@@ -433,7 +434,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let (guess, evals) = self.initial_guess(lag, ws, q, p);
         stats.guess = guess;
         stats.gradient_evaluations += evals;
-        if let Err(first) = self.newton(lag, ws, Mode::InitialValue, p, &mut stats) {
+        if let Err(first) = self.solve_stage_equations(lag, ws, p, &mut stats) {
             // Fallback: Newton from each of the other guesses before giving up (with very large
             // steps the residual-best guess can lie in the basin of no root, or of another).
             let mut solved = false;
@@ -447,10 +448,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                     continue;
                 }
                 ws.coeffs.copy_from_slice(&ws.cand);
-                if self
-                    .newton(lag, ws, Mode::InitialValue, p, &mut stats)
-                    .is_ok()
-                {
+                if self.solve_stage_equations(lag, ws, p, &mut stats).is_ok() {
                     stats.guess = g;
                     solved = true;
                     break;
@@ -470,6 +468,38 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         // The total impulse h Σ_j b_j L_q(c_j) at the solution is left in ws.impulse by the
         // last residual evaluation.
         Ok(stats)
+    }
+
+    /// The stage equations of an initial-value step from the iterate in `ws.coeffs`, by the
+    /// integrator's custom stage solver if it has one, else by the built-in one its options
+    /// name. A custom solver's result is re-evaluated here, so the impulse and ∂S/∂Q in the
+    /// workspace belong to the iterate it returns.
+    fn solve_stage_equations<L: Lagrangian>(
+        &self,
+        lag: &L,
+        ws: &mut Workspace,
+        p: &[f64],
+        stats: &mut StepStats,
+    ) -> std::result::Result<(), StepFailure> {
+        let Some(custom) = self.stage_solver.clone() else {
+            return self.newton(lag, ws, Mode::InitialValue, p, stats, self.options().solver);
+        };
+        use super::equations::{StageEquations, StepEquations};
+        let mut equations = StepEquations::new(self, lag, ws, p, stats);
+        custom.solve(&mut equations)?;
+        let residual = equations.residual();
+        if !residual.is_finite() {
+            ws.lu_valid = false;
+            return Err(StepFailure {
+                residual,
+                iterations: stats.iterations,
+                reason: format!(
+                    "stage solver '{}' returned a non-finite residual",
+                    custom.name()
+                ),
+            });
+        }
+        Ok(())
     }
 
     /// The discrete Lagrangian L_d(q0, q1) = ext h Σ_j b_j L(q(c_j), q̇(c_j)) over Galerkin
@@ -502,14 +532,21 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             ws.coeffs[(n - 1) * d + r] = q1[r] - q0[r];
         }
         let mut stats = StepStats::default();
-        self.newton(lag, &mut ws, Mode::BoundaryValue, &[], &mut stats)
-            .map_err(|f| GviError::NewtonFailure {
-                step: 0,
-                t: 0.0,
-                residual: f.residual,
-                iterations: f.iterations,
-                reason: format!("discrete Lagrangian: {}", f.reason),
-            })?;
+        self.newton(
+            lag,
+            &mut ws,
+            Mode::BoundaryValue,
+            &[],
+            &mut stats,
+            self.options().solver,
+        )
+        .map_err(|f| GviError::NewtonFailure {
+            step: 0,
+            t: 0.0,
+            residual: f.residual,
+            iterations: f.iterations,
+            reason: format!("discrete Lagrangian: {}", f.reason),
+        })?;
         let h = self.step_size();
         let mut value = 0.0;
         for j in 0..t.m {

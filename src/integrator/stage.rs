@@ -2,7 +2,7 @@
 //! ∂S/∂Q, the residual (with the compensated Legendre-transform rows) and the exact Newton
 //! matrix ∂²S/∂Q_a∂Q_b.
 
-use super::dd::{dd_acc, two_sum};
+use super::dd::{dd_acc, dd_acc_columns, two_sum};
 use super::{GalerkinIntegrator, Tables, Workspace};
 use crate::basis::Basis;
 use crate::lagrangian::Lagrangian;
@@ -42,7 +42,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
     /// Curve values q(c_j) and velocities q̇(c_j) at every quadrature node from the increments
     /// ΔQ in `coeffs` (or `cand`): q = q_k + Φ ΔQ and q̇ = Φ' ΔQ / h as two matrix products
     /// (Σ u_i φ_i ≡ 1 and Σ u_i φ_i' ≡ 0, so the constant part is added, not multiplied).
-    fn evaluate_curve(&self, ws: &mut Workspace, coeffs_from_cand: bool) {
+    pub(super) fn evaluate_curve(&self, ws: &mut Workspace, coeffs_from_cand: bool) {
         let t = self.tables();
         let (n, m, d, h) = (t.n, t.m, ws.d, self.step_size());
         let coeffs = if coeffs_from_cand {
@@ -128,12 +128,15 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             if self.options().exact_kinetic && !cand {
                 for a in 0..n {
                     let row = &t.kinetic[a * n..(a + 1) * n];
-                    for r in 0..d {
-                        let (mut hi, mut lo) = (0.0, 0.0);
-                        for (b, &k) in row.iter().enumerate() {
-                            dd_acc(&mut hi, &mut lo, k, ws.mq[b * d + r]);
-                        }
-                        ws.grad[a * d + r] = (hi + lo) / h;
+                    ws.dd_hi.iter_mut().for_each(|x| *x = 0.0);
+                    ws.dd_lo.iter_mut().for_each(|x| *x = 0.0);
+                    dd_acc_columns(n, |b| row[b], &ws.mq, d, &mut ws.dd_hi, &mut ws.dd_lo);
+                    for ((g, hi), lo) in ws.grad[a * d..(a + 1) * d]
+                        .iter_mut()
+                        .zip(&ws.dd_hi)
+                        .zip(&ws.dd_lo)
+                    {
+                        *g = (hi + lo) / h;
                     }
                 }
             } else {
@@ -240,12 +243,19 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let (t, h) = (self.tables(), self.step_size());
         let (d, n) = (ws.d, ws.n);
         let last = (n - 1) * d;
+        ws.dd_hi.iter_mut().for_each(|x| *x = 0.0);
+        ws.dd_lo.iter_mut().for_each(|x| *x = 0.0);
+        let weights = &t.weights;
+        dd_acc_columns(
+            t.m,
+            |j| h * weights[j],
+            &ws.lq,
+            d,
+            &mut ws.dd_hi,
+            &mut ws.dd_lo,
+        );
         for r in 0..d {
-            let (mut hi, mut lo) = (0.0, 0.0);
-            for j in 0..t.m {
-                dd_acc(&mut hi, &mut lo, h * t.weights[j], ws.lq[j * d + r]);
-            }
-            (ws.impulse[r], ws.impulse_lo[r]) = two_sum(hi, lo);
+            (ws.impulse[r], ws.impulse_lo[r]) = two_sum(ws.dd_hi[r], ws.dd_lo[r]);
             ws.rhs[r] = (p_k[r] - ws.grad[last + r]) + (ws.impulse[r] + ws.p_err[r]);
         }
         let Some(sep) = &ws.separable else {
@@ -256,18 +266,26 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         } else {
             &ws.coeffs
         };
+        // p_k + impulse …
         for r in 0..d {
-            // p_k + impulse …
-            let (mut s, mut e) = two_sum(p_k[r], ws.impulse[r]);
-            e += ws.p_err[r] + ws.impulse_lo[r];
-            // … − Σ_j φ_{n−1}(c_j) h b_j L_q(c_j) …
-            for j in 0..t.m {
-                let (w, f) = (h * t.weights[j], ws.lq[j * d + r]);
+            let (s, e) = two_sum(p_k[r], ws.impulse[r]);
+            ws.dd_hi[r] = s;
+            ws.dd_lo[r] = e + (ws.p_err[r] + ws.impulse_lo[r]);
+        }
+        // … − Σ_j φ_{n−1}(c_j) h b_j L_q(c_j) (side by side over r, each sum in the order
+        // of j) …
+        for j in 0..t.m {
+            let w = h * t.weights[j];
+            let phi = t.phi[j * n + n - 1];
+            let lq = &ws.lq[j * d..(j + 1) * d];
+            for ((s, e), &f) in ws.dd_hi.iter_mut().zip(ws.dd_lo.iter_mut()).zip(lq) {
                 let g = w * f;
-                let phi = t.phi[j * n + n - 1];
-                dd_acc(&mut s, &mut e, -phi, g);
-                e -= phi * w.mul_add(f, -g);
+                dd_acc(s, e, -phi, g);
+                *e -= phi * w.mul_add(f, -g);
             }
+        }
+        for r in 0..d {
+            let (mut s, mut e) = (ws.dd_hi[r], ws.dd_lo[r]);
             // … − (1/h) Σ_b K_{n−1,b} M ΔQ_b.
             let row = sep.kinetic_last_start[r]..sep.kinetic_last_start[r + 1];
             let (kinetic, index) = (&sep.kinetic_last[row.clone()], &sep.kinetic_last_index[row]);

@@ -96,6 +96,9 @@ pub struct Workspace {
     pub(crate) vel: Vec<f64>,
     pub(crate) small: Lu,
     pub(crate) small_rhs: Vec<f64>,
+    /// Double-double accumulators, one pair per coordinate (D each).
+    pub(crate) dd_hi: Vec<f64>,
+    pub(crate) dd_lo: Vec<f64>,
     pub(crate) small_scratch: Vec<f64>,
     /// Buffers of the Kronecker solver (separable Lagrangians whose tables have a Schur form).
     pub(crate) kron: Option<super::kronecker::KroneckerWork>,
@@ -286,6 +289,8 @@ impl Workspace {
             vel: vec![0.0; d],
             small: Lu::with_capacity(d),
             small_rhs: vec![0.0; d],
+            dd_hi: vec![0.0; d],
+            dd_lo: vec![0.0; d],
             small_scratch: vec![0.0; d],
             krylov: kron
                 .is_some()
