@@ -140,6 +140,26 @@ pub trait Lagrangian {
         }
     }
 
+    /// Products of the force Jacobians with vectors at many points, without forming them:
+    /// row j of `out` = L_qq(q_j) x_j (rows of `q`, `x` and `out`: D values each). Returns
+    /// `false`, touching nothing, when the system does not provide them (the default); the
+    /// Newton–Krylov solver then forms the D×D Jacobians at the nodes. [`crate::systems::NBody`]
+    /// provides them pairwise, O(N²) per point with no 3N×3N matrix.
+    fn force_jacobian_products_at_points(&self, q: &[f64], x: &[f64], out: &mut [f64]) -> bool {
+        let _ = (q, x, out);
+        false
+    }
+
+    /// The diagonal b×b blocks of the force Jacobians at many points, b from
+    /// [`coordinate_blocks`](Lagrangian::coordinate_blocks): block c of point j at
+    /// `out[(j·D/b + c)·b² ..]`, row-major — all the frozen-Hessian preconditioner uses of
+    /// them. Returns `false`, touching nothing, when the system does not provide them (the
+    /// default; the full Jacobians are formed instead).
+    fn force_jacobian_diagonal_blocks_at_points(&self, q: &[f64], out: &mut [f64]) -> bool {
+        let _ = (q, out);
+        false
+    }
+
     /// For separable Lagrangians: L_qq(q) = −∇²V(q), row-major D×D.
     fn force_jacobian(&self, q: &[f64], out: &mut [f64]) {
         let d = self.dim();
@@ -219,6 +239,20 @@ pub trait Mechanical {
             self.potential_hessian(qj, oj);
         }
     }
+    /// ∇²V(q_j)·x_j at many points without forming the Hessians, for
+    /// [`Lagrangian::force_jacobian_products_at_points`]; `false` (the default) when not
+    /// provided.
+    fn potential_hessian_products_at_points(&self, q: &[f64], x: &[f64], out: &mut [f64]) -> bool {
+        let _ = (q, x, out);
+        false
+    }
+    /// The diagonal b×b blocks of ∇²V at many points, for
+    /// [`Lagrangian::force_jacobian_diagonal_blocks_at_points`]; `false` (the default) when
+    /// not provided.
+    fn potential_hessian_diagonal_blocks_at_points(&self, q: &[f64], out: &mut [f64]) -> bool {
+        let _ = (q, out);
+        false
+    }
     /// ∇²V(q), row-major D×D. Default: automatic differentiation.
     fn potential_hessian(&self, q: &[f64], out: &mut [f64]) {
         let d = self.degrees_of_freedom();
@@ -297,6 +331,22 @@ impl<S: Mechanical> Lagrangian for S {
     fn force_jacobian_at_points(&self, q: &[f64], out: &mut [f64]) {
         self.potential_hessian_at_points(q, out);
         out.iter_mut().for_each(|x| *x = -*x);
+    }
+
+    fn force_jacobian_products_at_points(&self, q: &[f64], x: &[f64], out: &mut [f64]) -> bool {
+        if !self.potential_hessian_products_at_points(q, x, out) {
+            return false;
+        }
+        out.iter_mut().for_each(|x| *x = -*x);
+        true
+    }
+
+    fn force_jacobian_diagonal_blocks_at_points(&self, q: &[f64], out: &mut [f64]) -> bool {
+        if !self.potential_hessian_diagonal_blocks_at_points(q, out) {
+            return false;
+        }
+        out.iter_mut().for_each(|x| *x = -*x);
+        true
     }
 }
 

@@ -25,7 +25,6 @@
 //! integrator re-evaluates the residual at the iterate a solver returns, so the step's
 //! momentum and statistics always describe the final iterate.
 
-use super::krylov::Operator;
 use super::newton::max_abs;
 use super::stage::Mode;
 use super::{GalerkinIntegrator, NewtonOptions, StageSolver, StepFailure, StepStats, Workspace};
@@ -358,14 +357,11 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> StageEquations for StepEquations<'_
         let Some((kw, kv, parts, rhs)) = self.ws.krylov_parts() else {
             return Err(self.failure("Newton–Krylov needs a separable Lagrangian"));
         };
-        let op = Operator {
-            t: tables,
-            h,
-            d,
-            mass: parts.mass,
-            mass_diagonal: parts.mass_diagonal,
-            hall: parts.hall,
+        let lag = self.lag;
+        let apply = |q: &[f64], x: &[f64], out: &mut [f64]| {
+            lag.force_jacobian_products_at_points(q, x, out)
         };
+        let op = parts.operator(tables, h, d, &apply);
         let inner = super::krylov::gmres(&op, kt, kw, kv, rhs);
         self.stats.inner_iterations += inner;
         Ok(inner)
@@ -382,14 +378,11 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> StageEquations for StepEquations<'_
             }
             let tables = self.gvi.tables();
             if let Some((_, kv, parts, _)) = self.ws.krylov_parts() {
-                let op = Operator {
-                    t: tables,
-                    h,
-                    d,
-                    mass: parts.mass,
-                    mass_diagonal: parts.mass_diagonal,
-                    hall: parts.hall,
+                let lag = self.lag;
+                let apply = |q: &[f64], x: &[f64], out: &mut [f64]| {
+                    lag.force_jacobian_products_at_points(q, x, out)
                 };
+                let op = parts.operator(tables, h, d, &apply);
                 kv.product(&op, &x[..size], &mut y[..size]);
                 return;
             }

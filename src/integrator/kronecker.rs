@@ -256,6 +256,11 @@ impl KroneckerWork {
 
     /// Decompose the frozen Hessian in `self.hbar` against M and invert the decoupled diagonal
     /// blocks 1/h + h T_ii μ_r (and the 2×2 blocks of complex pairs).
+    /// The coordinate block size b of the frozen Hessian (b = D: full).
+    pub(crate) fn block(&self) -> usize {
+        self.block
+    }
+
     pub(crate) fn factor(&mut self, kt: &KroneckerTables, h: f64) -> Result<()> {
         let (d, k) = (self.d, kt.k);
         if self.block < d {
@@ -501,11 +506,32 @@ impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIn
             kw.factor(kt, h)?;
             return Ok(0);
         }
-        lag.force_jacobian_at_points(&ws.qj, &mut ws.hall);
-        for (j, hj) in ws.hall.chunks_exact(dd).enumerate() {
-            let w = t.weights[j];
-            for (x, y) in kw.hbar.iter_mut().zip(hj) {
-                *x += w * y;
+        if !ws.hblocks.is_empty()
+            && lag.force_jacobian_diagonal_blocks_at_points(&ws.qj, &mut ws.hblocks)
+        {
+            // Only the diagonal blocks of H̄ are used (block-diagonal preconditioner): the
+            // same weighted sums of the same entries, without forming the node Jacobians.
+            ws.hall_stale = true;
+            let b = kw.block();
+            let (bb, blocks) = (b * b, d / b);
+            for (j, hj) in ws.hblocks.chunks_exact(d * b).enumerate() {
+                let w = t.weights[j];
+                for c in 0..blocks {
+                    for r in 0..b {
+                        for s in 0..b {
+                            kw.hbar[(c * b + r) * d + c * b + s] += w * hj[c * bb + r * b + s];
+                        }
+                    }
+                }
+            }
+        } else {
+            lag.force_jacobian_at_points(&ws.qj, &mut ws.hall);
+            ws.hall_stale = false;
+            for (j, hj) in ws.hall.chunks_exact(dd).enumerate() {
+                let w = t.weights[j];
+                for (x, y) in kw.hbar.iter_mut().zip(hj) {
+                    *x += w * y;
+                }
             }
         }
         kw.factor(kt, h)?;
@@ -521,7 +547,12 @@ impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIn
         lag: &L,
         ws: &mut super::Workspace,
     ) -> usize {
+        if ws.matrix_free {
+            // The products are evaluated pairwise by the system when GMRES needs them.
+            return 0;
+        }
         lag.force_jacobian_at_points(&ws.qj, &mut ws.hall);
+        ws.hall_stale = false;
         self.tables().m
     }
 

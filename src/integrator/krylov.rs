@@ -77,8 +77,21 @@ pub(crate) struct Operator<'a> {
     pub mass: &'a [f64],
     /// M's diagonal when M is diagonal (N-body), for an O(D) product.
     pub mass_diagonal: Option<&'a [f64]>,
-    /// Force Jacobians L_qq at the nodes (m × D × D).
+    /// Force Jacobians L_qq at the nodes (m × D × D), unless `products` is given.
     pub hall: &'a [f64],
+    /// The system's matrix-free products (L_qq(q_j) x_j at every node j, `false` if not
+    /// provided) and the nodes q_j they are taken at; used instead of `hall` when set.
+    pub products: Option<Products<'a>>,
+}
+
+/// y_j = L_qq(q_j) x_j at every node j (q, x, y), `false` when the system has no such kernel.
+pub(crate) type ProductKernel<'a> = &'a dyn Fn(&[f64], &[f64], &mut [f64]) -> bool;
+
+/// A system's matrix-free force-Jacobian products at the nodes.
+#[derive(Clone, Copy)]
+pub(crate) struct Products<'a> {
+    pub apply: ProductKernel<'a>,
+    pub nodes: &'a [f64],
 }
 
 impl Operator<'_> {
@@ -121,17 +134,27 @@ impl Operator<'_> {
         };
         gemm(m, k, d, 1.0, &t.phi, phi_u, x, rd, 0.0, node, rd);
         let dd = d * d;
-        for j in 0..m {
-            let hj = &self.hall[j * dd..(j + 1) * dd];
-            let xj = &node[j * d..(j + 1) * d];
-            let w = h * t.weights[j];
-            for r in 0..d {
-                let s: f64 = hj[r * d..(r + 1) * d]
-                    .iter()
-                    .zip(xj)
-                    .map(|(a, b)| a * b)
-                    .sum();
-                nf[j * d + r] = w * s;
+        let pairwise = self
+            .products
+            .is_some_and(|p| (p.apply)(p.nodes, &node[..m * d], &mut nf[..m * d]));
+        if pairwise {
+            for (j, row) in nf[..m * d].chunks_exact_mut(d).enumerate() {
+                let w = h * t.weights[j];
+                row.iter_mut().for_each(|y| *y *= w);
+            }
+        } else {
+            for j in 0..m {
+                let hj = &self.hall[j * dd..(j + 1) * dd];
+                let xj = &node[j * d..(j + 1) * d];
+                let w = h * t.weights[j];
+                for r in 0..d {
+                    let s: f64 = hj[r * d..(r + 1) * d]
+                        .iter()
+                        .zip(xj)
+                        .map(|(a, b)| a * b)
+                        .sum();
+                    nf[j * d + r] = w * s;
+                }
             }
         }
         let phi_t = Strided {
@@ -257,6 +280,32 @@ pub(crate) struct Operands<'a> {
     pub mass: &'a [f64],
     pub mass_diagonal: Option<&'a [f64]>,
     pub hall: &'a [f64],
+    /// The curve at the nodes, when the products are matrix-free (`Workspace::matrix_free`).
+    pub matrix_free_nodes: Option<&'a [f64]>,
+}
+
+impl<'a> Operands<'a> {
+    /// The operator J x of a step of size h, with the system's matrix-free products `apply`
+    /// used when the workspace chose them.
+    pub(crate) fn operator(
+        self,
+        t: &'a Tables,
+        h: f64,
+        d: usize,
+        apply: ProductKernel<'a>,
+    ) -> Operator<'a> {
+        Operator {
+            t,
+            h,
+            d,
+            mass: self.mass,
+            mass_diagonal: self.mass_diagonal,
+            hall: self.hall,
+            products: self
+                .matrix_free_nodes
+                .map(|nodes| Products { apply, nodes }),
+        }
+    }
 }
 
 impl Workspace {
@@ -276,6 +325,7 @@ impl Workspace {
             mass: &sep.mass,
             mass_diagonal: sep.mass_diagonal.as_deref(),
             hall: &self.hall,
+            matrix_free_nodes: self.matrix_free.then_some(&self.qj[..]),
         };
         Some((kw, kv, operands, &mut self.rhs))
     }

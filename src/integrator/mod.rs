@@ -41,7 +41,7 @@ pub use equations::{Correction, StageEquations, StageSolve};
 pub use newton::{DiscreteLagrangian, InitialGuess, NewtonOptions, StepFailure, StepStats};
 pub use solver::StageSolver;
 pub use tangent::StepJacobian;
-pub use workspace::Workspace;
+pub use workspace::{MATRIX_FREE_MIN_DIM, Workspace};
 
 use crate::basis::{AnyBasis, Basis, BasisKind, ChebyshevLagrange, CurveFit};
 use crate::error::{GviError, Result, ensure_finite, ensure_len};

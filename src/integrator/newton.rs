@@ -161,6 +161,11 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                         stats.hessian_evaluations += evals;
                         have_lu = true;
                         fresh = true;
+                        if linear == Linear::Krylov && ws.hall_stale {
+                            // The freeze formed only the diagonal blocks; GMRES needs the
+                            // node Jacobians at this iterate.
+                            stats.hessian_evaluations += self.node_force_jacobians(lag, ws);
+                        }
                     }
                     Err(_) => {
                         linear = Linear::Dense;
@@ -193,14 +198,10 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 (Linear::Krylov, Some(kt)) => {
                     let d = ws.d;
                     if let Some((kw, kv, parts, rhs)) = ws.krylov_parts() {
-                        let op = super::krylov::Operator {
-                            t: self.tables(),
-                            h,
-                            d,
-                            mass: parts.mass,
-                            mass_diagonal: parts.mass_diagonal,
-                            hall: parts.hall,
+                        let apply = |q: &[f64], x: &[f64], out: &mut [f64]| {
+                            lag.force_jacobian_products_at_points(q, x, out)
                         };
+                        let op = parts.operator(self.tables(), h, d, &apply);
                         stats.inner_iterations += super::krylov::gmres(&op, kt, kw, kv, rhs);
                     }
                 }

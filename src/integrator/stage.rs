@@ -386,6 +386,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             // products Φᵀ diag(g_rs) Φ (one GEMM each) instead of scalar loops (docs/DESIGN.md §4).
             let dd = d * d;
             lag.force_jacobian_at_points(&ws.qj, &mut ws.hall);
+            ws.hall_stale = false;
             if d <= 4 && dd <= m {
                 // Few coordinates: all d² blocks in one pass over the nodes (the same products
                 // and the same order of summation as the per-block products below).

@@ -64,6 +64,14 @@ pub struct Workspace {
     pub(crate) lv: Vec<f64>,
     /// L_qq at every node (m×D×D) and the weighted basis table of one Gram product (n×m).
     pub(crate) hall: Vec<f64>,
+    /// The system's matrix-free force-Jacobian products replace `hall` in Newton–Krylov's
+    /// products (large N-body systems, [`MATRIX_FREE_MIN_DIM`]).
+    pub(crate) matrix_free: bool,
+    /// `hall` is not at the iterate of the last freeze (which formed only diagonal blocks).
+    pub(crate) hall_stale: bool,
+    /// Diagonal b×b blocks of the node force Jacobians (m·D·b), when the system provides them
+    /// and the frozen-Hessian preconditioner uses only those; empty otherwise.
+    pub(crate) hblocks: Vec<f64>,
     pub(crate) gram: Vec<f64>,
     /// One (n−1)×(n−1) block of the Newton matrix.
     pub(crate) block: Vec<f64>,
@@ -136,6 +144,12 @@ pub(crate) struct Separable {
     /// M's diagonal when M is diagonal.
     pub mass_diagonal: Option<Vec<f64>>,
 }
+
+/// Configuration dimension from which Newton–Krylov uses a system's matrix-free force-Jacobian
+/// products (N-body: pairwise, O(N²) per node) instead of the node Jacobians (O(D²) memory and
+/// work per node). Below it the stored Jacobians are cheaper: one pairwise product costs about
+/// as much as forming a node's Jacobian, and GMRES makes several per Newton iteration.
+pub const MATRIX_FREE_MIN_DIM: usize = 192;
 
 impl Separable {
     /// x ← M⁻¹ x: a division when M is diagonal (bit for bit what the LU solve of a diagonal
@@ -234,7 +248,24 @@ impl Workspace {
             ),
             _ => None,
         };
+        // Probe with empty slices: a system without the optional kernels answers `false`.
+        let matrix_free = d >= MATRIX_FREE_MIN_DIM
+            && kron.is_some()
+            && lagrangian.force_jacobian_products_at_points(&[], &[], &mut []);
+        let hblocks = match (&kron, lagrangian.coordinate_blocks()) {
+            (Some(kw), Some(b))
+                if kw.block() == b
+                    && b < d
+                    && lagrangian.force_jacobian_diagonal_blocks_at_points(&[], &mut []) =>
+            {
+                vec![0.0; m * d * b]
+            }
+            _ => Vec::new(),
+        };
         Ok(Workspace {
+            matrix_free,
+            hall_stale: true,
+            hblocks,
             d,
             n,
             separable,
@@ -339,5 +370,12 @@ impl Workspace {
     /// Dimension D.
     pub fn dim(&self) -> usize {
         self.d
+    }
+
+    /// Whether Newton–Krylov takes the system's matrix-free force-Jacobian products (D at
+    /// least [`MATRIX_FREE_MIN_DIM`] and a system that provides them, e.g. N-body from 64
+    /// bodies in 3D) instead of forming the node Jacobians.
+    pub fn uses_matrix_free_products(&self) -> bool {
+        self.matrix_free
     }
 }
