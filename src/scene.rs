@@ -30,7 +30,7 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 /// The built-in scenes: (name, TOML text).
-pub const BUILTIN_SCENES: [(&str, &str); 8] = [
+pub const BUILTIN_SCENES: [(&str, &str); 9] = [
     ("harmonic", include_str!("../scenes/harmonic.toml")),
     ("kepler", include_str!("../scenes/kepler.toml")),
     ("pendulum", include_str!("../scenes/pendulum.toml")),
@@ -44,6 +44,10 @@ pub const BUILTIN_SCENES: [(&str, &str); 8] = [
     (
         "planetesimal-ring",
         include_str!("../scenes/planetesimal-ring.toml"),
+    ),
+    (
+        "lagrange-triangle",
+        include_str!("../scenes/lagrange-triangle.toml"),
     ),
 ];
 
@@ -69,6 +73,9 @@ pub struct Scene {
     pub initial: InitialState,
     /// Integration method.
     pub method: MethodSpec,
+    /// Periodic-orbit data and initial guess for `gvi periodic` (see [`crate::periodic`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub periodic: Option<crate::periodic::PeriodicSpec>,
 }
 
 /// A built-in system and its parameters.
