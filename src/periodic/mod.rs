@@ -29,6 +29,7 @@
 pub mod curve;
 pub mod floquet;
 pub mod newton;
+mod report;
 pub mod spec;
 
 pub use curve::{FourierCurve, Layout};
@@ -308,6 +309,7 @@ pub fn analyse<S: System>(
             let opts = PeriodicOptions {
                 nodes: None,
                 tail_tolerance: None,
+                energy_spread_tolerance: None,
                 ..options
             };
             solve(system, curve.with_modes(k)?, condition, &symmetries, &opts)?
@@ -368,15 +370,17 @@ pub fn analyse<S: System>(
         .map(|(_, x)| *x);
 
     let steps = spec.steps.unwrap_or(scene.method.steps).max(1);
+    let mut method = scene.method.clone();
+    method.n = spec.n.unwrap_or(method.n);
     let floquet = if request.floquet {
-        Some(monodromy(system, &scene.method, &q0, &p0, period, steps)?)
+        Some(monodromy(system, &method, &q0, &p0, period, steps)?)
     } else {
         None
     };
     let closing = if request.periods > 0 {
         Some(closing_run(
             system,
-            scene,
+            &method,
             &q0,
             &p0,
             period,
@@ -434,14 +438,14 @@ pub fn analyse<S: System>(
 /// measure how far the end state is from the start.
 fn closing_run<L: Lagrangian>(
     lag: &L,
-    scene: &Scene,
+    method: &crate::scene::MethodSpec,
     q0: &[f64],
     p0: &[f64],
     period: f64,
     steps: usize,
     periods: usize,
 ) -> Result<Closing> {
-    let gvi = floquet::integrator_for_period(&scene.method, period, steps)?;
+    let gvi = floquet::integrator_for_period(method, period, steps)?;
     let traj = gvi
         .integrate(lag, 0.0, q0, p0, steps * periods)
         .map_err(|f| f.error)?;
@@ -455,7 +459,7 @@ fn closing_run<L: Lagrangian>(
     Ok(Closing {
         periods,
         steps_per_period: steps,
-        n: scene.method.n,
+        n: method.n,
         position_distance_one_period: dist(&traj.q[steps.min(last)], q0),
         position_distance: dist(&traj.q[last], q0),
         momentum_distance: dist(&traj.p[last], p0),

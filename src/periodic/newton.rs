@@ -134,6 +134,10 @@ pub struct PeriodicOptions {
     /// Reject a solution whose last two modes exceed this fraction of the largest mode
     /// ([`GviError::PeriodicUnderResolved`]); `None`: accept any.
     pub tail_tolerance: Option<f64>,
+    /// Reject a stationary point whose energy varies along the curve by more than this
+    /// (relative to max(1, |E|)): a stationary point of the discrete action through a
+    /// collision, not an orbit ([`GviError::PeriodicNotConverged`]); `None`: accept any.
+    pub energy_spread_tolerance: Option<f64>,
 }
 
 impl Default for PeriodicOptions {
@@ -145,6 +149,7 @@ impl Default for PeriodicOptions {
             eigen_cutoff: 1e-10,
             max_step: 0.5,
             tail_tolerance: None,
+            energy_spread_tolerance: Some(1e-6),
         }
     }
 }
@@ -160,7 +165,8 @@ pub struct PeriodicSolution {
     pub energy: f64,
     /// Max − min of the energy over the nodes (zero for an exact orbit).
     pub energy_spread: f64,
-    /// Final residual: max-norm of the gradient of F.
+    /// Final residual: max-norm of the gradient of F in the complement of the symmetry
+    /// directions.
     pub residual: f64,
     /// Residual before each Newton step and at the end.
     pub residual_history: Vec<f64>,
@@ -433,7 +439,18 @@ pub fn solve<L: Lagrangian>(
     };
     for iteration in 0..=options.max_iterations {
         let eval = evaluate(lag, &curve, &tables, nodes, condition, true);
-        let residual = max_norm(&eval.gradient);
+        // The residual is the gradient with its components along the symmetry generators
+        // removed (the phase conditions' Lagrange multipliers): rotations and translations
+        // leave the discrete action exactly invariant, but the trapezoid rule is invariant
+        // only under time shifts by multiples of T/M, so the gradient keeps an aliasing-size
+        // component along the time shift that no step in the complement can (or should) remove.
+        let zbasis = symmetry_basis(&curve, symmetries, nu);
+        let mut projected = eval.gradient.clone();
+        for z in &zbasis {
+            let dot: f64 = z.iter().zip(&projected).map(|(a, b)| a * b).sum();
+            projected.iter_mut().zip(z).for_each(|(x, y)| *x -= dot * y);
+        }
+        let residual = max_norm(&projected);
         history.push(residual);
         if !residual.is_finite() || !eval.action.is_finite() {
             return Err(fail(
@@ -452,6 +469,20 @@ pub fn solve<L: Lagrangian>(
                     tail,
                     tolerance: tol,
                 });
+            }
+            let spread = eval.energy_spread / eval.energy.abs().max(1.0);
+            if let Some(tol) = options.energy_spread_tolerance
+                && !(spread <= tol)
+            {
+                return Err(fail(
+                    residual,
+                    iteration,
+                    format!(
+                        "a stationary point of the discrete action that is not an orbit: the \
+                         energy varies by {spread:.2e} (relative) along it, above {tol:.0e} — a \
+                         collision or far too few modes"
+                    ),
+                ));
             }
             return Ok(PeriodicSolution {
                 action: eval.action,

@@ -76,6 +76,9 @@ pub struct PeriodicSpec {
     /// `method.steps`.
     #[serde(default)]
     pub steps: Option<usize>,
+    /// Basis functions per step of the time-stepping runs; default the scene's `method.n`.
+    #[serde(default)]
+    pub n: Option<usize>,
     /// The published period, for comparison (with `condition = "energy"`).
     #[serde(default)]
     pub reference_period: Option<f64>,
