@@ -17,7 +17,7 @@
 //! // The figure-eight from a lemniscate guess, energy from Simó's initial data.
 //! let nb = NBody::new(vec![1.0; 3], 1.0, 2)?;
 //! let layout = Layout::Choreography { bodies: 3, body_dim: 2 };
-//! let mut guess = FourierCurve::zeros(24, layout, 6.0)?;
+//! let mut guess = FourierCurve::zeros(30, layout, 6.0)?;
 //! guess.set_mode(1, &[0.0, 0.0], &[1.0, 0.0])?;
 //! guess.set_mode(2, &[0.0, 0.0], &[0.0, 0.35])?;
 //! let sol = periodic::solve(&nb, guess, PeriodCondition::Energy(-1.287_141_991_8),
