@@ -54,7 +54,7 @@ enum Command {
     /// number of bodies (planetesimal ring), with fitted exponents and auto / best ratios
     /// (CSV, JSON, Markdown, SVG in --out).
     SolverScaling(Box<scaling::ScalingArgs>),
-    /// Find a periodic orbit (choreography) of a scene's [periodic] table by periodic Galerkin
+    /// Find a periodic orbit (choreography) of a scene's `[periodic]` table by periodic Galerkin
     /// (Fourier basis, Newton on the action), with its Floquet multipliers and a closing run.
     Periodic(Box<periodic::PeriodicArgs>),
     /// List the built-in scenes.

@@ -10,7 +10,7 @@ use std::path::PathBuf;
 
 #[derive(Debug, Args)]
 pub struct PeriodicArgs {
-    /// Built-in scene name or TOML path; the scene needs a [periodic] table.
+    /// Built-in scene name or TOML path; the scene needs a `[periodic]` table.
     pub scene: String,
     /// Fourier modes K (default: the scene's). A comma-separated list refines in K: the
     /// largest is the main solve, and the Euler–Lagrange residual against K is fitted.
