@@ -5,7 +5,7 @@
 //! integrated by the trapezoid rule, spectrally accurate for periodic integrands, and made
 //! stationary by Newton's method with the exact Hessian (automatic differentiation through
 //! [`Lagrangian::hessian`], the analytic pairwise Hessian for N bodies), at fixed period or
-//! with the period unknown and the energy prescribed ([`newton`]). The symmetry directions are
+//! with the period unknown and the energy prescribed ([`action`], [`newton`]). The symmetry directions are
 //! removed from every step. An N-body choreography has one unknown curve,
 //! q_{i+1}(t) = q_i(t + T/N). The stability of the orbit found comes from the monodromy
 //! matrix, the product of the step Jacobians of a time-stepping run over one period
@@ -26,17 +26,17 @@
 //! # Ok::<(), galerkin_vi::GviError>(())
 //! ```
 
+pub mod action;
 pub mod curve;
 pub mod floquet;
 pub mod newton;
 mod report;
 pub mod spec;
 
+pub use action::{action_and_energy, default_nodes, equation_residual};
 pub use curve::{FourierCurve, Layout};
 pub use floquet::{Floquet, monodromy};
-pub use newton::{
-    PeriodCondition, PeriodicOptions, PeriodicSolution, Symmetry, equation_residual, solve,
-};
+pub use newton::{PeriodCondition, PeriodicOptions, PeriodicSolution, Symmetry, solve};
 pub use spec::{ConditionKind, CurveKind, GuessMode, PeriodicSpec};
 
 use crate::error::{GviError, Result};
