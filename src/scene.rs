@@ -1,7 +1,8 @@
 //! Scenes: small TOML files naming a system, its parameters, an initial state and a method.
 //!
 //! Built-in scenes (`harmonic`, `kepler`, `pendulum`, and the N-body scenes `solar-system`,
-//! `outer-solar-system`, `two-body`, `figure-eight` and the synthetic `planetesimal-ring`) are
+//! `outer-solar-system`, `two-body`, `figure-eight`, `lagrange-triangle` and the synthetic
+//! `planetesimal-ring`) are
 //! compiled into the crate from the `scenes/` directory; any other argument is read as a path to a user's TOML file. Unknown
 //! keys are rejected so that a typo is an error, not a silently ignored setting.
 //!
