@@ -166,6 +166,34 @@ pub enum GviError {
         /// The documented limit.
         limit: f64,
     },
+    /// The Newton iteration for a periodic orbit (stationary point of the action over one
+    /// period, [`crate::periodic`]) did not converge.
+    #[error(
+        "periodic orbit not found: Newton residual {residual:.3e} after {iterations} \
+         iterations ({reason})"
+    )]
+    PeriodicNotConverged {
+        /// Max-norm of the gradient of the action (and of the energy condition) at the last
+        /// iterate.
+        residual: f64,
+        /// Newton iterations taken.
+        iterations: usize,
+        /// Why it stopped (diverged, non-finite, iteration limit).
+        reason: String,
+    },
+    /// A periodic orbit was found but its Fourier series is not resolved by K modes.
+    #[error(
+        "too few modes: with K = {modes} the last modes are {tail:.3e} of the largest (limit \
+         {tolerance:.1e}); raise --modes"
+    )]
+    PeriodicUnderResolved {
+        /// Number of modes K.
+        modes: usize,
+        /// Size of the last two modes relative to the largest mode.
+        tail: f64,
+        /// The accepted limit.
+        tolerance: f64,
+    },
     /// Serialisation failed.
     #[error("serialisation error: {0}")]
     Serialize(String),

@@ -40,6 +40,7 @@ pub mod integrator;
 pub mod lagrangian;
 pub mod linalg;
 pub mod nbody_report;
+pub mod periodic;
 pub mod plot;
 pub mod progress;
 pub mod quadrature;

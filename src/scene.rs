@@ -1,7 +1,8 @@
 //! Scenes: small TOML files naming a system, its parameters, an initial state and a method.
 //!
 //! Built-in scenes (`harmonic`, `kepler`, `pendulum`, and the N-body scenes `solar-system`,
-//! `outer-solar-system`, `two-body`, `figure-eight` and the synthetic `planetesimal-ring`) are
+//! `outer-solar-system`, `two-body`, `figure-eight`, `lagrange-triangle` and the synthetic
+//! `planetesimal-ring`) are
 //! compiled into the crate from the `scenes/` directory; any other argument is read as a path to a user's TOML file. Unknown
 //! keys are rejected so that a typo is an error, not a silently ignored setting.
 //!
@@ -30,7 +31,7 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 /// The built-in scenes: (name, TOML text).
-pub const BUILTIN_SCENES: [(&str, &str); 8] = [
+pub const BUILTIN_SCENES: [(&str, &str); 9] = [
     ("harmonic", include_str!("../scenes/harmonic.toml")),
     ("kepler", include_str!("../scenes/kepler.toml")),
     ("pendulum", include_str!("../scenes/pendulum.toml")),
@@ -44,6 +45,10 @@ pub const BUILTIN_SCENES: [(&str, &str); 8] = [
     (
         "planetesimal-ring",
         include_str!("../scenes/planetesimal-ring.toml"),
+    ),
+    (
+        "lagrange-triangle",
+        include_str!("../scenes/lagrange-triangle.toml"),
     ),
 ];
 
@@ -69,6 +74,9 @@ pub struct Scene {
     pub initial: InitialState,
     /// Integration method.
     pub method: MethodSpec,
+    /// Periodic-orbit data and initial guess for `gvi periodic` (see [`crate::periodic`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub periodic: Option<crate::periodic::PeriodicSpec>,
 }
 
 /// A built-in system and its parameters.

@@ -2,6 +2,7 @@
 
 mod check;
 mod nbody;
+mod periodic;
 mod run;
 mod scaling;
 mod study;
@@ -53,6 +54,9 @@ enum Command {
     /// number of bodies (planetesimal ring), with fitted exponents and auto / best ratios
     /// (CSV, JSON, Markdown, SVG in --out).
     SolverScaling(Box<scaling::ScalingArgs>),
+    /// Find a periodic orbit (choreography) of a scene's `[periodic]` table by periodic Galerkin
+    /// (Fourier basis, Newton on the action), with its Floquet multipliers and a closing run.
+    Periodic(Box<periodic::PeriodicArgs>),
     /// List the built-in scenes.
     Scenes,
 }
@@ -71,6 +75,7 @@ pub fn main_with(cli: Cli) -> Result<(), GviError> {
         Command::NbodyReport(args) => nbody::run_nbody_report(*args),
         Command::ToleranceStudy(args) => tolerance::run_tolerance_study(*args),
         Command::SolverScaling(args) => scaling::run_solver_scaling(*args),
+        Command::Periodic(args) => periodic::run_periodic(*args),
         Command::Scenes => {
             for name in galerkin_vi::scene::Scene::builtin_names() {
                 let scene = galerkin_vi::scene::Scene::load(name)?;
