@@ -166,6 +166,56 @@ pub enum GviError {
         /// The documented limit.
         limit: f64,
     },
+    /// An output path is unusable (a directory, a pseudo-filesystem, the same file as another
+    /// output or as an input); refused before any work is done.
+    #[error("cannot write {path}: {reason}")]
+    InvalidOutput {
+        /// The output path.
+        path: PathBuf,
+        /// Why it is refused.
+        reason: String,
+    },
+    /// The computed state or an invariant became NaN or infinite. The steps before `step` are
+    /// kept (written, for `gvi run`).
+    #[error(
+        "non-finite {what} = {value:e} at step {step} (t = {t:e}); the {step} steps before it \
+         are kept"
+    )]
+    NonFiniteResult {
+        /// What became non-finite (a position, a momentum, an invariant).
+        what: String,
+        /// The value.
+        value: f64,
+        /// Index of the first step end where it happened.
+        step: usize,
+        /// Its time.
+        t: f64,
+    },
+    /// Two bodies coincide (or the force between them is not finite).
+    #[error("bodies {a} and {b} collide at step {step} (t = {t:e}): separation {separation:e}")]
+    Collision {
+        /// First body.
+        a: String,
+        /// Second body.
+        b: String,
+        /// Step end at which they met.
+        step: usize,
+        /// Its time.
+        t: f64,
+        /// Their separation there.
+        separation: f64,
+    },
+    /// With `--strict`: a run's error figures exceed the sanity threshold.
+    #[error("the run is not trustworthy (--strict): {0}")]
+    Untrustworthy(String),
+    /// Every run of a study failed: there is no result to report.
+    #[error("all {runs} runs of the study failed (first failure: {first})")]
+    AllRunsFailed {
+        /// Number of runs.
+        runs: usize,
+        /// The first failure's message.
+        first: String,
+    },
     /// Serialisation failed.
     #[error("serialisation error: {0}")]
     Serialize(String),

@@ -94,30 +94,4 @@ pub fn parse_vector(name: &str, text: &str) -> Result<Vec<f64>, GviError> {
         .collect()
 }
 
-/// Write text to a file (creating parent directories) or to stdout.
-pub fn write_output(path: Option<&std::path::Path>, text: &str) -> Result<(), GviError> {
-    match path {
-        Some(p) => {
-            if let Some(dir) = p.parent().filter(|d| !d.as_os_str().is_empty()) {
-                std::fs::create_dir_all(dir).map_err(|source| GviError::Io {
-                    path: dir.to_path_buf(),
-                    source,
-                })?;
-            }
-            std::fs::write(p, text).map_err(|source| GviError::Io {
-                path: p.to_path_buf(),
-                source,
-            })
-        }
-        None => {
-            use std::io::Write;
-            let mut out = std::io::stdout().lock();
-            out.write_all(text.as_bytes())
-                .and_then(|_| out.flush())
-                .map_err(|source| GviError::Io {
-                    path: "<stdout>".into(),
-                    source,
-                })
-        }
-    }
-}
+pub use galerkin_vi::output::write_output;

@@ -24,7 +24,6 @@ use crate::scene::{InitialState, MethodSpec};
 use crate::systems::{ExactSolution, System};
 use crate::trajectory::Trajectory;
 use serde::Serialize;
-use std::path::Path;
 use std::time::Instant;
 
 /// What the errors are measured against.
@@ -306,16 +305,4 @@ pub fn measurements_csv(ms: &[Measurement]) -> String {
     out
 }
 
-/// Write a text file, creating its directory.
-pub fn write_file(path: &Path, text: &str) -> Result<()> {
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(|source| GviError::Io {
-            path: dir.to_path_buf(),
-            source,
-        })?;
-    }
-    std::fs::write(path, text).map_err(|source| GviError::Io {
-        path: path.to_path_buf(),
-        source,
-    })
-}
+pub use crate::output::write_file;
