@@ -25,7 +25,7 @@ enum Command {
     Run(Box<run::RunArgs>),
     /// Geometric diagnostics: symplecticity defect of every step's exact Jacobian, energy and
     /// momentum-map errors at step ends and along the Galerkin curves.
-    Check(Box<run::RunArgs>),
+    Check(Box<run::SceneArgs>),
     /// n- or h-refinement sweep with the fitted rate (CSV, JSON, SVG in --out).
     Refine(Box<study::RefineArgs>),
     /// Every basis × quadrature over a range of n at fixed h: error and kinetic condition

@@ -1,6 +1,6 @@
 //! `gvi refine` and `gvi reproduce`.
 
-use super::run::{RunArgs, load_scene};
+use super::run::{SceneArgs, load_scene};
 use clap::{Args, ValueEnum};
 use galerkin_vi::GviError;
 use galerkin_vi::studies::refine::{Vary, parse_range, refine};
@@ -29,7 +29,7 @@ pub struct RefineArgs {
     #[arg(long)]
     pub out: Option<PathBuf>,
     #[command(flatten)]
-    pub run: RunArgs,
+    pub run: SceneArgs,
 }
 
 pub fn run_refine(args: RefineArgs) -> Result<(), GviError> {
@@ -89,7 +89,7 @@ pub struct CompareBasesArgs {
     #[arg(long)]
     pub out: Option<PathBuf>,
     #[command(flatten)]
-    pub run: RunArgs,
+    pub run: SceneArgs,
 }
 
 pub fn run_compare_bases(args: CompareBasesArgs) -> Result<(), GviError> {

@@ -1,6 +1,6 @@
 //! `gvi work-precision`, `gvi stability` and `gvi compare-refinement`.
 
-use super::run::{RunArgs, load_scene};
+use super::run::{SceneArgs, load_scene};
 use clap::Args;
 use galerkin_vi::GviError;
 use galerkin_vi::studies::compare_refinement::{CompareConfig, compare_refinement};
@@ -52,7 +52,7 @@ pub struct WorkPrecisionArgs {
     #[arg(long)]
     pub divisors: Option<String>,
     #[command(flatten)]
-    pub run: RunArgs,
+    pub run: SceneArgs,
 }
 
 /// A comma-separated list of whole numbers ≥ 1.
@@ -145,7 +145,7 @@ pub struct StabilityArgs {
     #[arg(long)]
     pub out: Option<PathBuf>,
     #[command(flatten)]
-    pub run: RunArgs,
+    pub run: SceneArgs,
 }
 
 pub fn run_stability(args: StabilityArgs) -> Result<(), GviError> {
@@ -194,7 +194,7 @@ pub struct CompareRefinementArgs {
     #[arg(long)]
     pub out: Option<PathBuf>,
     #[command(flatten)]
-    pub run: RunArgs,
+    pub run: SceneArgs,
 }
 
 pub fn run_compare_refinement(args: CompareRefinementArgs) -> Result<(), GviError> {
