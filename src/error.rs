@@ -21,7 +21,7 @@ pub enum GviError {
         reason: String,
     },
     /// The step size is not a positive finite number.
-    #[error("invalid step size h = {h}: it must be finite and positive")]
+    #[error("invalid step size h = {h:e}: it must be finite and positive")]
     InvalidStepSize {
         /// Requested step.
         h: f64,

@@ -345,7 +345,10 @@ pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> 
     let method = match (m.tol, n_range) {
         (Some(tol), Some((lo, hi))) => format!(
             "{} basis, n chosen per step in {lo}…{hi} for tol = {tol:e}, {} (default points), h = {}, {} solver",
-            m.basis, m.quadrature, trajectory.h, m.solver
+            m.basis,
+            m.quadrature,
+            fmt_number(trajectory.h),
+            m.solver
         ),
         _ => format!(
             "{} basis n = {}, {} with {} points, h = {}, {} solver",
@@ -353,7 +356,7 @@ pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> 
             m.n,
             gvi.rule().kind,
             gvi.rule().len(),
-            m.h,
+            fmt_number(m.h),
             m.solver
         ),
     };
@@ -431,6 +434,17 @@ pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> 
         chart,
         inner_chart,
     })
+}
+
+/// A number for messages: plain when it reads well (1e-4 ≤ |x| < 1e6, or 0), scientific
+/// otherwise (`{}` would print h = 1e300 as a 301-digit integer).
+pub fn fmt_number(x: f64) -> String {
+    let a = x.abs();
+    if x == 0.0 || (1e-4..1e6).contains(&a) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
 }
 
 /// Keep the first `states` step ends (and the `states − 1` steps between them).

@@ -292,6 +292,17 @@ impl Scene {
             })?;
             return Scene::from_toml_str(name_or_path, &text);
         }
+        let what = match std::fs::metadata(path) {
+            Ok(m) if m.is_dir() => Some("a directory"),
+            Ok(_) => Some("not a regular file (a device, a FIFO or a socket)"),
+            Err(_) => None,
+        };
+        if let Some(what) = what {
+            return Err(GviError::Scene {
+                source_name: name_or_path.to_string(),
+                reason: format!("{what}; a scene is a built-in name or a TOML file"),
+            });
+        }
         Err(GviError::Scene {
             source_name: name_or_path.to_string(),
             reason: format!(

@@ -96,6 +96,20 @@ pub struct RunArgs {
 pub fn load_scene(a: &SceneArgs) -> Result<Scene, GviError> {
     let mut scene = Scene::load(&a.scene)?;
     apply_overrides(&mut scene, a)?;
+    let init = &scene.initial;
+    let named = [
+        ("initial position q0 (--q0, or q in [initial])", &init.q),
+        ("initial momentum p0 (--p0, or p in [initial])", &init.p),
+        ("initial time t0 (t0 in [initial])", &vec![init.t0]),
+    ];
+    for (what, values) in named {
+        if let Some(&value) = values.iter().find(|x| !x.is_finite()) {
+            return Err(GviError::NonFinite {
+                what: what.into(),
+                value,
+            });
+        }
+    }
     Ok(scene)
 }
 

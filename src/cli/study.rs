@@ -40,6 +40,7 @@ pub fn run_refine(args: RefineArgs) -> Result<(), GviError> {
         VaryArg::H => Vary::H,
     };
     let study = refine(&scene, vary, &values, args.fixed_steps)?;
+    galerkin_vi::studies::ensure_some_succeeded(&study.points)?;
     let dir = args.out.unwrap_or_else(|| PathBuf::from("out/refine"));
     let files = study.write(&dir)?;
     eprintln!(
@@ -104,6 +105,8 @@ pub fn run_compare_bases(args: CompareBasesArgs) -> Result<(), GviError> {
         Some(list) => list.split(',').map(str::parse).collect::<Result<_, _>>()?,
     };
     let cmp = galerkin_vi::studies::compare_bases::compare_bases(&scene, &ns, &quads)?;
+    let measurements: Vec<_> = cmp.points.iter().map(|p| p.measurement.clone()).collect();
+    galerkin_vi::studies::ensure_some_succeeded(&measurements)?;
     let dir = args
         .out
         .unwrap_or_else(|| PathBuf::from("out/compare-bases"));

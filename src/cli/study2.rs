@@ -149,6 +149,29 @@ pub struct StabilityArgs {
 }
 
 pub fn run_stability(args: StabilityArgs) -> Result<(), GviError> {
+    // The map sweeps h and n itself and takes its steps from --cell-steps.
+    for (flag, given) in [
+        ("--h", args.run.h.is_some()),
+        ("--n", args.run.n.is_some()),
+        ("--steps", args.run.steps.is_some()),
+        ("--quad-points", args.run.quad_points.is_some()),
+        ("--economical", args.run.economical),
+    ] {
+        if given {
+            return Err(GviError::InvalidArgument {
+                name: flag.into(),
+                reason: "stability sweeps h and n over its own grid and takes the steps per \
+                         cell from --cell-steps; this flag would be ignored"
+                    .into(),
+            });
+        }
+    }
+    if args.cell_steps == 0 {
+        return Err(GviError::InvalidArgument {
+            name: "--cell-steps".into(),
+            reason: "need at least one step per cell".into(),
+        });
+    }
     let scene = load_scene(&args.run)?;
     let mut config = if args.quick {
         StabilityConfig::quick()
@@ -157,6 +180,20 @@ pub fn run_stability(args: StabilityArgs) -> Result<(), GviError> {
     };
     config.steps = args.cell_steps;
     let study = stability(&scene, &config)?;
+    if study
+        .cells
+        .iter()
+        .all(|c| c.class == Class::SolverFailure)
+    {
+        return Err(GviError::AllRunsFailed {
+            runs: study.cells.len(),
+            first: study
+                .cells
+                .first()
+                .and_then(|c| c.message.clone())
+                .unwrap_or_default(),
+        });
+    }
     let dir = args.out.unwrap_or_else(|| PathBuf::from("out/stability"));
     let files = study.write(&dir)?;
     let counts = study.counts();

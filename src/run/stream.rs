@@ -198,7 +198,7 @@ fn stream_system<S: System>(
         m.n,
         gvi.rule().kind,
         gvi.rule().len(),
-        m.h,
+        super::fmt_number(m.h),
         m.solver
     );
     let label = |v: Vec<f64>| -> Vec<(String, f64)> {
