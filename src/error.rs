@@ -21,7 +21,7 @@ pub enum GviError {
         reason: String,
     },
     /// The step size is not a positive finite number.
-    #[error("invalid step size h = {h:e}: it must be finite and positive")]
+    #[error("invalid step size h = {}: it must be finite and positive", fmt_number(*.h))]
     InvalidStepSize {
         /// Requested step.
         h: f64,
@@ -72,7 +72,7 @@ pub enum GviError {
         got: usize,
     },
     /// A value given by the user is NaN or infinite.
-    #[error("non-finite value in {what}: {value}")]
+    #[error("non-finite value in {what}: {}", fmt_number(*.value))]
     NonFinite {
         /// What contained it.
         what: String,
@@ -80,7 +80,7 @@ pub enum GviError {
         value: f64,
     },
     /// A parameter of a system is out of its domain (e.g. a negative mass).
-    #[error("invalid parameter {name} = {value}: {reason}")]
+    #[error("invalid parameter {name} = {}: {reason}", fmt_number(*.value))]
     InvalidParameter {
         /// Parameter name.
         name: String,
@@ -222,6 +222,17 @@ pub enum GviError {
     /// Chart rendering failed.
     #[error("chart error: {0}")]
     Plot(String),
+}
+
+/// A number for messages: plain when it reads well (1e-4 ≤ |x| < 1e6, or 0), scientific
+/// otherwise (`{}` would print 1e300 as a 301-digit integer).
+pub fn fmt_number(x: f64) -> String {
+    let a = x.abs();
+    if x == 0.0 || !x.is_finite() || (1e-4..1e6).contains(&a) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
 }
 
 /// Shorthand for results with [`GviError`].

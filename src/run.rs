@@ -436,16 +436,7 @@ pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> 
     })
 }
 
-/// A number for messages: plain when it reads well (1e-4 ≤ |x| < 1e6, or 0), scientific
-/// otherwise (`{}` would print h = 1e300 as a 301-digit integer).
-pub fn fmt_number(x: f64) -> String {
-    let a = x.abs();
-    if x == 0.0 || (1e-4..1e6).contains(&a) {
-        format!("{x}")
-    } else {
-        format!("{x:e}")
-    }
-}
+pub use crate::error::fmt_number;
 
 /// Keep the first `states` step ends (and the `states − 1` steps between them).
 fn truncate(traj: &mut Trajectory, states: usize) {

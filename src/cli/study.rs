@@ -33,6 +33,8 @@ pub struct RefineArgs {
 }
 
 pub fn run_refine(args: RefineArgs) -> Result<(), GviError> {
+    let dir = args.out.unwrap_or_else(|| PathBuf::from("out/refine"));
+    galerkin_vi::output::check_output_dir(&dir)?;
     let scene = load_scene(&args.run)?;
     let values = parse_range(&args.range)?;
     let vary = match args.vary {
@@ -41,7 +43,6 @@ pub fn run_refine(args: RefineArgs) -> Result<(), GviError> {
     };
     let study = refine(&scene, vary, &values, args.fixed_steps)?;
     galerkin_vi::studies::ensure_some_succeeded(&study.points)?;
-    let dir = args.out.unwrap_or_else(|| PathBuf::from("out/refine"));
     let files = study.write(&dir)?;
     eprintln!(
         "{}: {:?}-refinement, {} runs ({} failed), errors against the {}",
@@ -71,6 +72,7 @@ pub struct ReproduceArgs {
 
 pub fn run_reproduce(args: ReproduceArgs) -> Result<(), GviError> {
     let dir = args.out.unwrap_or_else(|| PathBuf::from("out/reproduce"));
+    galerkin_vi::output::check_output_dir(&dir)?;
     let size = if args.quick { Size::Quick } else { Size::Full };
     let rep = reproduce(&dir, size)?;
     eprint!("{}", rep.markdown());
@@ -94,6 +96,10 @@ pub struct CompareBasesArgs {
 }
 
 pub fn run_compare_bases(args: CompareBasesArgs) -> Result<(), GviError> {
+    let dir = args
+        .out
+        .unwrap_or_else(|| PathBuf::from("out/compare-bases"));
+    galerkin_vi::output::check_output_dir(&dir)?;
     use galerkin_vi::quadrature::QuadratureKind;
     let scene = load_scene(&args.run)?;
     let ns: Vec<usize> = parse_range(&args.range)?
@@ -107,9 +113,6 @@ pub fn run_compare_bases(args: CompareBasesArgs) -> Result<(), GviError> {
     let cmp = galerkin_vi::studies::compare_bases::compare_bases(&scene, &ns, &quads)?;
     let measurements: Vec<_> = cmp.points.iter().map(|p| p.measurement.clone()).collect();
     galerkin_vi::studies::ensure_some_succeeded(&measurements)?;
-    let dir = args
-        .out
-        .unwrap_or_else(|| PathBuf::from("out/compare-bases"));
     let files = cmp.write(&dir)?;
     eprintln!(
         "{}: {} runs at h = {} ({} failed or rejected), errors against the {}",

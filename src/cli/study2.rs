@@ -74,6 +74,14 @@ fn parse_counts(name: &str, text: &str) -> Result<Vec<usize>, GviError> {
 }
 
 pub fn run_work_precision(args: WorkPrecisionArgs) -> Result<(), GviError> {
+    match &args.write_reference {
+        Some(path) => galerkin_vi::output::check_output_path(path)?,
+        None => galerkin_vi::output::check_output_dir(
+            args.out
+                .as_deref()
+                .unwrap_or(std::path::Path::new("out/work-precision")),
+        )?,
+    }
     let scene = load_scene(&args.run)?;
     let mut config = if args.quick {
         WorkPrecisionConfig::quick()
@@ -149,6 +157,8 @@ pub struct StabilityArgs {
 }
 
 pub fn run_stability(args: StabilityArgs) -> Result<(), GviError> {
+    let dir = args.out.unwrap_or_else(|| PathBuf::from("out/stability"));
+    galerkin_vi::output::check_output_dir(&dir)?;
     // The map sweeps h and n itself and takes its steps from --cell-steps.
     for (flag, given) in [
         ("--h", args.run.h.is_some()),
@@ -194,7 +204,6 @@ pub fn run_stability(args: StabilityArgs) -> Result<(), GviError> {
                 .unwrap_or_default(),
         });
     }
-    let dir = args.out.unwrap_or_else(|| PathBuf::from("out/stability"));
     let files = study.write(&dir)?;
     let counts = study.counts();
     eprintln!(
@@ -235,6 +244,10 @@ pub struct CompareRefinementArgs {
 }
 
 pub fn run_compare_refinement(args: CompareRefinementArgs) -> Result<(), GviError> {
+    let dir = args
+        .out
+        .unwrap_or_else(|| PathBuf::from("out/compare-refinement"));
+    galerkin_vi::output::check_output_dir(&dir)?;
     let scene = load_scene(&args.run)?;
     let config = if args.quick {
         CompareConfig::quick()
@@ -242,9 +255,6 @@ pub fn run_compare_refinement(args: CompareRefinementArgs) -> Result<(), GviErro
         CompareConfig::full()
     };
     let study = compare_refinement(&scene, &config)?;
-    let dir = args
-        .out
-        .unwrap_or_else(|| PathBuf::from("out/compare-refinement"));
     let files = study.write(&dir)?;
     eprintln!(
         "{}: T = {}, errors against the {}; cheapest path per target:",
