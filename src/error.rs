@@ -216,6 +216,22 @@ pub enum GviError {
         /// The first failure's message.
         first: String,
     },
+    /// A run would hold an absurd amount of memory; refused before any work is done.
+    #[error(
+        "refusing the run: {steps} steps at about {bytes_per_step:.0} bytes each need an \
+         estimated {estimate:.3e} bytes, above the limit {limit:.0e} (a chart, JSON output and \
+         --tol keep the whole trajectory; a plain CSV run is streamed and needs no such memory)"
+    )]
+    MemoryTooHigh {
+        /// Steps requested.
+        steps: usize,
+        /// Estimated bytes per step.
+        bytes_per_step: f64,
+        /// Estimated total bytes.
+        estimate: f64,
+        /// The documented limit.
+        limit: f64,
+    },
     /// Serialisation failed.
     #[error("serialisation error: {0}")]
     Serialize(String),

@@ -264,13 +264,9 @@ fn refuse_if_too_big(scene: &Scene, args: &RunArgs) -> Result<(), GviError> {
     let per_step = bytes_per_step(columns, n, d, args.format == Format::Json);
     let estimate = per_step * scene.method.steps as f64;
     if estimate > MEMORY_LIMIT_BYTES {
-        return Err(GviError::CostTooHigh {
-            what: format!(
-                "the memory of this run in bytes ({} steps at about {per_step:.0} bytes each: \
-                 a chart, JSON output and --tol keep the whole trajectory, a plain CSV run is \
-                 streamed)",
-                scene.method.steps
-            ),
+        return Err(GviError::MemoryTooHigh {
+            steps: scene.method.steps,
+            bytes_per_step: per_step,
             estimate,
             limit: MEMORY_LIMIT_BYTES,
         });

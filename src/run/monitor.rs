@@ -58,18 +58,11 @@ impl Monitor {
             .collect();
         let mut inv0 = vec![0.0; names.len()];
         system.invariants(q0, p0, &mut inv0);
-        for (name, &v) in names.iter().zip(&inv0) {
-            if !v.is_finite() {
-                return Err(GviError::NonFinite {
-                    what: format!("initial {name} (check the initial state and parameters)"),
-                    value: v,
-                });
-            }
-        }
         let bodies = system.body_names();
         let spatial = bodies
             .as_ref()
             .map_or(0, |b| system.dim() / b.len().max(1));
+        // Coincident bodies first: their infinite energy is a collision, not bad input.
         let mut m = Monitor {
             inv: vec![0.0; names.len()],
             inv_err: vec![0.0; names.len()],
@@ -83,6 +76,14 @@ impl Monitor {
             encounter: None,
         };
         m.closest(q0, 0, t0)?;
+        for (name, &v) in m.names.iter().zip(&m.inv0) {
+            if !v.is_finite() {
+                return Err(GviError::NonFinite {
+                    what: format!("initial {name} (check the initial state and parameters)"),
+                    value: v,
+                });
+            }
+        }
         Ok(m)
     }
 
