@@ -233,11 +233,13 @@ fn coincident_bodies_are_a_collision_error() {
         .replace("v = [0.0, -1.0]", "v = [3.0, 0.0]")
         .replace("v = [0.0, 1.0]", "v = [-3.0, 0.0]");
     let scene = write_scene(&dir, "head-on.toml", &text);
-    let o = gvi(&["run", s(&scene), "--steps", "4", "--h", "0.1", "--n", "8"]);
+    let o = gvi(&["run", s(&scene), "--steps", "40", "--h", "0.01", "--n", "8"]);
     let err = stderr(&o);
-    assert!(
-        !o.status.success() || err.contains("close encounter not resolved"),
-        "{err}"
+    assert!(err.contains("closest approach: body 1 and body 2"), "{err}");
+    assert!(err.contains("close encounter not resolved"), "{err}");
+    fails_with(
+        &gvi(&["run", s(&scene), "--steps", "40", "--h", "0.01", "--n", "8", "--strict"]),
+        "close encounter",
     );
 }
 
