@@ -84,8 +84,8 @@ pub fn resolve(path: &Path) -> PathBuf {
 }
 
 /// Check an output file path before any work: not a directory, not under `/proc` or `/sys`,
-/// and its directory exists (or can be created: it is then created, and stderr says so) and
-/// accepts a new file (probed by creating and removing one).
+/// and its directory (or, if missing, the ancestor it would be created in) accepts a new file
+/// (probed by creating and removing one).
 pub fn check_output_path(path: &Path) -> Result<()> {
     if path.as_os_str().is_empty() {
         return Err(bad_output(path, "the path is empty"));
@@ -111,12 +111,12 @@ pub fn check_output_path(path: &Path) -> Result<()> {
     if std::fs::metadata(path).is_ok_and(|m| m.permissions().readonly()) {
         return Err(bad_output(path, "the file exists and is read-only"));
     }
-    ensure_parent(path)?;
     probe_dir(parent_dir(path))
 }
 
-/// Check an output directory before any work: not a file, not under `/proc` or `/sys`,
-/// created if missing (stderr says so), and writable.
+/// Check an output directory before any work: not a file, not under `/proc` or `/sys`, and
+/// writable (or, if missing, creatable: it is created when the first file is written, and
+/// stderr says so).
 pub fn check_output_dir(dir: &Path) -> Result<()> {
     if dir.exists() && !dir.is_dir() {
         return Err(bad_output(dir, "it is a file, not a directory"));
@@ -128,18 +128,30 @@ pub fn check_output_dir(dir: &Path) -> Result<()> {
             "it is in a kernel pseudo-filesystem (/proc, /sys), not a place for output",
         ));
     }
-    if !dir.exists() {
-        std::fs::create_dir_all(dir).map_err(io_err(dir))?;
-        eprintln!("created directory {}", dir.display());
-    }
     probe_dir(dir)
 }
 
+/// Check that `dir`, or if it does not exist yet its deepest existing ancestor (where it
+/// would be created), is a directory that accepts a new file: create and remove a probe file.
+/// Nothing is left behind; missing directories are created when the output is written.
 fn probe_dir(dir: &Path) -> Result<()> {
-    let probe = dir.join(format!(".gvi-probe-{}", std::process::id()));
+    let mut existing = dir;
+    while !existing.exists() {
+        existing = match existing.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+    }
+    if !existing.is_dir() {
+        return Err(bad_output(
+            dir,
+            format!("{} is not a directory", existing.display()),
+        ));
+    }
+    let probe = existing.join(format!(".gvi-probe-{}", std::process::id()));
     std::fs::File::create(&probe)
         .map_err(|source| GviError::Io {
-            path: dir.to_path_buf(),
+            path: existing.to_path_buf(),
             source,
         })
         .map(|_| {

@@ -12,8 +12,8 @@ use std::time::Instant;
 
 mod monitor;
 pub mod stream;
-pub use monitor::{Encounter, SANITY_THRESHOLD};
 use monitor::Monitor;
+pub use monitor::{Encounter, SANITY_THRESHOLD};
 
 /// What a run produced. On a Newton failure `failure` is set and the table holds the steps
 /// completed before it.

@@ -263,7 +263,11 @@ fn locate_unknown_field(text: &str, message: String) -> String {
     match line {
         Some(i) => {
             let detail = message.lines().last().unwrap_or("").trim();
-            format!("line {}: {detail}\n  | {}", i + 1, text.lines().nth(i).unwrap_or(""))
+            format!(
+                "line {}: {detail}\n  | {}",
+                i + 1,
+                text.lines().nth(i).unwrap_or("")
+            )
         }
         None => message,
     }

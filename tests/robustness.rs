@@ -36,7 +36,10 @@ fn s(p: &Path) -> &str {
 
 fn fails_with(o: &Output, needle: &str) {
     let err = stderr(o);
-    assert!(!o.status.success(), "expected a failure, got rc 0; stderr: {err}");
+    assert!(
+        !o.status.success(),
+        "expected a failure, got rc 0; stderr: {err}"
+    );
     assert!(err.contains(needle), "stderr lacks {needle:?}: {err}");
 }
 
@@ -48,7 +51,16 @@ const TWO_BODY: &str = include_str!("../scenes/two-body.toml");
 fn same_path_for_output_and_plot_is_refused() {
     let dir = scratch("same");
     let out = dir.join("out.csv");
-    let o = gvi(&["run", "kepler", "--steps", "5", "--output", s(&out), "--plot", s(&out)]);
+    let o = gvi(&[
+        "run",
+        "kepler",
+        "--steps",
+        "5",
+        "--output",
+        s(&out),
+        "--plot",
+        s(&out),
+    ]);
     fails_with(&o, "name the same file");
     assert!(!out.exists(), "nothing may be written");
 }
@@ -62,7 +74,10 @@ fn output_equal_to_the_scene_file_is_refused() {
     fails_with(&o, "scene file");
     assert_eq!(std::fs::read_to_string(&scene).unwrap(), TWO_BODY);
     // The same file reached through another spelling of its path.
-    let other = dir.join("../").join(dir.file_name().unwrap()).join("my.toml");
+    let other = dir
+        .join("../")
+        .join(dir.file_name().unwrap())
+        .join("my.toml");
     let o = gvi(&["run", s(&scene), "--steps", "2", "--plot", s(&other)]);
     fails_with(&o, "scene file");
     assert_eq!(std::fs::read_to_string(&scene).unwrap(), TWO_BODY);
@@ -72,7 +87,14 @@ fn output_equal_to_the_scene_file_is_refused() {
 fn unusable_output_paths_fail_before_computing() {
     let dir = scratch("paths");
     // 10^8 steps would take minutes: an immediate refusal shows the check comes first.
-    let o = gvi(&["run", "kepler", "--steps", "100000000", "--output", "/proc/version"]);
+    let o = gvi(&[
+        "run",
+        "kepler",
+        "--steps",
+        "100000000",
+        "--output",
+        "/proc/version",
+    ]);
     fails_with(&o, "pseudo-filesystem");
     let o = gvi(&["run", "kepler", "--steps", "100000000", "--output", s(&dir)]);
     fails_with(&o, "is a directory");
@@ -83,7 +105,14 @@ fn unusable_output_paths_fail_before_computing() {
     let o = gvi(&["reproduce", "--quick", "--out", s(&file)]);
     fails_with(&o, s(&file));
     fails_with(&o, "not a directory");
-    let o = gvi(&["run", "kepler", "--steps", "3", "--output", s(&file.join("x.csv"))]);
+    let o = gvi(&[
+        "run",
+        "kepler",
+        "--steps",
+        "3",
+        "--output",
+        s(&file.join("x.csv")),
+    ]);
     assert!(!o.status.success());
 }
 
@@ -113,7 +142,11 @@ fn writes_are_atomic_and_leave_no_temporary_files() {
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
     assert_eq!(names, vec!["k.csv".to_string()], "stray files: {names:?}");
-    assert!(std::fs::read_to_string(&out).unwrap().starts_with("step,t,"));
+    assert!(
+        std::fs::read_to_string(&out)
+            .unwrap()
+            .starts_with("step,t,")
+    );
 }
 
 #[test]
@@ -152,18 +185,41 @@ fn a_blow_up_is_a_typed_failure_with_the_steps_before_it_written() {
     let dir = scratch("blowup");
     let out = dir.join("h.csv");
     let o = gvi(&[
-        "run", "harmonic", "--h", "1000", "--n", "4", "--steps", "1000", "--output", s(&out),
+        "run",
+        "harmonic",
+        "--h",
+        "1000",
+        "--n",
+        "4",
+        "--steps",
+        "1000",
+        "--output",
+        s(&out),
     ]);
     fails_with(&o, "non-finite");
     let text = std::fs::read_to_string(&out).unwrap();
     let rows = rows(&text);
     assert!(rows.len() > 100 && rows.len() < 1001, "{} rows", rows.len());
     for r in &rows {
-        assert!(!r.contains("inf") && !r.contains("NaN"), "non-finite row: {r}");
+        assert!(
+            !r.contains("inf") && !r.contains("NaN"),
+            "non-finite row: {r}"
+        );
     }
     // The failing step is the one after the last row written.
-    let last: usize = rows.last().unwrap().split(',').next().unwrap().parse().unwrap();
-    assert!(stderr(&o).contains(&format!("at step {}", last + 1)), "{}", stderr(&o));
+    let last: usize = rows
+        .last()
+        .unwrap()
+        .split(',')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(
+        stderr(&o).contains(&format!("at step {}", last + 1)),
+        "{}",
+        stderr(&o)
+    );
 }
 
 #[test]
@@ -171,17 +227,35 @@ fn non_finite_invariants_at_the_start_are_errors_not_zero_errors() {
     let o = gvi(&["run", "kepler", "--q0", "1e308,1e308", "--steps", "3"]);
     fails_with(&o, "non-finite");
     assert!(!stderr(&o).contains("error: 0.000e0"));
-    let o = gvi(&["run", "figure-eight", "--p0", "1e300,0,0,0,0,0", "--steps", "3"]);
+    let o = gvi(&[
+        "run",
+        "figure-eight",
+        "--p0",
+        "1e300,0,0,0,0,0",
+        "--steps",
+        "3",
+    ]);
     fails_with(&o, "non-finite");
 }
 
 #[test]
 fn wildly_wrong_runs_warn_and_fail_with_strict() {
     for args in [
-        &["run", "harmonic", "--h", "1000", "--n", "4", "--steps", "10"][..],
+        &[
+            "run", "harmonic", "--h", "1000", "--n", "4", "--steps", "10",
+        ][..],
         &["run", "kepler", "--h", "6", "--n", "8", "--steps", "20"],
         &["run", "kepler", "--h", "1e5", "--steps", "3"],
-        &["run", "figure-eight", "--h", "5", "--n", "8", "--steps", "20"],
+        &[
+            "run",
+            "figure-eight",
+            "--h",
+            "5",
+            "--n",
+            "8",
+            "--steps",
+            "20",
+        ],
         &["run", "kepler", "--tol", "1e10", "--steps", "3"],
     ] {
         let o = gvi(args);
@@ -211,7 +285,10 @@ fn nbody_runs_report_relative_energy_errors_and_the_closest_approach() {
     let o = gvi(&["run", "two-body", "--steps", "10"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let err = stderr(&o);
-    assert!(err.contains("max energy error:") && err.contains("(relative"), "{err}");
+    assert!(
+        err.contains("max energy error:") && err.contains("(relative"),
+        "{err}"
+    );
     assert!(err.contains("closest approach: body 1 and body 2"), "{err}");
 }
 
@@ -238,7 +315,17 @@ fn coincident_bodies_are_a_collision_error() {
     assert!(err.contains("closest approach: body 1 and body 2"), "{err}");
     assert!(err.contains("close encounter not resolved"), "{err}");
     fails_with(
-        &gvi(&["run", s(&scene), "--steps", "40", "--h", "0.01", "--n", "8", "--strict"]),
+        &gvi(&[
+            "run",
+            s(&scene),
+            "--steps",
+            "40",
+            "--h",
+            "0.01",
+            "--n",
+            "8",
+            "--strict",
+        ]),
         "close encounter",
     );
 }
@@ -255,7 +342,10 @@ fn a_huge_t0_is_rejected() {
         .unwrap()
         .replace("t0 = 0.0", "t0 = nan");
     let scene = write_scene(&dir, "nan.toml", &text);
-    fails_with(&gvi(&["run", s(&scene), "--steps", "3"]), "t0 in [initial]): NaN");
+    fails_with(
+        &gvi(&["run", s(&scene), "--steps", "3"]),
+        "t0 in [initial]): NaN",
+    );
 }
 
 // ---- studies ----
@@ -264,15 +354,63 @@ fn a_huge_t0_is_rejected() {
 fn studies_reject_invalid_input() {
     let dir = scratch("studies");
     let out = s(&dir);
-    let o = gvi(&["stability", "kepler", "--q0", "nan,nan", "--quick", "--out", out]);
+    let o = gvi(&[
+        "stability",
+        "kepler",
+        "--q0",
+        "nan,nan",
+        "--quick",
+        "--out",
+        out,
+    ]);
     fails_with(&o, "--q0");
-    let o = gvi(&["stability", "kepler", "--h", "nan", "--n", "0", "--steps", "0", "--out", out]);
+    let o = gvi(&[
+        "stability",
+        "kepler",
+        "--h",
+        "nan",
+        "--n",
+        "0",
+        "--steps",
+        "0",
+        "--out",
+        out,
+    ]);
     fails_with(&o, "--h");
-    let o = gvi(&["refine", "kepler", "--vary", "h", "--range", "1e-300:1e-299:x1.1", "--out", out]);
+    let o = gvi(&[
+        "refine",
+        "kepler",
+        "--vary",
+        "h",
+        "--range",
+        "1e-300:1e-299:x1.1",
+        "--out",
+        out,
+    ]);
     fails_with(&o, "--range");
-    let o = gvi(&["refine", "kepler", "--vary", "h", "--range", "1:1e300:x10", "--out", out]);
+    let o = gvi(&[
+        "refine",
+        "kepler",
+        "--vary",
+        "h",
+        "--range",
+        "1:1e300:x10",
+        "--out",
+        out,
+    ]);
     fails_with(&o, "longer than the horizon");
-    let o = gvi(&["refine", "kepler", "--vary", "n", "--range", "4:6:1", "--quad-points", "2", "--out", out]);
+    let o = gvi(&[
+        "refine",
+        "kepler",
+        "--vary",
+        "n",
+        "--range",
+        "4:6:1",
+        "--quad-points",
+        "2",
+        "--out",
+        out,
+    ]);
     fails_with(&o, "all 3 runs of the study failed");
 }
 
@@ -281,7 +419,16 @@ fn failed_study_rows_carry_no_error_figures() {
     let dir = scratch("rows");
     // Four Gauss points (degree 7) integrate the kinetic terms up to n = 4: n = 6, 8 fail.
     let o = gvi(&[
-        "refine", "kepler", "--vary", "n", "--range", "2:8:2", "--quad-points", "4", "--out", s(&dir),
+        "refine",
+        "kepler",
+        "--vary",
+        "n",
+        "--range",
+        "2:8:2",
+        "--quad-points",
+        "4",
+        "--out",
+        s(&dir),
     ]);
     let csv = std::fs::read_to_string(dir.join("refine.csv")).unwrap_or_default();
     assert!(o.status.success() || !csv.is_empty(), "{}", stderr(&o));
@@ -306,14 +453,23 @@ fn commands_refuse_flags_they_would_ignore() {
         &["check", "kepler", "--plot", "x.svg"],
         &["check", "kepler", "--tol", "1e-6"],
         &["check", "kepler", "--auto-h"],
-        &["refine", "kepler", "--vary", "n", "--range", "4:8:2", "--output", "x"],
-        &["refine", "kepler", "--vary", "n", "--range", "4:8:2", "--format", "json"],
+        &[
+            "refine", "kepler", "--vary", "n", "--range", "4:8:2", "--output", "x",
+        ],
+        &[
+            "refine", "kepler", "--vary", "n", "--range", "4:8:2", "--format", "json",
+        ],
         &["run", "kepler", "--ladder", "4,6"],
         &["run", "kepler", "--control", "indicator"],
         &["run", "kepler", "--auto-h"],
     ] {
         let o = gvi(args);
-        assert_eq!(o.status.code(), Some(2), "{args:?} accepted: {}", stderr(&o));
+        assert_eq!(
+            o.status.code(),
+            Some(2),
+            "{args:?} accepted: {}",
+            stderr(&o)
+        );
     }
 }
 
@@ -328,19 +484,35 @@ fn messages_name_the_field_and_the_value() {
     fails_with(&gvi(&["run", s(&dir)]), "a directory");
     fails_with(&gvi(&["run", "/dev/null"]), "not a regular file");
     fails_with(
-        &gvi(&["nbody-report", "two-body", "--substeps", "0", "--out", s(&dir)]),
+        &gvi(&[
+            "nbody-report",
+            "two-body",
+            "--substeps",
+            "0",
+            "--out",
+            s(&dir),
+        ]),
         "--substeps",
     );
     let gm = TWO_BODY
         .replace("mass = 0.5", "gm = -1")
         .replace("g = 1.0\n", "");
     let scene = write_scene(&dir, "gm.toml", &gm);
-    fails_with(&gvi(&["run", s(&scene)]), "gm must be finite and positive, got -1");
+    fails_with(
+        &gvi(&["run", s(&scene)]),
+        "gm must be finite and positive, got -1",
+    );
     let typo = TWO_BODY.replacen("mass = 0.5", "mass = 0.5\nmas = 1", 1);
     let line = typo.lines().position(|l| l == "mas = 1").unwrap() + 1;
     let scene = write_scene(&dir, "typo.toml", &typo);
-    fails_with(&gvi(&["run", s(&scene)]), &format!("line {line}: unknown field `mas`"));
+    fails_with(
+        &gvi(&["run", s(&scene)]),
+        &format!("line {line}: unknown field `mas`"),
+    );
     let help = stdout(&gvi(&["run", "--help"]));
-    assert!(help.contains("legendre") && help.contains("gauss-lobatto"), "{help}");
+    assert!(
+        help.contains("legendre") && help.contains("gauss-lobatto"),
+        "{help}"
+    );
     assert!(!help.contains("as they are available"), "{help}");
 }

@@ -9,11 +9,32 @@ use galerkin_vi::scene::{BUILTIN_SCENES, Scene};
 use proptest::prelude::*;
 
 const VALUES: [&str; 14] = [
-    "0", "-1", "1e308", "-1e308", "nan", "inf", "-inf", "1e-308", "1e300", "4294967297",
-    "0.5", "2", "-0.0", "18446744073709551615",
+    "0",
+    "-1",
+    "1e308",
+    "-1e308",
+    "nan",
+    "inf",
+    "-inf",
+    "1e-308",
+    "1e300",
+    "4294967297",
+    "0.5",
+    "2",
+    "-0.0",
+    "18446744073709551615",
 ];
 const KEYS: [&str; 10] = [
-    "mass", "gm", "mu", "n", "h", "steps", "q", "dim", "tol", "quad_points",
+    "mass",
+    "gm",
+    "mu",
+    "n",
+    "h",
+    "steps",
+    "q",
+    "dim",
+    "tol",
+    "quad_points",
 ];
 
 /// Byte ranges of the numbers in a TOML text (outside comments).
@@ -47,7 +68,12 @@ fn mutate(text: &str, kind: u8, pick: usize, value: usize) -> String {
         0 => {
             let spans = number_spans(text);
             let (a, b) = spans[pick % spans.len()];
-            format!("{}{}{}", &text[..a], VALUES[value % VALUES.len()], &text[b..])
+            format!(
+                "{}{}{}",
+                &text[..a],
+                VALUES[value % VALUES.len()],
+                &text[b..]
+            )
         }
         1 => {
             let mut l = lines.clone();

@@ -33,9 +33,8 @@ unsafe impl GlobalAlloc for Counting {
         let p = unsafe { System.realloc(ptr, layout, new_size) };
         if !p.is_null() {
             if new_size > layout.size() {
-                let live =
-                    LIVE.fetch_add(new_size - layout.size(), Ordering::Relaxed) + new_size
-                        - layout.size();
+                let live = LIVE.fetch_add(new_size - layout.size(), Ordering::Relaxed) + new_size
+                    - layout.size();
                 PEAK.fetch_max(live, Ordering::Relaxed);
             } else {
                 LIVE.fetch_sub(layout.size() - new_size, Ordering::Relaxed);
@@ -81,7 +80,10 @@ fn streamed_run_memory_is_flat_in_the_number_of_steps() {
         assert_eq!(rows, steps + 2, "header and steps + 1 rows");
         peaks.push(peak);
     }
-    eprintln!("streamed peak heap: 1e4 steps {} B, 1e6 steps {} B", peaks[0], peaks[1]);
+    eprintln!(
+        "streamed peak heap: 1e4 steps {} B, 1e6 steps {} B",
+        peaks[0], peaks[1]
+    );
     // Flat: 100 times the steps, at most a few kilobytes more (allocator noise), and far
     // below the 100 MB bound for 10^6 steps.
     assert!(peaks[1] < peaks[0] + 64 * 1024, "{peaks:?}");
@@ -100,7 +102,10 @@ fn in_memory_run_memory_grows_with_the_steps() {
             assert_eq!(r.rows.len(), steps + 1);
         }));
     }
-    eprintln!("in-memory peak heap: 1e3 steps {} B, 1e4 steps {} B", peaks[0], peaks[1]);
+    eprintln!(
+        "in-memory peak heap: 1e3 steps {} B, 1e4 steps {} B",
+        peaks[0], peaks[1]
+    );
     let per_step = (peaks[1] - peaks[0]) as f64 / 9_000.0;
     assert!(per_step > 200.0, "{peaks:?}: {per_step} B per step");
 }

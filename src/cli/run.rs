@@ -176,14 +176,16 @@ fn apply_tolerance(scene: &mut Scene, a: &RunArgs) -> Result<(), GviError> {
     Ok(())
 }
 
-
 /// In-memory runs whose estimated memory exceeds this are refused up front (streamed runs
 /// hold one row at a time and have no such limit).
 const MEMORY_LIMIT_BYTES: f64 = 4e9;
 
 /// `<stem><suffix>.svg` next to `path`.
 fn sibling(path: &Path, suffix: &str, fallback: &str) -> PathBuf {
-    let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or(fallback);
+    let stem = path
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or(fallback);
     path.with_file_name(format!("{stem}{suffix}.svg"))
 }
 
@@ -297,7 +299,11 @@ fn run_in_memory(
     if let (Some(path), Some(chart)) = (&args.plot, &result.chart) {
         plot(chart, path, "chart")?;
         if let Some(inner) = &result.inner_chart {
-            plot(inner, &sibling(path, "-inner", "orbits"), "inner-bodies chart")?;
+            plot(
+                inner,
+                &sibling(path, "-inner", "orbits"),
+                "inner-bodies chart",
+            )?;
         }
         if let Some(nc) = &result.n_chart {
             plot(nc, &sibling(path, "-n", "run"), "n-against-time chart")?;

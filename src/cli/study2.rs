@@ -190,11 +190,7 @@ pub fn run_stability(args: StabilityArgs) -> Result<(), GviError> {
     };
     config.steps = args.cell_steps;
     let study = stability(&scene, &config)?;
-    if study
-        .cells
-        .iter()
-        .all(|c| c.class == Class::SolverFailure)
-    {
+    if study.cells.iter().all(|c| c.class == Class::SolverFailure) {
         return Err(GviError::AllRunsFailed {
             runs: study.cells.len(),
             first: study

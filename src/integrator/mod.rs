@@ -236,7 +236,8 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let too_weak_degree =
             self.basis.polynomial_degree().is_some() && self.rule.degree < required;
         let exact_rule = self.basis.polynomial_degree().is_some() && !too_weak_degree;
-        if exact_rule && !(rcond >= 1e-13) {
+        let singular = rcond.is_nan() || rcond < 1e-13;
+        if exact_rule && singular {
             // The quadrature is exact for the kinetic integrand: the basis itself is
             // numerically singular at this n, not the rule.
             return Err(GviError::InvalidBasisSize {
@@ -250,7 +251,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 ),
             });
         }
-        if too_weak_degree || !(rcond >= 1e-13) {
+        if too_weak_degree || singular {
             return Err(GviError::QuadratureTooWeak {
                 quadrature: self.quadrature.name(),
                 degree: self.rule.degree,

@@ -59,9 +59,7 @@ impl Monitor {
         let mut inv0 = vec![0.0; names.len()];
         system.invariants(q0, p0, &mut inv0);
         let bodies = system.body_names();
-        let spatial = bodies
-            .as_ref()
-            .map_or(0, |b| system.dim() / b.len().max(1));
+        let spatial = bodies.as_ref().map_or(0, |b| system.dim() / b.len().max(1));
         // Coincident bodies first: their infinite energy is a collision, not bad input.
         let mut m = Monitor {
             inv: vec![0.0; names.len()],
@@ -87,6 +85,7 @@ impl Monitor {
         Ok(m)
     }
 
+    #[allow(clippy::too_many_arguments)]
     /// Observe step end k at time t; appends the invariants (and position error) to `row`
     /// after the state. Fails at the first non-finite value or coincident bodies.
     pub fn observe<S: System>(
@@ -253,11 +252,7 @@ pub(crate) fn check_time_span(t0: f64, h: f64, steps: usize) -> Result<()> {
     let end = t0 + steps as f64 * h;
     let top = t0.abs().max(end.abs());
     // Spacing of doubles at `top` (one unit in the last place).
-    let ulp = if top == 0.0 {
-        0.0
-    } else {
-        top * f64::EPSILON
-    };
+    let ulp = if top == 0.0 { 0.0 } else { top * f64::EPSILON };
     if !end.is_finite() || ulp > 1e-3 * h {
         return Err(GviError::InvalidParameter {
             name: "t0".into(),

@@ -240,10 +240,10 @@ fn fill_errors<S: System>(
     m.gradient_evaluations = traj.gradient_evaluations();
     let mut map = 0.0f64;
     for k in 0..traj.q.len() {
-        map = nan_max(map, max_norm_diff(
-            &traj.q[k],
-            &reference.position(traj.time(k))?,
-        ));
+        map = nan_max(
+            map,
+            max_norm_diff(&traj.q[k], &reference.position(traj.time(k))?),
+        );
     }
     m.map_error = map;
     if !map.is_finite() {
@@ -255,10 +255,10 @@ fn fill_errors<S: System>(
     let mut curve = map;
     if traj.steps() > 0 && curve_samples > 0 {
         for t in traj.sample_times(curve_samples) {
-            curve = nan_max(curve, max_norm_diff(
-                &traj.position_at(t)?,
-                &reference.position(t)?,
-            ));
+            curve = nan_max(
+                curve,
+                max_norm_diff(&traj.position_at(t)?, &reference.position(t)?),
+            );
         }
     }
     m.curve_error = curve;

@@ -187,7 +187,7 @@ fn refine_system<S: System + Sync>(
         .sum::<f64>()
         + Reference::estimated_steps(system, &scene.initial, hmin, ref_horizon);
     let limit = crate::studies::work_precision::MAX_TOTAL_STEPS;
-    if !(total <= limit) {
+    if total.is_nan() || total > limit {
         return Err(GviError::CostTooHigh {
             what: "the total number of integration steps (every run plus the reference)".into(),
             estimate: total,
