@@ -92,8 +92,9 @@ pub enum GviError {
     /// The Newton solve of one step's stage equations did not converge. The trajectory computed
     /// up to the failing step is kept in [`crate::IntegrationFailure`].
     #[error(
-        "Newton solve failed at step {step} (t = {t}): residual {residual:.3e} after {iterations} \
-         iterations ({reason})"
+        "Newton solve failed at step {step} (t = {}): residual {residual:.3e} after \
+         {iterations} iterations ({reason})",
+        fmt_number(*.t)
     )]
     NewtonFailure {
         /// Index of the step that failed (0-based: step k maps t_k to t_{k+1}).

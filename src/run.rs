@@ -68,7 +68,8 @@ pub struct RunSummary {
     pub max_curve_error: Option<f64>,
     /// Max |I(t_k) − I(t_0)| for each invariant.
     pub invariant_errors: Vec<(String, f64)>,
-    /// Max |I(t_k) − I(t_0)| / |I(t_0)| for each invariant (NaN where I(t_0) = 0).
+    /// Max |I(t_k) − I(t_0)| / |I(t_0)| for the energy (NaN for the other invariants, which
+    /// are often zero up to round-off, and where I(t_0) = 0).
     pub relative_invariant_errors: Vec<(String, f64)>,
     /// For point masses: the closest approach of two bodies at a step end.
     pub closest_approach: Option<Encounter>,

@@ -516,3 +516,64 @@ fn messages_name_the_field_and_the_value() {
     );
     assert!(!help.contains("as they are available"), "{help}");
 }
+
+#[test]
+fn shipped_scenes_pass_strict_without_warnings() {
+    // The negative control of the sanity warnings: accurate runs raise none (the solar system
+    // with h = 100 d steps over Mercury's 88-day orbit is not a "close encounter").
+    for args in [
+        &["run", "harmonic", "--strict"][..],
+        &["run", "kepler", "--strict"],
+        &["run", "pendulum", "--strict"],
+        &["run", "two-body", "--strict"],
+        &["run", "figure-eight", "--strict"],
+        &["run", "solar-system", "--steps", "20", "--strict"],
+    ] {
+        let o = gvi(args);
+        assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+        assert!(!stderr(&o).contains("warning"), "{args:?}: {}", stderr(&o));
+    }
+    // Mercury ejected by n = 6 is flagged.
+    let o = gvi(&["run", "solar-system", "--n", "6", "--steps", "100"]);
+    assert!(
+        stderr(&o).contains("warning: relative energy error"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn absurd_study_sizes_are_refused_with_the_estimate() {
+    let dir = scratch("sizes");
+    let o = gvi(&[
+        "stability",
+        "kepler",
+        "--cell-steps",
+        "100000000",
+        "--out",
+        s(&dir),
+    ]);
+    fails_with(&o, "refusing the sweep");
+    let o = gvi(&[
+        "compare-bases",
+        "kepler",
+        "--steps",
+        "100000000",
+        "--out",
+        s(&dir),
+    ]);
+    fails_with(&o, "refusing the sweep");
+    let o = gvi(&[
+        "refine",
+        "kepler",
+        "--vary",
+        "n",
+        "--range",
+        "4:8:2",
+        "--steps",
+        "100000000",
+        "--out",
+        s(&dir),
+    ]);
+    fails_with(&o, "refusing the sweep");
+}

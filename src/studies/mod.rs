@@ -309,6 +309,29 @@ pub(crate) fn max_norm_diff(a: &[f64], b: &[f64]) -> f64 {
         .fold(0.0, nan_max)
 }
 
+/// Memory above which a study is refused before it starts.
+pub const MAX_STUDY_BYTES: f64 = 4e9;
+
+/// Refuse a study whose runs would hold an absurd amount of memory: each run keeps its
+/// trajectory (about 8(nD + 2D) + 136 bytes per step), and rayon runs as many at once as it
+/// has threads.
+pub fn refuse_memory(steps_per_run: f64, n: usize, d: usize) -> Result<()> {
+    let per_step = (8 * (n * d + 2 * d) + 136) as f64;
+    let parallel = rayon::current_num_threads().max(1) as f64;
+    let estimate = steps_per_run * per_step * parallel;
+    if estimate.is_nan() || estimate > MAX_STUDY_BYTES {
+        return Err(GviError::CostTooHigh {
+            what: format!(
+                "the memory in bytes ({steps_per_run:.3e} steps per run at about {per_step:.0} \
+                 bytes each, {parallel} runs at once; lower --steps or the range)"
+            ),
+            estimate,
+            limit: MAX_STUDY_BYTES,
+        });
+    }
+    Ok(())
+}
+
 /// Refuse a study whose every run failed: there is nothing to report.
 pub fn ensure_some_succeeded(ms: &[Measurement]) -> Result<()> {
     if !ms.is_empty() && ms.iter().all(|m| m.failure.is_some()) {

@@ -194,6 +194,18 @@ fn refine_system<S: System + Sync>(
             limit,
         });
     }
+    let max_steps = values
+        .iter()
+        .map(|&x| match (vary, fixed_steps) {
+            (Vary::H, false) => (horizon / x).round().max(1.0),
+            _ => base.steps as f64,
+        })
+        .fold(0.0, f64::max);
+    let max_n = match vary {
+        Vary::N => values.iter().fold(0.0f64, |a, &b| a.max(b)) as usize,
+        Vary::H => base.n,
+    };
+    super::refuse_memory(max_steps, max_n, system.dim())?;
     let reference = Reference::for_system(system, &scene.initial, hmin, ref_horizon)?;
     let methods: Vec<_> = values
         .iter()
