@@ -432,6 +432,8 @@ fn failed_study_rows_carry_no_error_figures() {
     ]);
     let csv = std::fs::read_to_string(dir.join("refine.csv")).unwrap_or_default();
     assert!(o.status.success() || !csv.is_empty(), "{}", stderr(&o));
+    let failed_rows = csv.lines().filter(|l| l.ends_with('"')).count();
+    assert_eq!(failed_rows, 2, "{csv}");
     for line in csv.lines().skip(1) {
         let failed = line.ends_with('"');
         let cells: Vec<&str> = line.split(',').collect();
@@ -576,4 +578,41 @@ fn absurd_study_sizes_are_refused_with_the_estimate() {
         s(&dir),
     ]);
     fails_with(&o, "refusing the sweep");
+}
+
+#[test]
+fn a_run_killed_while_writing_leaves_the_old_file_intact() {
+    let dir = scratch("kill");
+    let out = dir.join("k.csv");
+    std::fs::write(&out, "previous\n").unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_gvi"))
+        .args([
+            "run",
+            "harmonic",
+            "--n",
+            "4",
+            "--h",
+            "0.1",
+            "--steps",
+            "100000000",
+        ])
+        .args(["--output", s(&out)])
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    // Wait until the streamed rows are being written (the temporary file grows), then kill.
+    let temp = dir.join(format!(".k.csv.gvi-tmp-{}", child.id()));
+    for _ in 0..200 {
+        if std::fs::metadata(&temp).is_ok_and(|m| m.len() > 100_000) {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(25));
+    }
+    assert!(
+        std::fs::metadata(&temp).is_ok_and(|m| m.len() > 0),
+        "rows are streamed"
+    );
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), "previous\n");
 }
