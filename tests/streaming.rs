@@ -122,3 +122,28 @@ impl std::io::Write for CountingSink<'_> {
         Ok(())
     }
 }
+
+/// The streamed table and summary are the in-memory run's, byte for byte and figure for figure.
+#[test]
+fn streamed_and_in_memory_runs_agree() {
+    let _guard = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    for name in ["kepler", "harmonic", "two-body"] {
+        let mut scene = Scene::load(name).unwrap();
+        scene.method.steps = 20;
+        let mut out = Vec::new();
+        let streamed = stream_scene(&scene, 16, &mut out).unwrap();
+        let memory = run_scene(&scene, RunOptions::default()).unwrap();
+        assert_eq!(String::from_utf8(out).unwrap(), memory.to_csv(), "{name}");
+        let (a, b) = (&streamed.summary, &memory.summary);
+        assert_eq!(a.steps, b.steps);
+        assert_eq!(a.max_position_error, b.max_position_error, "{name}");
+        assert_eq!(a.invariant_errors, b.invariant_errors, "{name}");
+        assert_eq!(a.force_evaluations, b.force_evaluations, "{name}");
+        match (a.max_curve_error, b.max_curve_error) {
+            (Some(x), Some(y)) => {
+                assert!((x - y).abs() <= 1e-12 * y.max(1e-300), "{name}: {x} {y}")
+            }
+            (x, y) => assert_eq!(x, y, "{name}"),
+        }
+    }
+}
