@@ -616,3 +616,19 @@ fn a_run_killed_while_writing_leaves_the_old_file_intact() {
     child.wait().unwrap();
     assert_eq!(std::fs::read_to_string(&out).unwrap(), "previous\n");
 }
+
+#[test]
+fn check_reports_an_overflowing_run_as_a_failure() {
+    fails_with(
+        &gvi(&[
+            "check", "harmonic", "--h", "1000", "--n", "4", "--steps", "300",
+        ]),
+        "non-finite energy",
+    );
+    fails_with(
+        &gvi(&["check", "kepler", "--q0", "1e308,1e308", "--steps", "3"]),
+        "non-finite",
+    );
+    let o = gvi(&["check", "kepler", "--steps", "3"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
