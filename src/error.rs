@@ -21,7 +21,7 @@ pub enum GviError {
         reason: String,
     },
     /// The step size is not a positive finite number.
-    #[error("invalid step size h = {h}: it must be finite and positive")]
+    #[error("invalid step size h = {}: it must be finite and positive", fmt_number(*.h))]
     InvalidStepSize {
         /// Requested step.
         h: f64,
@@ -72,7 +72,7 @@ pub enum GviError {
         got: usize,
     },
     /// A value given by the user is NaN or infinite.
-    #[error("non-finite value in {what}: {value}")]
+    #[error("non-finite value in {what}: {}", fmt_number(*.value))]
     NonFinite {
         /// What contained it.
         what: String,
@@ -80,7 +80,7 @@ pub enum GviError {
         value: f64,
     },
     /// A parameter of a system is out of its domain (e.g. a negative mass).
-    #[error("invalid parameter {name} = {value}: {reason}")]
+    #[error("invalid parameter {name} = {}: {reason}", fmt_number(*.value))]
     InvalidParameter {
         /// Parameter name.
         name: String,
@@ -92,8 +92,9 @@ pub enum GviError {
     /// The Newton solve of one step's stage equations did not converge. The trajectory computed
     /// up to the failing step is kept in [`crate::IntegrationFailure`].
     #[error(
-        "Newton solve failed at step {step} (t = {t}): residual {residual:.3e} after {iterations} \
-         iterations ({reason})"
+        "Newton solve failed at step {step} (t = {}): residual {residual:.3e} after \
+         {iterations} iterations ({reason})",
+        fmt_number(*.t)
     )]
     NewtonFailure {
         /// Index of the step that failed (0-based: step k maps t_k to t_{k+1}).
@@ -194,12 +195,89 @@ pub enum GviError {
         /// The accepted limit.
         tolerance: f64,
     },
+    /// An output path is unusable (a directory, a pseudo-filesystem, the same file as another
+    /// output or as an input); refused before any work is done.
+    #[error("cannot write {path}: {reason}")]
+    InvalidOutput {
+        /// The output path.
+        path: PathBuf,
+        /// Why it is refused.
+        reason: String,
+    },
+    /// The computed state or an invariant became NaN or infinite. The steps before `step` are
+    /// kept (written, for `gvi run`).
+    #[error(
+        "non-finite {what} = {value:e} at step {step} (t = {t:e}); the {step} steps before it \
+         are kept"
+    )]
+    NonFiniteResult {
+        /// What became non-finite (a position, a momentum, an invariant).
+        what: String,
+        /// The value.
+        value: f64,
+        /// Index of the first step end where it happened.
+        step: usize,
+        /// Its time.
+        t: f64,
+    },
+    /// Two bodies coincide (or the force between them is not finite).
+    #[error("bodies {a} and {b} collide at step {step} (t = {t:e}): separation {separation:e}")]
+    Collision {
+        /// First body.
+        a: String,
+        /// Second body.
+        b: String,
+        /// Step end at which they met.
+        step: usize,
+        /// Its time.
+        t: f64,
+        /// Their separation there.
+        separation: f64,
+    },
+    /// With `--strict`: a run's error figures exceed the sanity threshold.
+    #[error("the run is not trustworthy (--strict): {0}")]
+    Untrustworthy(String),
+    /// Every run of a study failed: there is no result to report.
+    #[error("all {runs} runs of the study failed (first failure: {first})")]
+    AllRunsFailed {
+        /// Number of runs.
+        runs: usize,
+        /// The first failure's message.
+        first: String,
+    },
+    /// A run would hold an absurd amount of memory; refused before any work is done.
+    #[error(
+        "refusing the run: {steps} steps at about {bytes_per_step:.0} bytes each need an \
+         estimated {estimate:.3e} bytes, above the limit {limit:.0e} (a chart, JSON output and \
+         --tol keep the whole trajectory; a plain CSV run is streamed and needs no such memory)"
+    )]
+    MemoryTooHigh {
+        /// Steps requested.
+        steps: usize,
+        /// Estimated bytes per step.
+        bytes_per_step: f64,
+        /// Estimated total bytes.
+        estimate: f64,
+        /// The documented limit.
+        limit: f64,
+    },
     /// Serialisation failed.
     #[error("serialisation error: {0}")]
     Serialize(String),
     /// Chart rendering failed.
     #[error("chart error: {0}")]
     Plot(String),
+}
+
+/// A number for messages: plain when it reads well (1e-4 ≤ |x| < 1e6, or 0), scientific
+/// otherwise (`{}` would print 1e300 as a 301-digit integer).
+pub fn fmt_number(x: f64) -> String {
+    let a = x.abs();
+    if x == 0.0 || !x.is_finite() || (1e-4..1e6).contains(&a) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
 }
 
 /// Shorthand for results with [`GviError`].

@@ -41,6 +41,7 @@ pub mod lagrangian;
 pub mod linalg;
 pub mod nbody_report;
 pub mod periodic;
+pub mod output;
 pub mod plot;
 pub mod progress;
 pub mod quadrature;

@@ -10,6 +10,11 @@ use crate::trajectory::Trajectory;
 use serde::Serialize;
 use std::time::Instant;
 
+mod monitor;
+pub mod stream;
+use monitor::Monitor;
+pub use monitor::{Encounter, SANITY_THRESHOLD};
+
 /// What a run produced. On a Newton failure `failure` is set and the table holds the steps
 /// completed before it.
 #[derive(Debug, Serialize)]
@@ -63,6 +68,11 @@ pub struct RunSummary {
     pub max_curve_error: Option<f64>,
     /// Max |I(t_k) − I(t_0)| for each invariant.
     pub invariant_errors: Vec<(String, f64)>,
+    /// Max |I(t_k) − I(t_0)| / |I(t_0)| for the energy (NaN for the other invariants, which
+    /// are often zero up to round-off, and where I(t_0) = 0).
+    pub relative_invariant_errors: Vec<(String, f64)>,
+    /// For point masses: the closest approach of two bodies at a step end.
+    pub closest_approach: Option<Encounter>,
     /// Newton iterations per step (mean).
     pub newton_iterations_per_step: f64,
     /// Wall-clock seconds of the integration.
@@ -85,8 +95,23 @@ impl std::fmt::Display for RunSummary {
         if let Some(e) = self.max_curve_error {
             writeln!(f, "  max position error along the Galerkin curves: {e:.3e}")?;
         }
-        for (name, e) in &self.invariant_errors {
-            writeln!(f, "  max {name} error: {e:.3e}")?;
+        for ((name, e), (_, rel)) in self
+            .invariant_errors
+            .iter()
+            .zip(&self.relative_invariant_errors)
+        {
+            if rel.is_nan() {
+                writeln!(f, "  max {name} error: {e:.3e}")?;
+            } else {
+                writeln!(f, "  max {name} error: {e:.3e} (relative {rel:.3e})")?;
+            }
+        }
+        if let Some(c) = &self.closest_approach {
+            writeln!(
+                f,
+                "  closest approach: {} and {} at {:.3e} (t = {:.6e})",
+                c.a, c.b, c.separation, c.t
+            )?;
         }
         write!(
             f,
@@ -205,6 +230,7 @@ pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> 
         });
     }
     let (h, steps) = (m.h, m.steps);
+    monitor::check_time_span(init.t0, h, steps)?;
     let outcome = match m.tol {
         None => gvi.integrate(system, init.t0, &init.q, &init.p, m.steps),
         Some(tol) => {
@@ -242,7 +268,7 @@ pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> 
             })
         }
     };
-    let (trajectory, failure) = match outcome {
+    let (mut trajectory, failure) = match outcome {
         Ok(t) => (t, None),
         Err(f) => match f.partial {
             Some(partial) => (*partial, Some(f.error)),
@@ -264,27 +290,20 @@ pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> 
         columns.push("indicator".into());
         columns.push("estimate".into());
     }
-    let mut inv0 = vec![0.0; names.len()];
-    system.invariants(&init.q, &init.p, &mut inv0);
-    let mut inv = vec![0.0; names.len()];
-    let mut inv_err = vec![0.0f64; names.len()];
-    let mut max_pos: Option<f64> = exact.as_ref().map(|_| 0.0);
+    let mut monitor = Monitor::new(system, &init.q, &init.p, init.t0)?;
     let mut rows = Vec::with_capacity(trajectory.q.len());
+    let mut failure = failure;
     for k in 0..trajectory.q.len() {
         let t = trajectory.time(k);
         let (q, p) = (&trajectory.q[k], &trajectory.p[k]);
         let mut row = vec![k as f64, t];
         row.extend_from_slice(q);
         row.extend_from_slice(p);
-        system.invariants(q, p, &mut inv);
-        for i in 0..names.len() {
-            inv_err[i] = inv_err[i].max((inv[i] - inv0[i]).abs());
-        }
-        row.extend_from_slice(&inv);
-        if let Some(ex) = &exact {
-            let e = max_norm_diff(q, &ex.position(t));
-            max_pos = max_pos.map(|m| m.max(e));
-            row.push(e);
+        if let Err(e) = monitor.observe(system, exact.as_ref(), k, t, q, p, &mut row) {
+            // The first non-finite step end: keep the steps before it.
+            failure = Some(e);
+            truncate(&mut trajectory, k);
+            break;
         }
         if let Some(a) = &adaptive {
             // Row k is the state at t_k: report the n, indicator and embedded estimate (NaN:
@@ -307,6 +326,7 @@ pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> 
         }
         rows.push(row);
     }
+    let max_pos = monitor.max_pos;
     let max_curve_error = match (&exact, options.curve_samples_per_step) {
         (Some(ex), s) if s > 0 && trajectory.steps() > 0 => {
             let mut worst = 0.0f64;
@@ -326,7 +346,10 @@ pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> 
     let method = match (m.tol, n_range) {
         (Some(tol), Some((lo, hi))) => format!(
             "{} basis, n chosen per step in {lo}…{hi} for tol = {tol:e}, {} (default points), h = {}, {} solver",
-            m.basis, m.quadrature, trajectory.h, m.solver
+            m.basis,
+            m.quadrature,
+            fmt_number(trajectory.h),
+            m.solver
         ),
         _ => format!(
             "{} basis n = {}, {} with {} points, h = {}, {} solver",
@@ -334,14 +357,15 @@ pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> 
             m.n,
             gvi.rule().kind,
             gvi.rule().len(),
-            m.h,
+            fmt_number(m.h),
             m.solver
         ),
     };
-    let (warnings, force_evaluations) = match &adaptive {
+    let (mut warnings, force_evaluations) = match &adaptive {
         Some(a) => (a.warnings.clone(), a.evaluations),
         None => (Vec::new(), trajectory.gradient_evaluations()),
     };
+    warnings.extend(monitor.warnings());
     let summary = RunSummary {
         system: system.name().to_string(),
         method,
@@ -351,7 +375,17 @@ pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> 
         steps,
         max_position_error: max_pos,
         max_curve_error,
-        invariant_errors: names.iter().map(|s| s.to_string()).zip(inv_err).collect(),
+        invariant_errors: names
+            .iter()
+            .map(|s| s.to_string())
+            .zip(monitor.inv_err.iter().copied())
+            .collect(),
+        relative_invariant_errors: names
+            .iter()
+            .map(|s| s.to_string())
+            .zip(monitor.relative_errors())
+            .collect(),
+        closest_approach: monitor.encounter.clone(),
         newton_iterations_per_step: trajectory.newton_iterations() as f64 / steps.max(1) as f64,
         seconds,
     };
@@ -401,6 +435,18 @@ pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> 
         chart,
         inner_chart,
     })
+}
+
+pub use crate::error::fmt_number;
+
+/// Keep the first `states` step ends (and the `states − 1` steps between them).
+fn truncate(traj: &mut Trajectory, states: usize) {
+    let steps = states.saturating_sub(1);
+    traj.q.truncate(states);
+    traj.p.truncate(states);
+    traj.coefficients.truncate(steps);
+    traj.stats.truncate(steps);
+    traj.step_n.truncate(steps);
 }
 
 fn max_norm_diff(a: &[f64], b: &[f64]) -> f64 {

@@ -252,12 +252,41 @@ impl MethodSpec {
     }
 }
 
+/// The `[system]` table is an internally tagged enum, which serde parses from a buffer without
+/// positions, so toml points an unknown key inside it (a typo in a `[[system.bodies]]` entry)
+/// at the `[system]` header. Find the key's own line instead.
+fn locate_unknown_field(text: &str, message: String) -> String {
+    let Some(field) = message
+        .split("unknown field `")
+        .nth(1)
+        .and_then(|rest| rest.split('`').next())
+    else {
+        return message;
+    };
+    let line = text.lines().position(|l| {
+        l.trim_start()
+            .strip_prefix(field)
+            .is_some_and(|rest| rest.trim_start().starts_with('='))
+    });
+    match line {
+        Some(i) => {
+            let detail = message.lines().last().unwrap_or("").trim();
+            format!(
+                "line {}: {detail}\n  | {}",
+                i + 1,
+                text.lines().nth(i).unwrap_or("")
+            )
+        }
+        None => message,
+    }
+}
+
 impl Scene {
     /// Parse a scene from TOML text; `origin` names it in errors.
     pub fn from_toml_str(origin: &str, text: &str) -> Result<Scene> {
         let mut scene: Scene = toml::from_str(text).map_err(|e| GviError::Scene {
             source_name: origin.to_string(),
-            reason: e.to_string(),
+            reason: locate_unknown_field(text, e.to_string()),
         })?;
         if scene.name.is_empty() {
             scene.name = origin.to_string();
@@ -299,6 +328,17 @@ impl Scene {
                 source,
             })?;
             return Scene::from_toml_str(name_or_path, &text);
+        }
+        let what = match std::fs::metadata(path) {
+            Ok(m) if m.is_dir() => Some("a directory"),
+            Ok(_) => Some("not a regular file (a device, a FIFO or a socket)"),
+            Err(_) => None,
+        };
+        if let Some(what) = what {
+            return Err(GviError::Scene {
+                source_name: name_or_path.to_string(),
+                reason: format!("{what}; a scene is a built-in name or a TOML file"),
+            });
         }
         Err(GviError::Scene {
             source_name: name_or_path.to_string(),

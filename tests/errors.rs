@@ -291,7 +291,7 @@ fn cli_tol_adds_the_n_column_and_rejects_bad_tolerances() {
         (last - 20.0).abs() < 1e-9,
         "the horizon h·steps is kept: t_end = {last}"
     );
-    assert_clean_failure(&["run", "kepler", "--auto-h"], "auto_h");
+    assert_clean_failure(&["run", "kepler", "--auto-h"], "--tol"); // clap: --auto-h requires --tol
 }
 
 #[test]

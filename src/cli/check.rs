@@ -1,13 +1,13 @@
 //! `gvi check SCENE`: symplecticity, energy and momentum-map diagnostics of a run.
 
-use super::run::{RunArgs, load_scene};
+use super::run::{SceneArgs, load_scene};
 use galerkin_vi::GviError;
 use galerkin_vi::geometry::{CheckReport, check_report};
 use galerkin_vi::run::{SystemVisitor, visit_system};
 use galerkin_vi::scene::Scene;
 use galerkin_vi::systems::System;
 
-pub fn run_check(args: RunArgs) -> Result<(), GviError> {
+pub fn run_check(args: SceneArgs) -> Result<(), GviError> {
     let scene = load_scene(&args)?;
     struct Check<'a>(&'a Scene);
     impl SystemVisitor for Check<'_> {

@@ -26,7 +26,7 @@ enum Command {
     Run(Box<run::RunArgs>),
     /// Geometric diagnostics: symplecticity defect of every step's exact Jacobian, energy and
     /// momentum-map errors at step ends and along the Galerkin curves.
-    Check(Box<run::RunArgs>),
+    Check(Box<run::SceneArgs>),
     /// n- or h-refinement sweep with the fitted rate (CSV, JSON, SVG in --out).
     Refine(Box<study::RefineArgs>),
     /// Every basis × quadrature over a range of n at fixed h: error and kinetic condition
@@ -99,30 +99,4 @@ pub fn parse_vector(name: &str, text: &str) -> Result<Vec<f64>, GviError> {
         .collect()
 }
 
-/// Write text to a file (creating parent directories) or to stdout.
-pub fn write_output(path: Option<&std::path::Path>, text: &str) -> Result<(), GviError> {
-    match path {
-        Some(p) => {
-            if let Some(dir) = p.parent().filter(|d| !d.as_os_str().is_empty()) {
-                std::fs::create_dir_all(dir).map_err(|source| GviError::Io {
-                    path: dir.to_path_buf(),
-                    source,
-                })?;
-            }
-            std::fs::write(p, text).map_err(|source| GviError::Io {
-                path: p.to_path_buf(),
-                source,
-            })
-        }
-        None => {
-            use std::io::Write;
-            let mut out = std::io::stdout().lock();
-            out.write_all(text.as_bytes())
-                .and_then(|_| out.flush())
-                .map_err(|source| GviError::Io {
-                    path: "<stdout>".into(),
-                    source,
-                })
-        }
-    }
-}
+pub use galerkin_vi::output::write_output;

@@ -34,6 +34,19 @@ pub struct NBodyReportArgs {
 }
 
 pub fn run_nbody_report(args: NBodyReportArgs) -> Result<(), GviError> {
+    if args.substeps == Some(0) {
+        return Err(GviError::InvalidArgument {
+            name: "--substeps".into(),
+            reason: "the reference needs at least 1 step per Galerkin step".into(),
+        });
+    }
+    if args.stages == 0 {
+        return Err(GviError::InvalidArgument {
+            name: "--stages".into(),
+            reason: "Gauss collocation needs at least 1 stage".into(),
+        });
+    }
+    galerkin_vi::output::check_output_dir(&args.out)?;
     let mut scene = Scene::load(&args.scene)?;
     if let Some(n) = args.n {
         scene.method.n = n;

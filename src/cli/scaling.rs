@@ -19,6 +19,9 @@ pub struct ScalingArgs {
 }
 
 pub fn run_solver_scaling(args: ScalingArgs) -> Result<(), GviError> {
+    if let Some(dir) = &args.out {
+        galerkin_vi::output::check_output_dir(dir)?;
+    }
     let mut config = if args.quick {
         ScalingConfig::quick()
     } else {

@@ -1,6 +1,6 @@
 //! `gvi refine` and `gvi reproduce`.
 
-use super::run::{RunArgs, load_scene};
+use super::run::{SceneArgs, load_scene};
 use clap::{Args, ValueEnum};
 use galerkin_vi::GviError;
 use galerkin_vi::studies::refine::{Vary, parse_range, refine};
@@ -29,10 +29,12 @@ pub struct RefineArgs {
     #[arg(long)]
     pub out: Option<PathBuf>,
     #[command(flatten)]
-    pub run: RunArgs,
+    pub run: SceneArgs,
 }
 
 pub fn run_refine(args: RefineArgs) -> Result<(), GviError> {
+    let dir = args.out.unwrap_or_else(|| PathBuf::from("out/refine"));
+    galerkin_vi::output::check_output_dir(&dir)?;
     let scene = load_scene(&args.run)?;
     let values = parse_range(&args.range)?;
     let vary = match args.vary {
@@ -40,7 +42,7 @@ pub fn run_refine(args: RefineArgs) -> Result<(), GviError> {
         VaryArg::H => Vary::H,
     };
     let study = refine(&scene, vary, &values, args.fixed_steps)?;
-    let dir = args.out.unwrap_or_else(|| PathBuf::from("out/refine"));
+    galerkin_vi::studies::ensure_some_succeeded(&study.points)?;
     let files = study.write(&dir)?;
     eprintln!(
         "{}: {:?}-refinement, {} runs ({} failed), errors against the {}",
@@ -70,6 +72,7 @@ pub struct ReproduceArgs {
 
 pub fn run_reproduce(args: ReproduceArgs) -> Result<(), GviError> {
     let dir = args.out.unwrap_or_else(|| PathBuf::from("out/reproduce"));
+    galerkin_vi::output::check_output_dir(&dir)?;
     let size = if args.quick { Size::Quick } else { Size::Full };
     let rep = reproduce(&dir, size)?;
     eprint!("{}", rep.markdown());
@@ -89,10 +92,14 @@ pub struct CompareBasesArgs {
     #[arg(long)]
     pub out: Option<PathBuf>,
     #[command(flatten)]
-    pub run: RunArgs,
+    pub run: SceneArgs,
 }
 
 pub fn run_compare_bases(args: CompareBasesArgs) -> Result<(), GviError> {
+    let dir = args
+        .out
+        .unwrap_or_else(|| PathBuf::from("out/compare-bases"));
+    galerkin_vi::output::check_output_dir(&dir)?;
     use galerkin_vi::quadrature::QuadratureKind;
     let scene = load_scene(&args.run)?;
     let ns: Vec<usize> = parse_range(&args.range)?
@@ -104,9 +111,8 @@ pub fn run_compare_bases(args: CompareBasesArgs) -> Result<(), GviError> {
         Some(list) => list.split(',').map(str::parse).collect::<Result<_, _>>()?,
     };
     let cmp = galerkin_vi::studies::compare_bases::compare_bases(&scene, &ns, &quads)?;
-    let dir = args
-        .out
-        .unwrap_or_else(|| PathBuf::from("out/compare-bases"));
+    let measurements: Vec<_> = cmp.points.iter().map(|p| p.measurement.clone()).collect();
+    galerkin_vi::studies::ensure_some_succeeded(&measurements)?;
     let files = cmp.write(&dir)?;
     eprintln!(
         "{}: {} runs at h = {} ({} failed or rejected), errors against the {}",

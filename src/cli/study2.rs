@@ -1,6 +1,6 @@
 //! `gvi work-precision`, `gvi stability` and `gvi compare-refinement`.
 
-use super::run::{RunArgs, load_scene};
+use super::run::{SceneArgs, load_scene};
 use clap::Args;
 use galerkin_vi::GviError;
 use galerkin_vi::studies::compare_refinement::{CompareConfig, compare_refinement};
@@ -52,7 +52,7 @@ pub struct WorkPrecisionArgs {
     #[arg(long)]
     pub divisors: Option<String>,
     #[command(flatten)]
-    pub run: RunArgs,
+    pub run: SceneArgs,
 }
 
 /// A comma-separated list of whole numbers ≥ 1.
@@ -74,6 +74,14 @@ fn parse_counts(name: &str, text: &str) -> Result<Vec<usize>, GviError> {
 }
 
 pub fn run_work_precision(args: WorkPrecisionArgs) -> Result<(), GviError> {
+    match &args.write_reference {
+        Some(path) => galerkin_vi::output::check_output_path(path)?,
+        None => galerkin_vi::output::check_output_dir(
+            args.out
+                .as_deref()
+                .unwrap_or(std::path::Path::new("out/work-precision")),
+        )?,
+    }
     let scene = load_scene(&args.run)?;
     let mut config = if args.quick {
         WorkPrecisionConfig::quick()
@@ -145,10 +153,35 @@ pub struct StabilityArgs {
     #[arg(long)]
     pub out: Option<PathBuf>,
     #[command(flatten)]
-    pub run: RunArgs,
+    pub run: SceneArgs,
 }
 
 pub fn run_stability(args: StabilityArgs) -> Result<(), GviError> {
+    let dir = args.out.unwrap_or_else(|| PathBuf::from("out/stability"));
+    galerkin_vi::output::check_output_dir(&dir)?;
+    // The map sweeps h and n itself and takes its steps from --cell-steps.
+    for (flag, given) in [
+        ("--h", args.run.h.is_some()),
+        ("--n", args.run.n.is_some()),
+        ("--steps", args.run.steps.is_some()),
+        ("--quad-points", args.run.quad_points.is_some()),
+        ("--economical", args.run.economical),
+    ] {
+        if given {
+            return Err(GviError::InvalidArgument {
+                name: flag.into(),
+                reason: "stability sweeps h and n over its own grid and takes the steps per \
+                         cell from --cell-steps; this flag would be ignored"
+                    .into(),
+            });
+        }
+    }
+    if args.cell_steps == 0 {
+        return Err(GviError::InvalidArgument {
+            name: "--cell-steps".into(),
+            reason: "need at least one step per cell".into(),
+        });
+    }
     let scene = load_scene(&args.run)?;
     let mut config = if args.quick {
         StabilityConfig::quick()
@@ -157,7 +190,16 @@ pub fn run_stability(args: StabilityArgs) -> Result<(), GviError> {
     };
     config.steps = args.cell_steps;
     let study = stability(&scene, &config)?;
-    let dir = args.out.unwrap_or_else(|| PathBuf::from("out/stability"));
+    if study.cells.iter().all(|c| c.class == Class::SolverFailure) {
+        return Err(GviError::AllRunsFailed {
+            runs: study.cells.len(),
+            first: study
+                .cells
+                .first()
+                .and_then(|c| c.message.clone())
+                .unwrap_or_default(),
+        });
+    }
     let files = study.write(&dir)?;
     let counts = study.counts();
     eprintln!(
@@ -194,10 +236,14 @@ pub struct CompareRefinementArgs {
     #[arg(long)]
     pub out: Option<PathBuf>,
     #[command(flatten)]
-    pub run: RunArgs,
+    pub run: SceneArgs,
 }
 
 pub fn run_compare_refinement(args: CompareRefinementArgs) -> Result<(), GviError> {
+    let dir = args
+        .out
+        .unwrap_or_else(|| PathBuf::from("out/compare-refinement"));
+    galerkin_vi::output::check_output_dir(&dir)?;
     let scene = load_scene(&args.run)?;
     let config = if args.quick {
         CompareConfig::quick()
@@ -205,9 +251,6 @@ pub fn run_compare_refinement(args: CompareRefinementArgs) -> Result<(), GviErro
         CompareConfig::full()
     };
     let study = compare_refinement(&scene, &config)?;
-    let dir = args
-        .out
-        .unwrap_or_else(|| PathBuf::from("out/compare-refinement"));
     let files = study.write(&dir)?;
     eprintln!(
         "{}: T = {}, errors against the {}; cheapest path per target:",

@@ -68,6 +68,9 @@ fn parse_tols(text: &str) -> Result<Vec<f64>, GviError> {
 }
 
 pub fn run_tolerance_study(args: ToleranceArgs) -> Result<(), GviError> {
+    if let Some(dir) = &args.out {
+        galerkin_vi::output::check_output_dir(dir)?;
+    }
     let mut scene = Scene::load(&args.scene)?;
     if let Some(b) = &args.basis {
         scene.method.basis = b.parse()?;

@@ -95,6 +95,30 @@ pub fn check_report<S: System, B: Basis, Q: Quadrature>(
     check_report_with(integrator, system, q0, p0, steps, &known_symmetries(system))
 }
 
+/// Diagnostics of a run that overflowed are meaningless (an error of inf − inf is NaN, which
+/// a max would drop): the first non-finite state or invariant is an error.
+fn ensure_finite_run<S: System>(system: &S, traj: &crate::Trajectory) -> Result<()> {
+    let mut inv = vec![0.0; system.invariant_names().len()];
+    for k in 0..traj.q.len() {
+        let (q, p) = (&traj.q[k], &traj.p[k]);
+        system.invariants(q, p, &mut inv);
+        let names = (0..q.len())
+            .map(|i| format!("position q{i}"))
+            .chain((0..p.len()).map(|i| format!("momentum p{i}")))
+            .chain(system.invariant_names().iter().map(|s| s.to_string()));
+        let values = q.iter().chain(p).chain(&inv);
+        if let Some((what, &value)) = names.zip(values).find(|(_, v)| !v.is_finite()) {
+            return Err(crate::GviError::NonFiniteResult {
+                what,
+                value,
+                step: k,
+                t: traj.time(k),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// [`check_report`] with an explicit list of momentum maps.
 pub fn check_report_with<S: System, B: Basis, Q: Quadrature>(
     integrator: &GalerkinIntegrator<B, Q>,
@@ -105,6 +129,7 @@ pub fn check_report_with<S: System, B: Basis, Q: Quadrature>(
     symmetries: &[NamedMomentumMap],
 ) -> Result<CheckReport> {
     let traj = integrator.integrate(system, 0.0, q0, p0, steps)?;
+    ensure_finite_run(system, &traj)?;
     let (mut defect, mut relative) = (0.0f64, 0.0f64);
     for c in &traj.coefficients {
         let j = integrator.step_jacobian_from_coefficients(system, c)?;

@@ -253,7 +253,23 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let rcond = crate::linalg::reciprocal_condition(&block, n - 1);
         let too_weak_degree =
             self.basis.polynomial_degree().is_some() && self.rule.degree < required;
-        if too_weak_degree || rcond < 1e-13 {
+        let exact_rule = self.basis.polynomial_degree().is_some() && !too_weak_degree;
+        let singular = rcond.is_nan() || rcond < 1e-13;
+        if exact_rule && singular {
+            // The quadrature is exact for the kinetic integrand: the basis itself is
+            // numerically singular at this n, not the rule.
+            return Err(GviError::InvalidBasisSize {
+                n,
+                basis: self.basis.name().into(),
+                reason: format!(
+                    "the kinetic matrix is numerically singular (reciprocal condition number \
+                     {rcond:.3e}) although {} is exact for it: this basis is ill-conditioned \
+                     at this n (use a smaller n or the chebyshev basis)",
+                    self.quadrature.name()
+                ),
+            });
+        }
+        if too_weak_degree || singular {
             return Err(GviError::QuadratureTooWeak {
                 quadrature: self.quadrature.name(),
                 degree: self.rule.degree,

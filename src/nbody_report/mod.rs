@@ -370,13 +370,12 @@ impl NBodyReport {
     /// `<name>-orbits-inner.svg` when there is an inner chart) and `<name>-summary.txt` into
     /// `dir`; returns the file names.
     pub fn write_to(&self, dir: &std::path::Path) -> Result<Vec<String>> {
-        let io = |path: std::path::PathBuf| move |source| GviError::Io { path, source };
-        std::fs::create_dir_all(dir).map_err(io(dir.to_path_buf()))?;
+        crate::output::check_output_dir(dir)?;
         let stem = self.scene.name.replace(['/', '\\', ' '], "_");
         let mut files = Vec::new();
         let mut text = |name: String, body: String| -> Result<()> {
             let path = dir.join(&name);
-            std::fs::write(&path, body).map_err(io(path))?;
+            crate::output::write_file(&path, &body)?;
             files.push(name);
             Ok(())
         };

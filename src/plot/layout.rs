@@ -87,9 +87,10 @@ pub(super) fn frame<'b, 'a>(
     Ok(chart)
 }
 
+/// Write the SVG through the crate's one atomic writer ([`crate::output::write_atomic`]).
 pub(super) fn write_file(path: &Path, svg: &str) -> Result<(), PlotError> {
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir)?;
-    }
-    Ok(std::fs::write(path, svg)?)
+    crate::output::write_atomic(path, svg.as_bytes()).map_err(|e| match e {
+        crate::GviError::Io { source, .. } => PlotError::Io(source),
+        other => PlotError::Io(std::io::Error::other(other.to_string())),
+    })
 }

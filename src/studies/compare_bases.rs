@@ -61,6 +61,20 @@ pub fn compare_bases(
             let (scene, ns, quads) = (self.0, self.1, self.2);
             let m = &scene.method;
             let horizon = m.h * m.steps as f64;
+            let total = (BasisKind::ALL.len() * quads.len() * ns.len()) as f64 * m.steps as f64
+                + Reference::estimated_steps(system, &scene.initial, m.h, horizon);
+            let limit = super::work_precision::MAX_TOTAL_STEPS;
+            if total > limit {
+                return Err(GviError::CostTooHigh {
+                    what: "the total number of integration steps (bases × quadratures × values \
+                           of n × steps, plus the reference; lower --steps or the range)"
+                        .into(),
+                    estimate: total,
+                    limit,
+                });
+            }
+            let max_n = ns.iter().copied().max().unwrap_or(0);
+            super::refuse_memory(m.steps as f64, max_n, system.dim())?;
             let reference = Reference::for_system(system, &scene.initial, m.h, horizon)?;
             let mut jobs = Vec::new();
             for &b in &BasisKind::ALL {

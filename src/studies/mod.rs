@@ -24,7 +24,6 @@ use crate::scene::{InitialState, MethodSpec};
 use crate::systems::{ExactSolution, System};
 use crate::trajectory::Trajectory;
 use serde::Serialize;
-use std::path::Path;
 use std::time::Instant;
 
 /// What the errors are measured against.
@@ -219,6 +218,13 @@ pub fn measure<S: System>(
     if let Err(e) = fill_errors(system, initial, &traj, reference, curve_samples, &mut m) {
         m.failure.get_or_insert(e.to_string());
     }
+    if m.failure.is_some() {
+        // A failed run has no error figures: the partial run's would look like a success.
+        m.map_error = f64::NAN;
+        m.curve_error = f64::NAN;
+        m.energy_error = f64::NAN;
+        m.momentum_error = None;
+    }
     m
 }
 
@@ -234,22 +240,34 @@ fn fill_errors<S: System>(
     m.gradient_evaluations = traj.gradient_evaluations();
     let mut map = 0.0f64;
     for k in 0..traj.q.len() {
-        map = map.max(max_norm_diff(
-            &traj.q[k],
-            &reference.position(traj.time(k))?,
-        ));
+        map = nan_max(
+            map,
+            max_norm_diff(&traj.q[k], &reference.position(traj.time(k))?),
+        );
     }
     m.map_error = map;
+    if !map.is_finite() {
+        return Err(GviError::NonFinite {
+            what: "position error at a step end".into(),
+            value: map,
+        });
+    }
     let mut curve = map;
     if traj.steps() > 0 && curve_samples > 0 {
         for t in traj.sample_times(curve_samples) {
-            curve = curve.max(max_norm_diff(
-                &traj.position_at(t)?,
-                &reference.position(t)?,
-            ));
+            curve = nan_max(
+                curve,
+                max_norm_diff(&traj.position_at(t)?, &reference.position(t)?),
+            );
         }
     }
     m.curve_error = curve;
+    if !curve.is_finite() {
+        return Err(GviError::NonFinite {
+            what: "position error along the Galerkin curves".into(),
+            value: curve,
+        });
+    }
     let k = system.invariant_names().len();
     if k > 0 {
         let (mut i0, mut i) = (vec![0.0; k], vec![0.0; k]);
@@ -258,8 +276,14 @@ fn fill_errors<S: System>(
         for s in 0..traj.q.len() {
             system.invariants(&traj.q[s], &traj.p[s], &mut i);
             for c in 0..k {
-                worst[c] = worst[c].max((i[c] - i0[c]).abs());
+                worst[c] = nan_max(worst[c], (i[c] - i0[c]).abs());
             }
+        }
+        if let Some(&w) = worst.iter().find(|w| !w.is_finite()) {
+            return Err(GviError::NonFinite {
+                what: "invariant error".into(),
+                value: w,
+            });
         }
         m.energy_error = worst[0];
         m.momentum_error = worst.get(1).copied();
@@ -267,11 +291,56 @@ fn fill_errors<S: System>(
     Ok(())
 }
 
+/// max(a, b), but NaN if either is NaN (`f64::max` drops a NaN, which turns a run that blew
+/// up into a perfect-looking error of 0).
+pub(crate) fn nan_max(a: f64, b: f64) -> f64 {
+    if a.is_nan() || b.is_nan() {
+        f64::NAN
+    } else {
+        a.max(b)
+    }
+}
+
+/// Max-norm of a − b; NaN if any difference is NaN.
 pub(crate) fn max_norm_diff(a: &[f64], b: &[f64]) -> f64 {
     a.iter()
         .zip(b)
         .map(|(x, y)| (x - y).abs())
-        .fold(0.0, f64::max)
+        .fold(0.0, nan_max)
+}
+
+/// Memory above which a study is refused before it starts.
+pub const MAX_STUDY_BYTES: f64 = 4e9;
+
+/// Refuse a study whose runs would hold an absurd amount of memory: each run keeps its
+/// trajectory (about 8(nD + 2D) + 136 bytes per step), and rayon runs as many at once as it
+/// has threads.
+pub fn refuse_memory(steps_per_run: f64, n: usize, d: usize) -> Result<()> {
+    let per_step = (8 * (n * d + 2 * d) + 136) as f64;
+    let parallel = rayon::current_num_threads().max(1) as f64;
+    let estimate = steps_per_run * per_step * parallel;
+    if estimate.is_nan() || estimate > MAX_STUDY_BYTES {
+        return Err(GviError::CostTooHigh {
+            what: format!(
+                "the memory in bytes ({steps_per_run:.3e} steps per run at about {per_step:.0} \
+                 bytes each, {parallel} runs at once; lower --steps or the range)"
+            ),
+            estimate,
+            limit: MAX_STUDY_BYTES,
+        });
+    }
+    Ok(())
+}
+
+/// Refuse a study whose every run failed: there is nothing to report.
+pub fn ensure_some_succeeded(ms: &[Measurement]) -> Result<()> {
+    if !ms.is_empty() && ms.iter().all(|m| m.failure.is_some()) {
+        return Err(GviError::AllRunsFailed {
+            runs: ms.len(),
+            first: ms[0].failure.clone().unwrap_or_default(),
+        });
+    }
+    Ok(())
 }
 
 /// Measurements as CSV.
@@ -306,16 +375,4 @@ pub fn measurements_csv(ms: &[Measurement]) -> String {
     out
 }
 
-/// Write a text file, creating its directory.
-pub fn write_file(path: &Path, text: &str) -> Result<()> {
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(|source| GviError::Io {
-            path: dir.to_path_buf(),
-            source,
-        })?;
-    }
-    std::fs::write(path, text).map_err(|source| GviError::Io {
-        path: path.to_path_buf(),
-        source,
-    })
-}
+pub use crate::output::write_file;

@@ -177,6 +177,35 @@ fn refine_system<S: System + Sync>(
         (Vary::H, true) => values.iter().cloned().fold(0.0, f64::max) * base.steps as f64,
         _ => horizon,
     };
+    check_values(vary, values, base, fixed_steps)?;
+    let total: f64 = values
+        .iter()
+        .map(|&x| match (vary, fixed_steps) {
+            (Vary::H, false) => (horizon / x).round().max(1.0),
+            _ => base.steps as f64,
+        })
+        .sum::<f64>()
+        + Reference::estimated_steps(system, &scene.initial, hmin, ref_horizon);
+    let limit = crate::studies::work_precision::MAX_TOTAL_STEPS;
+    if total.is_nan() || total > limit {
+        return Err(GviError::CostTooHigh {
+            what: "the total number of integration steps (every run plus the reference)".into(),
+            estimate: total,
+            limit,
+        });
+    }
+    let max_steps = values
+        .iter()
+        .map(|&x| match (vary, fixed_steps) {
+            (Vary::H, false) => (horizon / x).round().max(1.0),
+            _ => base.steps as f64,
+        })
+        .fold(0.0, f64::max);
+    let max_n = match vary {
+        Vary::N => values.iter().fold(0.0f64, |a, &b| a.max(b)) as usize,
+        Vary::H => base.n,
+    };
+    super::refuse_memory(max_steps, max_n, system.dim())?;
     let reference = Reference::for_system(system, &scene.initial, hmin, ref_horizon)?;
     let methods: Vec<_> = values
         .iter()
@@ -216,6 +245,58 @@ fn refine_system<S: System + Sync>(
         fit,
         curve_fit,
     })
+}
+
+/// Reject sweep values no run could use: n not a whole number ≥ 2; h longer than the
+/// horizon (a sweep over one truncated step fits a meaningless rate) or so short that the
+/// horizon needs more than [`crate::integrator::MAX_STEPS`] steps.
+fn check_values(
+    vary: Vary,
+    values: &[f64],
+    base: &crate::scene::MethodSpec,
+    fixed_steps: bool,
+) -> Result<()> {
+    let bad = |reason: String| GviError::InvalidArgument {
+        name: "--range".into(),
+        reason,
+    };
+    let horizon = base.h * base.steps as f64;
+    for &x in values {
+        match vary {
+            Vary::N => {
+                if !(x >= 2.0 && x.fract() == 0.0 && x <= 4096.0) {
+                    return Err(bad(format!(
+                        "n = {x:e} is not a whole number of basis functions in 2…4096"
+                    )));
+                }
+            }
+            Vary::H if fixed_steps => {
+                if !(x * base.steps as f64).is_finite() {
+                    return Err(bad(format!(
+                        "h = {x:e} times {} steps is not a finite time span",
+                        base.steps
+                    )));
+                }
+            }
+            Vary::H => {
+                if x > horizon {
+                    return Err(bad(format!(
+                        "h = {x:e} is longer than the horizon T = h·steps = {horizon:e} of the \
+                         scene (use --fixed-steps, or a longer scene)"
+                    )));
+                }
+                let steps = horizon / x;
+                if steps > crate::integrator::MAX_STEPS as f64 {
+                    return Err(bad(format!(
+                        "h = {x:e} needs {steps:.3e} steps to cover T = {horizon:e}, more than \
+                         {:e}",
+                        crate::integrator::MAX_STEPS as f64
+                    )));
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 fn fit_points(vary: Vary, points: &[Measurement], err: impl Fn(&Measurement) -> f64) -> RateFit {

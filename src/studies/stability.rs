@@ -167,6 +167,22 @@ pub fn stability(scene: &Scene, config: &StabilityConfig) -> Result<StabilityStu
             reason: "needs at least one h, one n and one step".into(),
         });
     }
+    let total = (config.hs.len() * config.ns.len()) as f64 * config.steps as f64;
+    let limit = super::work_precision::MAX_TOTAL_STEPS;
+    if total > limit {
+        return Err(GviError::CostTooHigh {
+            what: format!(
+                "the total number of integration steps ({} cells × {} steps per cell; lower \
+                 --cell-steps)",
+                config.hs.len() * config.ns.len(),
+                config.steps
+            ),
+            estimate: total,
+            limit,
+        });
+    }
+    let max_n = config.ns.iter().copied().max().unwrap_or(0);
+    super::refuse_memory(config.steps as f64, max_n, scene.initial.q.len())?;
     struct Visit<'a>(&'a Scene, &'a StabilityConfig);
     impl SystemVisitor for Visit<'_> {
         type Output = StabilityStudy;

@@ -125,11 +125,30 @@ impl System for Kepler {
             // Unbound or degenerate orbits have no closed form here; that is not an error.
             Err(super::kepler_orbit::OrbitError::NotBound { .. })
             | Err(super::kepler_orbit::OrbitError::Degenerate) => Ok(None),
-            Err(e) => Err(GviError::InvalidParameter {
-                name: "Kepler initial state".into(),
-                value: f64::NAN,
-                reason: e.to_string(),
-            }),
+            Err(e) => {
+                // Name the field and the value that broke the orbit's elements.
+                let fields = [
+                    ("t0", t0),
+                    ("q0[0]", q0[0]),
+                    ("q0[1]", q0[1]),
+                    ("p0[0]", p0[0]),
+                    ("p0[1]", p0[1]),
+                    ("mu", self.mu),
+                ];
+                let (name, value) = fields
+                    .into_iter()
+                    .find(|(_, v)| !v.is_finite())
+                    .unwrap_or(("mu", self.mu));
+                Err(GviError::InvalidParameter {
+                    name: format!("Kepler {name}"),
+                    value,
+                    reason: format!(
+                        "{e} (mu = {:e}, q0 = [{:e}, {:e}], p0 = [{:e}, {:e}], t0 = {:e}: the \
+                         orbital elements overflow)",
+                        self.mu, q0[0], q0[1], p0[0], p0[1], t0
+                    ),
+                })
+            }
         }
     }
 }

@@ -48,9 +48,11 @@ pub(crate) fn build(
             }
         };
         if !(m.is_finite() && m > 0.0) {
+            let field = if uses_gm { "gm" } else { "mass" };
             return Err(scene_error(format!(
-                "body '{}': mass must be finite and positive, got {m}",
-                b.name
+                "body '{}': {field} must be finite and positive, got {}",
+                b.name,
+                crate::error::fmt_number(m)
             )));
         }
         if b.q.len() != dim || b.v.len() != dim {
