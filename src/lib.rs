@@ -38,6 +38,7 @@ pub mod fit;
 pub mod geometry;
 pub mod integrator;
 pub mod lagrangian;
+pub mod lie;
 pub mod linalg;
 pub mod nbody_report;
 pub mod plot;
