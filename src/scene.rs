@@ -1,7 +1,7 @@
 //! Scenes: small TOML files naming a system, its parameters, an initial state and a method.
 //!
 //! Built-in scenes (`harmonic`, `kepler`, `pendulum`, the rigid bodies `rigid-body` and
-//! `heavy-top` (run by [`crate::lie`]), and the N-body scenes `solar-system`,
+//! `heavy-top`, `pendulum-3d` (run by [`crate::lie`]), and the N-body scenes `solar-system`,
 //! `outer-solar-system`, `two-body`, `figure-eight` and the synthetic `planetesimal-ring`) are
 //! compiled into the crate from the `scenes/` directory; any other argument is read as a path to a user's TOML file. Unknown
 //! keys are rejected so that a typo is an error, not a silently ignored setting.
@@ -31,7 +31,7 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 /// The built-in scenes: (name, TOML text).
-pub const BUILTIN_SCENES: [(&str, &str); 10] = [
+pub const BUILTIN_SCENES: [(&str, &str); 11] = [
     ("harmonic", include_str!("../scenes/harmonic.toml")),
     ("kepler", include_str!("../scenes/kepler.toml")),
     ("pendulum", include_str!("../scenes/pendulum.toml")),
@@ -48,6 +48,7 @@ pub const BUILTIN_SCENES: [(&str, &str); 10] = [
     ),
     ("rigid-body", include_str!("../scenes/rigid-body.toml")),
     ("heavy-top", include_str!("../scenes/heavy-top.toml")),
+    ("pendulum-3d", include_str!("../scenes/pendulum-3d.toml")),
 ];
 
 /// A complete experiment: system, initial state and method.

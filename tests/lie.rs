@@ -118,7 +118,10 @@ fn spectral_convergence_at_a_quarter_period() {
     }
     let nf: Vec<f64> = ns.iter().map(|&n| n as f64).collect();
     let fit = fit_geometric_in(&nf, &errs, 4.0, 12.0).unwrap();
-    eprintln!("quarter period h = {h}: errors {errs:?}, fitted rate {:.4}", fit.rate);
+    eprintln!(
+        "quarter period h = {h}: errors {errs:?}, fitted rate {:.4}",
+        fit.rate
+    );
     assert!(fit.rate < 0.06, "rate {} ({errs:?})", fit.rate);
     for w in errs.windows(2) {
         assert!(w[1] < 0.05 * w[0], "not geometric: {errs:?}");

@@ -44,6 +44,9 @@ pub struct RunArgs {
     /// Number of steps.
     #[arg(long)]
     pub steps: Option<usize>,
+    /// Rigid-body scenes: the Lie group chart, exp (default) or cayley.
+    #[arg(long)]
+    pub retraction: Option<String>,
     /// Initial position, comma-separated (e.g. 0.4,0).
     #[arg(long, allow_hyphen_values = true)]
     pub q0: Option<String>,
@@ -110,6 +113,9 @@ pub fn apply_overrides(scene: &mut Scene, a: &RunArgs) -> Result<(), GviError> {
     }
     if let Some(s) = a.steps {
         scene.method.steps = s;
+    }
+    if let Some(r) = &a.retraction {
+        scene.method.retraction = Some(r.parse()?);
     }
     if let Some(q) = &a.q0 {
         scene.initial.q = parse_vector("--q0", q)?;

@@ -196,6 +196,11 @@ impl<B: Basis> LieGalerkin<B> {
         self.basis.len()
     }
 
+    /// Number of quadrature points m.
+    pub fn quadrature_points(&self) -> usize {
+        self.rule.len()
+    }
+
     /// The retraction.
     pub fn retraction(&self) -> Retraction {
         self.retraction

@@ -1,5 +1,5 @@
 //! Lie group spectral variational integrators on SO(3) (Hall & Leok, "Lie group spectral
-//! variational integrators", Found. Comput. Math. 17 (2017)), for rigid bodies.
+//! variational integrators", Found. Comput. Math. 17 (2017) 199–257), for rigid bodies.
 //!
 //! # The construction
 //!

@@ -79,7 +79,11 @@ fn run_body<S: RigidBody>(body: &S, scene: &Scene) -> Result<RunResult> {
     } else {
         FreeBodyExact::new(body.inertia(), &r0, &mu0).ok()
     };
-    tabulate(body, scene, &gvi.describe(), &traj, exact.as_ref(), seconds)
+    let mut result = tabulate(body, scene, &gvi.describe(), &traj, exact.as_ref(), seconds)?;
+    // One evaluation of ℓ's derivatives per quadrature node per Newton iteration.
+    result.summary.force_evaluations =
+        traj.iterations.iter().sum::<usize>() * gvi.quadrature_points();
+    Ok(result)
 }
 
 fn tabulate<S: RigidBody>(
