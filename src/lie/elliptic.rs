@@ -215,7 +215,7 @@ impl FreeBodyExact {
         let (mut t, mut phi) = (0.0, 0.0);
         let mut out = Vec::with_capacity(times.len());
         for &target in times {
-            if !(target >= t) {
+            if target.is_nan() || target < t {
                 return Err(GviError::InvalidArgument {
                     name: "times".into(),
                     reason: "the reference needs increasing times from 0".into(),
