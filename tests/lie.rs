@@ -32,7 +32,7 @@ fn max_abs_diff(a: &[f64; 3], b: &[f64; 3]) -> f64 {
 }
 
 /// Orthogonality, spatial angular momentum and energy over 10⁴ steps (n = 3, h = 0.4; order 4,
-/// energy error 2.1e-5 from the first steps on). Measured: ‖RᵀR − I‖ ≤ 3.2e-14, |ΔL| ≤ 2.6e-14
+/// energy error 2.1e-5 from the first steps on). Measured: ‖RᵀR − I‖ ≤ 3.6e-14, |ΔL| ≤ 4.8e-14
 /// (a random walk, ~ε|L|√k). RK4 at the same h: ‖RᵀR − I‖ = 1.4, |ΔL| = 0.28, energy error
 /// growing from 3.3e-3 (100 steps) to 0.25.
 #[test]
@@ -94,7 +94,7 @@ fn invariants_over_ten_thousand_steps_with_rk4_control() {
 
 /// Spectral convergence at h = a quarter of the body period (8 steps, two periods): fitted
 /// rate over n = 4 … 12 measured 0.039 per n (errors 3.0e-2 at n = 4, 1.5e-13 at n = 12), and
-/// 1e-12 reached (1.9e-14 at n = 16). Chebyshev and Legendre give the same map; the Cayley
+/// 1e-12 reached (2.0e-14 at n = 16). Chebyshev and Legendre give the same map; the Cayley
 /// chart also converges geometrically (more slowly: 2.4e-6 at n = 10, 1.5e-12 at n = 16).
 #[test]
 fn spectral_convergence_at_a_quarter_period() {
@@ -181,7 +181,7 @@ fn h_order_per_n() {
 
 /// The one-step map in canonical coordinates of T*SO(3) near (R_k, μ_k): ζ with R = R_k exp(ζ̂)
 /// and π = J_r(ζ)ᵀμ (the cotangent lift of the chart); the same chart around the image.
-/// Central differences (δ = 1e-5) give the 6 × 6 Jacobian M; ‖MᵀJM − J‖ measured 8e-11 and 2e-10 for
+/// Central differences (δ = 1e-5) give the 6 × 6 Jacobian M; ‖MᵀJM − J‖ measured 7e-11 and 2.7e-10 for
 /// the Lie Galerkin map (h = 0.4, n = 5; h = T/4, n = 12) and 2.9e-3 for RK4 at h = 0.4.
 #[test]
 fn symplectic_in_trivialised_coordinates_with_rk4_control() {
