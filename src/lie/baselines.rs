@@ -110,7 +110,7 @@ pub fn rattle_step(inertia: &[f64; 3], s: &LieState, h: f64) -> Result<LieState>
                 val[i] = y[i].re;
             }
         }
-        let d = super::integrator::solve3(&jac, &val);
+        let d = super::node::solve3(&jac, &val);
         let mut dn = 0.0f64;
         for k in 0..3 {
             f[k] -= d[k];

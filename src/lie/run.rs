@@ -80,6 +80,13 @@ fn run_body<S: RigidBody>(body: &S, scene: &Scene) -> Result<RunResult> {
         FreeBodyExact::new(body.inertia(), &r0, &mu0).ok()
     };
     let mut result = tabulate(body, scene, &gvi.describe(), &traj, exact.as_ref(), seconds)?;
+    // The symplecticity defect of the first step in canonical coordinates (12 extra steps).
+    let defect =
+        super::geometry::symplecticity_defect(|s| gvi.step(body, s), &traj.states[0], 1e-5)?;
+    result
+        .summary
+        .invariant_errors
+        .push(("step-0 symplecticity defect".into(), defect));
     // One evaluation of ℓ's derivatives per quadrature node per Newton iteration.
     result.summary.force_evaluations =
         traj.iterations.iter().sum::<usize>() * gvi.quadrature_points();
