@@ -180,6 +180,9 @@ pub fn visit_system<V: SystemVisitor>(spec: &SystemSpec, visitor: V) -> Result<V
             gravity,
             mass,
         } => visitor.visit(&Pendulum::new(*length, *gravity, *mass)?),
+        SystemSpec::RigidBody { .. } | SystemSpec::HeavyTop { .. } => Err(GviError::Unsupported(
+            "rigid bodies live on SO(3): only `gvi run` supports them (crate::lie)".into(),
+        )),
         SystemSpec::NBody { .. } => match spec.nbody()? {
             Some((system, _)) => visitor.visit(&system),
             None => Err(GviError::Scene {
@@ -193,6 +196,9 @@ pub fn visit_system<V: SystemVisitor>(spec: &SystemSpec, visitor: V) -> Result<V
 /// Run a scene. Invalid input is an `Err`; a Newton failure is `Ok` with
 /// [`RunResult::failure`] set and the partial trajectory kept.
 pub fn run_scene(scene: &Scene, options: RunOptions) -> Result<RunResult> {
+    if let Some(result) = crate::lie::run::run_rigid_body_scene(scene, options)? {
+        return Ok(result);
+    }
     struct Run<'a>(&'a Scene, RunOptions);
     impl SystemVisitor for Run<'_> {
         type Output = RunResult;

@@ -1,6 +1,7 @@
 //! Scenes: small TOML files naming a system, its parameters, an initial state and a method.
 //!
-//! Built-in scenes (`harmonic`, `kepler`, `pendulum`, and the N-body scenes `solar-system`,
+//! Built-in scenes (`harmonic`, `kepler`, `pendulum`, the rigid bodies `rigid-body` and
+//! `heavy-top`, `pendulum-3d` (run by [`crate::lie`]), and the N-body scenes `solar-system`,
 //! `outer-solar-system`, `two-body`, `figure-eight`, `lagrange-triangle` and the synthetic
 //! `planetesimal-ring`) are
 //! compiled into the crate from the `scenes/` directory; any other argument is read as a path to a user's TOML file. Unknown
@@ -31,7 +32,7 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 /// The built-in scenes: (name, TOML text).
-pub const BUILTIN_SCENES: [(&str, &str); 9] = [
+pub const BUILTIN_SCENES: [(&str, &str); 12] = [
     ("harmonic", include_str!("../scenes/harmonic.toml")),
     ("kepler", include_str!("../scenes/kepler.toml")),
     ("pendulum", include_str!("../scenes/pendulum.toml")),
@@ -50,6 +51,9 @@ pub const BUILTIN_SCENES: [(&str, &str); 9] = [
         "lagrange-triangle",
         include_str!("../scenes/lagrange-triangle.toml"),
     ),
+    ("rigid-body", include_str!("../scenes/rigid-body.toml")),
+    ("heavy-top", include_str!("../scenes/heavy-top.toml")),
+    ("pendulum-3d", include_str!("../scenes/pendulum-3d.toml")),
 ];
 
 /// A complete experiment: system, initial state and method.
@@ -144,6 +148,25 @@ pub enum SystemSpec {
         #[serde(default = "one")]
         mass: f64,
     },
+    /// [`FreeRigidBody`](crate::lie::FreeRigidBody) on SO(3) (Lie group integrator;
+    /// `[initial] q` is the rotation vector of R₀, `p` the body momentum).
+    RigidBody {
+        /// Principal moments of inertia.
+        inertia: [f64; 3],
+    },
+    /// [`HeavyTop`](crate::lie::HeavyTop) on SO(3) (Lie group integrator).
+    HeavyTop {
+        /// Principal moments of inertia about the fixed point.
+        inertia: [f64; 3],
+        /// Mass m.
+        #[serde(default = "one")]
+        mass: f64,
+        /// Gravity g.
+        #[serde(default = "one")]
+        gravity: f64,
+        /// Centre of mass in the body frame.
+        com: [f64; 3],
+    },
 }
 
 fn one() -> f64 {
@@ -225,6 +248,10 @@ pub struct MethodSpec {
     /// `newton-krylov`; default `auto`). Every solver gives the same map to round-off.
     #[serde(default)]
     pub solver: crate::integrator::StageSolver,
+    /// Rigid-body scenes: the retraction of the Lie group integrator (`exp` or `cayley`;
+    /// default `exp`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub retraction: Option<crate::lie::Retraction>,
 }
 
 impl MethodSpec {

@@ -47,6 +47,9 @@ pub struct SceneArgs {
     /// Number of steps.
     #[arg(long)]
     pub steps: Option<usize>,
+    /// Rigid-body scenes: the Lie group chart, exp (default) or cayley.
+    #[arg(long)]
+    pub retraction: Option<String>,
     /// Initial position, comma-separated (e.g. 0.4,0).
     #[arg(long, allow_hyphen_values = true)]
     pub q0: Option<String>,
@@ -139,6 +142,9 @@ pub fn apply_overrides(scene: &mut Scene, a: &SceneArgs) -> Result<(), GviError>
     if let Some(s) = a.steps {
         scene.method.steps = s;
     }
+    if let Some(r) = &a.retraction {
+        scene.method.retraction = Some(r.parse()?);
+    }
     if let Some(q) = &a.q0 {
         scene.initial.q = parse_vector("--q0", q)?;
     }
@@ -218,7 +224,13 @@ pub fn run(args: RunArgs) -> Result<(), GviError> {
     let out_refs: Vec<(&str, &Path)> = outputs.iter().map(|(r, p)| (*r, p.as_path())).collect();
     ensure_distinct(&out_refs, &inputs)?;
 
-    let streamed = args.plot.is_none() && args.format == Format::Csv && scene.method.tol.is_none();
+    // Rigid bodies run on SO(3) by their own integrator (crate::lie), in memory.
+    let on_so3 = matches!(
+        scene.system,
+        SystemSpec::RigidBody { .. } | SystemSpec::HeavyTop { .. }
+    );
+    let streamed =
+        args.plot.is_none() && args.format == Format::Csv && scene.method.tol.is_none() && !on_so3;
     let samples = RunOptions::default().curve_samples_per_step;
     let (summary, failure) = if streamed {
         let outcome = match &args.output {
