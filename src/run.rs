@@ -155,6 +155,7 @@ pub fn visit_system<V: SystemVisitor>(spec: &SystemSpec, visitor: V) -> Result<V
             gravity,
             mass,
         } => visitor.visit(&Pendulum::new(*length, *gravity, *mass)?),
+        SystemSpec::Lagrangian(spec) => visitor.visit(&spec.build()?),
         SystemSpec::NBody { .. } => match spec.nbody()? {
             Some((system, _)) => visitor.visit(&system),
             None => Err(GviError::Scene {

@@ -1,7 +1,8 @@
 //! Scenes: small TOML files naming a system, its parameters, an initial state and a method.
 //!
 //! Built-in scenes (`harmonic`, `kepler`, `pendulum`, and the N-body scenes `solar-system`,
-//! `outer-solar-system`, `two-body`, `figure-eight` and the synthetic `planetesimal-ring`) are
+//! `outer-solar-system`, `two-body`, `figure-eight` and the synthetic `planetesimal-ring`; the
+//! expression-Lagrangian scenes `henon-heiles`, `double-pendulum` and `magnetic`) are
 //! compiled into the crate from the `scenes/` directory; any other argument is read as a path to a user's TOML file. Unknown
 //! keys are rejected so that a typo is an error, not a silently ignored setting.
 //!
@@ -30,7 +31,7 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 /// The built-in scenes: (name, TOML text).
-pub const BUILTIN_SCENES: [(&str, &str); 8] = [
+pub const BUILTIN_SCENES: [(&str, &str); 11] = [
     ("harmonic", include_str!("../scenes/harmonic.toml")),
     ("kepler", include_str!("../scenes/kepler.toml")),
     ("pendulum", include_str!("../scenes/pendulum.toml")),
@@ -45,6 +46,12 @@ pub const BUILTIN_SCENES: [(&str, &str); 8] = [
         "planetesimal-ring",
         include_str!("../scenes/planetesimal-ring.toml"),
     ),
+    ("henon-heiles", include_str!("../scenes/henon-heiles.toml")),
+    (
+        "double-pendulum",
+        include_str!("../scenes/double-pendulum.toml"),
+    ),
+    ("magnetic", include_str!("../scenes/magnetic.toml")),
 ];
 
 /// A complete experiment: system, initial state and method.
@@ -124,6 +131,9 @@ pub enum SystemSpec {
         /// The bodies, in the order of the configuration vector (body-major flattening).
         bodies: Vec<Body>,
     },
+    /// [`ExpressionLagrangian`](crate::systems::ExpressionLagrangian): L(q, q̇) written as
+    /// an expression (see [`LagrangianSpec`](crate::systems::expression::LagrangianSpec)).
+    Lagrangian(crate::systems::expression::LagrangianSpec),
     /// [`Pendulum`](crate::systems::Pendulum).
     Pendulum {
         /// Length l.
@@ -276,7 +286,19 @@ impl Scene {
             }
             Err(e) => return Err(e),
         }
+        scene.validate()?;
         Ok(scene)
+    }
+
+    /// Checks that need the system and the initial state together: for an expression
+    /// Lagrangian, that it compiles, that q and p have one entry per coordinate and that the
+    /// Lagrangian is regular at the initial state. Called when a scene is loaded and again
+    /// after command-line overrides of the state.
+    pub fn validate(&self) -> Result<()> {
+        if let SystemSpec::Lagrangian(spec) = &self.system {
+            spec.check(&self.initial.q, &self.initial.p)?;
+        }
+        Ok(())
     }
 
     /// A built-in scene by name, or a TOML file by path.
