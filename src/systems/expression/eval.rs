@@ -359,7 +359,7 @@ mod tests {
     #[test]
     fn folds_constants_and_reuses_subexpressions() {
         // x, y, x−y, cos(x−y), its square, the sum: six slots; 2*k/3 folded to 2.
-        let t = tape("cos(x - y)^2 + cos(x-y) * 2*k/3");
+        let t = tape("cos(x - y)^2 + cos(x-y) * (2*k/3)");
         assert_eq!(t.len(), 7, "{:?}", t.ops);
         let (x, y) = (0.3f64, -1.1f64);
         let c = (x - y).cos();

@@ -32,6 +32,7 @@
 mod error;
 mod eval;
 mod parse;
+mod separable;
 mod spec;
 
 pub use error::{ExpressionError, Position};
@@ -62,6 +63,7 @@ pub struct ExpressionLagrangian {
     parameters: Vec<(String, f64)>,
     energy: bool,
     exact: Option<Arc<ExactTapes>>,
+    separable: Option<separable::Separable>,
 }
 
 /// q(t) as compiled expressions in `t`, with the Lagrangian to form p = ∂L/∂v(q, q̇).
@@ -146,7 +148,9 @@ impl ExpressionLagrangian {
                 .into());
             }
         }
+        let separable = separable::split(&expr, lagrangian, &symbols, coordinates.len());
         Ok(ExpressionLagrangian {
+            separable,
             text: lagrangian.to_string(),
             expr,
             tape,
@@ -210,6 +214,13 @@ impl ExpressionLagrangian {
     /// Coordinate names.
     pub fn coordinates(&self) -> &[String] {
         &self.coordinates
+    }
+
+    /// Whether L was recognised as separable, ½ vᵀ M v + U(q) with a constant
+    /// positive-definite M (then [`Lagrangian::mass_matrix`] is `Some` and the integrator and
+    /// the classical baselines use the force −∇V = ∇U).
+    pub fn is_separable(&self) -> bool {
+        self.separable.is_some()
     }
 
     /// ∂L/∂v and ∂²L/∂v∂v (row-major) at (q, v).
@@ -317,6 +328,47 @@ impl Lagrangian for ExpressionLagrangian {
     #[inline]
     fn lagrangian<T: DualNum<Primitive = f64> + Copy>(&self, q: &[T], v: &[T]) -> T {
         self.tape.eval(q, v)
+    }
+
+    fn mass_matrix(&self) -> Option<DMatrix<f64>> {
+        let d = self.dim();
+        self.separable
+            .as_ref()
+            .map(|s| DMatrix::from_row_slice(d, d, &s.mass))
+    }
+
+    /// ∇U(q) for a separable L (no allocation up to D = 64); otherwise ∂L/∂q at v = 0.
+    fn force(&self, q: &[f64], out: &mut [f64]) {
+        let d = self.dim();
+        match &self.separable {
+            Some(s) => {
+                ad::gradient(|y| s.potential.eval(y, &[]), q, out);
+            }
+            None => {
+                let (zeros, mut lv) = (vec![0.0; d], vec![0.0; d]);
+                self.gradient(q, &zeros, out, &mut lv);
+            }
+        }
+    }
+
+    /// ∇²U(q) for a separable L (no allocation up to D = 64); otherwise ∂²L/∂q² at v = 0.
+    fn force_jacobian(&self, q: &[f64], out: &mut [f64]) {
+        let d = self.dim();
+        match &self.separable {
+            Some(s) if d <= 64 => {
+                let mut g = [0.0; 64];
+                ad::hessian(|y| s.potential.eval(y, &[]), q, &mut g[..d], out);
+            }
+            Some(s) => {
+                let mut g = vec![0.0; d];
+                ad::hessian(|y| s.potential.eval(y, &[]), q, &mut g, out);
+            }
+            None => {
+                let zeros = vec![0.0; d];
+                let (mut a, mut b) = (vec![0.0; d * d], vec![0.0; d * d]);
+                self.hessian(q, &zeros, out, &mut a, &mut b);
+            }
+        }
     }
 }
 
