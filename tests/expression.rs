@@ -65,7 +65,9 @@ impl Lagrangian for DoublePendulum {
         2
     }
     fn lagrangian<T: DualNum<Primitive = f64> + Copy>(&self, q: &[T], v: &[T]) -> T {
-        v[0] * v[0] + v[1] * v[1] * 0.5 + v[0] * v[1] * (q[0] - q[1]).cos()
+        v[0] * v[0]
+            + v[1] * v[1] * 0.5
+            + v[0] * v[1] * (q[0] - q[1]).cos()
             + q[0].cos() * 2.0
             + q[1].cos()
     }
@@ -144,7 +146,10 @@ fn henon_heiles_is_recognised_as_separable_and_matches_rust() {
         other => panic!("{other:?}"),
     };
     assert!(expr.is_separable());
-    assert_eq!(expr.mass_matrix().unwrap(), nalgebra::DMatrix::identity(2, 2));
+    assert_eq!(
+        expr.mass_matrix().unwrap(),
+        nalgebra::DMatrix::identity(2, 2)
+    );
     let q = [0.3, -0.2];
     let (mut f1, mut f2) = ([0.0; 2], [0.0; 2]);
     expr.force(&q, &mut f1);
@@ -191,9 +196,8 @@ fn every_expression_scene_runs() {
 
 #[test]
 fn library_errors_are_typed() {
-    let bad = |l: &str, c: &[&str], p: &[(&str, f64)]| {
-        ExpressionLagrangian::parse(l, c, p).expect_err(l)
-    };
+    let bad =
+        |l: &str, c: &[&str], p: &[(&str, f64)]| ExpressionLagrangian::parse(l, c, p).expect_err(l);
     assert!(matches!(
         bad("x_dot^2 +* x", &["x"], &[]),
         GviError::Expression(ExpressionError::Syntax { .. })
@@ -230,11 +234,17 @@ fn library_errors_are_typed() {
         ExpressionLagrangian::parse("(x_dot + y_dot)^2/2 - x^2 - y^2", &["x", "y"], &[]).unwrap();
     assert!(matches!(
         degenerate.check_state(&[0.1, 0.2], &[0.0, 0.0]),
-        Err(GviError::Expression(ExpressionError::SingularHessian { .. }))
+        Err(GviError::Expression(
+            ExpressionError::SingularHessian { .. }
+        ))
     ));
     assert!(matches!(
         degenerate.check_state(&[0.1], &[0.0, 0.0]),
-        Err(GviError::DimensionMismatch { expected: 2, got: 1, .. })
+        Err(GviError::DimensionMismatch {
+            expected: 2,
+            got: 1,
+            ..
+        })
     ));
     // Regular away from q = 0 only: L = x²ẋ²/2 is singular at x = 0.
     let l = ExpressionLagrangian::parse("x^2*x_dot^2/2 - x^2/2", &["x"], &[]).unwrap();
@@ -292,19 +302,27 @@ fn cli_reports_expression_errors_without_panicking() {
     );
     assert_clean_failure(
         &["run", &f],
-        &["syntax error at line 2, column 12", "  - (x^2 + * y^2)/2\n           ^"],
+        &[
+            "syntax error at line 2, column 12",
+            "  - (x^2 + * y^2)/2\n           ^",
+        ],
     );
     // An unknown symbol, listing the known ones.
     let f = scene_file(
         &dir,
         "unknown",
-        &format!("{xy}\nparameters = {{ k = 2.0 }}\nlagrangian = \"(x_dot^2 + y_dot^2)/2 - kk*x^2\""),
+        &format!(
+            "{xy}\nparameters = {{ k = 2.0 }}\nlagrangian = \"(x_dot^2 + y_dot^2)/2 - kk*x^2\""
+        ),
         "[0.1, 0.0]",
         "[0.0, 0.3]",
     );
     assert_clean_failure(
         &["check", &f],
-        &["unknown symbol `kk`", "known symbols: x, y, x_dot, y_dot, k, pi"],
+        &[
+            "unknown symbol `kk`",
+            "known symbols: x, y, x_dot, y_dot, k, pi",
+        ],
     );
     // A coordinate whose velocity never occurs.
     let f = scene_file(
@@ -319,7 +337,9 @@ fn cli_reports_expression_errors_without_panicking() {
     let f = scene_file(
         &dir,
         "nan",
-        &format!("{xy}\nparameters = {{ k = nan }}\nlagrangian = \"(x_dot^2 + y_dot^2)/2 - k*x^2\""),
+        &format!(
+            "{xy}\nparameters = {{ k = nan }}\nlagrangian = \"(x_dot^2 + y_dot^2)/2 - k*x^2\""
+        ),
         "[0.1, 0.0]",
         "[0.0, 0.3]",
     );
@@ -338,12 +358,27 @@ fn cli_reports_expression_errors_without_panicking() {
     let f = scene_file(&dir, "shortq", &ok, "[0.1]", "[0.0, 0.3]");
     assert_clean_failure(&["run", &f], &["dimension mismatch", "expected 2, got 1"]);
     let f = scene_file(&dir, "longp", &ok, "[0.1, 0.0]", "[0.0, 0.3, 1.0]");
-    assert_clean_failure(&["refine", &f, "--vary", "n", "--range", "4:8:2"], &["expected 2, got 3"]);
+    assert_clean_failure(
+        &["refine", &f, "--vary", "n", "--range", "4:8:2"],
+        &["expected 2, got 3"],
+    );
     // Overrides of the state are checked too.
-    assert_clean_failure(&["run", "magnetic", "--p0", "1,2,3"], &["expected 2, got 3"]);
-    assert_clean_failure(&["run", "henon-heiles", "--q0", "0.1"], &["expected 2, got 1"]);
+    assert_clean_failure(
+        &["run", "magnetic", "--p0", "1,2,3"],
+        &["expected 2, got 3"],
+    );
+    assert_clean_failure(
+        &["run", "henon-heiles", "--q0", "0.1"],
+        &["expected 2, got 1"],
+    );
     // An unknown key in [system] is still a scene error.
-    let f = scene_file(&dir, "typo", &format!("{ok}\nparameter = {{ k = 1 }}"), "[0.1, 0.0]", "[0.0, 0.3]");
+    let f = scene_file(
+        &dir,
+        "typo",
+        &format!("{ok}\nparameter = {{ k = 1 }}"),
+        "[0.1, 0.0]",
+        "[0.0, 0.3]",
+    );
     assert_clean_failure(&["run", &f], &["unknown field `parameter`"]);
     // The same file with valid content runs.
     let f = scene_file(&dir, "fine", &ok, "[0.1, 0.0]", "[0.0, 0.3]");

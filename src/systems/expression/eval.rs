@@ -94,6 +94,24 @@ fn unary<T: DualNum<Primitive = f64> + Copy>(func: Func, a: T) -> T {
     }
 }
 
+/// a^e for a constant exponent, with the same special forms as at run time (square, square
+/// root, integer power), so that folding a constant base gives the value a variable one would.
+fn constant_power(a: f64, e: f64) -> f64 {
+    if e == 1.0 {
+        a
+    } else if e == 0.0 {
+        1.0
+    } else if e == 2.0 {
+        a * a
+    } else if e == 0.5 {
+        a.sqrt()
+    } else if e.fract() == 0.0 && e.abs() <= 64.0 {
+        a.powi(e as i32)
+    } else {
+        a.powf(e)
+    }
+}
+
 /// A compiled expression: straight-line code over slots, the result in the last slot.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Tape {
@@ -184,7 +202,7 @@ impl Tape {
                 Op::MulC(a, c) => s[a as usize] * c,
                 Op::DivC(a, c) => s[a as usize] / c,
                 Op::CSub(c, a) => -s[a as usize] + c,
-                Op::CDiv(c, a) => s[a as usize].recip() * c,
+                Op::CDiv(c, a) => T::from(c) / s[a as usize],
                 Op::Neg(a) => -s[a as usize],
                 Op::Square(a) => s[a as usize] * s[a as usize],
                 Op::Powi(a, i) => s[a as usize].powi(i),
@@ -273,7 +291,7 @@ impl Compiler<'_> {
             (BinOp::Sub, Const(x), Const(y)) => Const(x - y),
             (BinOp::Mul, Const(x), Const(y)) => Const(x * y),
             (BinOp::Div, Const(x), Const(y)) => Const(x / y),
-            (BinOp::Pow, Const(x), Const(y)) => Const(x.powf(y)),
+            (BinOp::Pow, Const(x), Const(y)) => Const(constant_power(x, y)),
 
             (BinOp::Add, Slot(s), Const(c)) | (BinOp::Add, Const(c), Slot(s)) => {
                 if c == 0.0 {
