@@ -167,7 +167,7 @@ impl Tape {
 
     /// Whether the expression reads the velocity `i`.
     pub(crate) fn reads_v(&self, i: usize) -> bool {
-        self.ops.iter().any(|op| *op == Op::V(i as u32))
+        self.ops.contains(&Op::V(i as u32))
     }
 
     /// Evaluate at (q, v), generic over the scalar. Entries missing from `q` or `v` read as
