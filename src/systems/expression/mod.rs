@@ -34,6 +34,7 @@ mod eval;
 mod parse;
 mod separable;
 mod spec;
+mod vectorised;
 
 pub use error::{ExpressionError, Position};
 pub use eval::Tape;
@@ -332,6 +333,30 @@ impl Lagrangian for ExpressionLagrangian {
     #[inline]
     fn lagrangian<T: DualNum<Primitive = f64> + Copy>(&self, q: &[T], v: &[T]) -> T {
         self.tape.eval(q, v)
+    }
+
+    /// One tape pass with first-order dual vectors of size 2D for D ≤ 4 (the default makes
+    /// 2D passes with scalar duals).
+    fn gradient(&self, q: &[f64], v: &[f64], lq: &mut [f64], lv: &mut [f64]) {
+        match self.dim() {
+            1 => self.gradient_fixed::<2>(q, v, lq, lv),
+            2 => self.gradient_fixed::<4>(q, v, lq, lv),
+            3 => self.gradient_fixed::<6>(q, v, lq, lv),
+            4 => self.gradient_fixed::<8>(q, v, lq, lv),
+            _ => vectorised::gradient_by_passes(self, q, v, lq, lv),
+        }
+    }
+
+    /// One tape pass with second-order dual vectors (value, gradient and Hessian together)
+    /// for D ≤ 4; the default makes D(2D + 1) passes with hyper-dual numbers.
+    fn hessian(&self, q: &[f64], v: &[f64], lqq: &mut [f64], lqv: &mut [f64], lvv: &mut [f64]) {
+        match self.dim() {
+            1 => self.hessian_fixed::<2>(q, v, lqq, lqv, lvv),
+            2 => self.hessian_fixed::<4>(q, v, lqq, lqv, lvv),
+            3 => self.hessian_fixed::<6>(q, v, lqq, lqv, lvv),
+            4 => self.hessian_fixed::<8>(q, v, lqq, lqv, lvv),
+            _ => vectorised::hessian_by_passes(self, q, v, lqq, lqv, lvv),
+        }
     }
 
     fn mass_matrix(&self) -> Option<DMatrix<f64>> {
