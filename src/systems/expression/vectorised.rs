@@ -6,7 +6,7 @@
 use super::ExpressionLagrangian;
 use crate::ad;
 use nalgebra::{Const, U1};
-use num_dual::{Dual2SVec64, DualNum, DualSVec64};
+use num_dual::{Dual2SVec64, DualSVec64};
 
 impl ExpressionLagrangian {
     pub(super) fn gradient_fixed<const N: usize>(
