@@ -15,9 +15,10 @@
 use super::error::{ExpressionError, Position};
 use std::fmt;
 
-/// The deepest nesting accepted: deeper trees are a syntax error, so that no recursion over
-/// a tree (compiling, printing, dropping) can exhaust the stack.
-pub const MAX_DEPTH: usize = 200;
+/// The deepest tree accepted (a sum of k terms is k levels deep): deeper trees are a syntax
+/// error, so that no recursion over a tree (compiling, printing, dropping) can exhaust even a
+/// 2 MiB thread stack.
+pub const MAX_DEPTH: usize = 1000;
 
 /// A built-in function.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -607,5 +608,29 @@ mod tests {
         assert!(parse(&deep).is_err());
         let long = vec!["x"; 10_000].join("+");
         assert!(parse(&long).is_err());
+    }
+
+    #[test]
+    fn the_deepest_accepted_tree_is_handled_on_a_small_stack() {
+        // 999 terms: depth 998, just inside MAX_DEPTH; compiled, evaluated, printed and
+        // dropped on a 2 MiB thread (the test harness's default).
+        let text = (0..999)
+            .map(|i| format!("x_dot^2*{i}"))
+            .collect::<Vec<_>>()
+            .join(" + ");
+        let handle = std::thread::Builder::new()
+            .stack_size(2 << 20)
+            .spawn(move || {
+                let l = crate::systems::ExpressionLagrangian::parse(&text, &["x"], &[]).unwrap();
+                let printed = l.expression().to_string();
+                let again = parse(&printed).unwrap();
+                let mut lvv = [0.0];
+                crate::Lagrangian::hessian(&l, &[0.1], &[0.2], &mut [0.0], &mut [0.0], &mut lvv);
+                (again == *l.expression(), lvv[0])
+            })
+            .unwrap();
+        let (same, lvv) = handle.join().unwrap();
+        assert!(same);
+        assert_eq!(lvv, 2.0 * (0..999).sum::<i32>() as f64);
     }
 }
