@@ -71,3 +71,72 @@ fn positions_count_characters_and_keep_tabs() {
     let end = Position::locate("x +", 99);
     assert_eq!((end.line, end.column), (1, 4));
 }
+
+/// The parser (kept here so that parse.rs stays a readable size).
+mod parse_tests {
+    use super::*;
+
+    fn round_trip(s: &str) -> String {
+        parse(s).unwrap().to_string()
+    }
+
+    #[test]
+    fn precedence_and_associativity() {
+        assert_eq!(round_trip("a - b - c"), "a-b-c");
+        assert_eq!(round_trip("a - (b - c)"), "a-(b-c)");
+        assert_eq!(round_trip("a ^ b ^ c"), "a^b^c");
+        assert_eq!(round_trip("(a ^ b) ^ c"), "(a^b)^c");
+        assert_eq!(round_trip("-a^2"), "-a^2");
+        assert_eq!(round_trip("(-a)^2"), "(-a)^2");
+        assert_eq!(round_trip("2^-1"), "2^(-1)");
+        assert_eq!(round_trip("a*-b"), "a*-b");
+        assert_eq!(round_trip("--a"), "-(-a)");
+        assert_eq!(round_trip("a/(b*c)"), "a/(b*c)");
+        assert_eq!(round_trip("1.5e-3*atan2(y, x)"), "0.0015*atan2(y, x)");
+        assert!(parse("-a^2").unwrap() == parse("-(a^2)").unwrap());
+    }
+
+    #[test]
+    fn syntax_errors_point_at_the_spot() {
+        let e = parse("x +\n  (y * )").unwrap_err();
+        match &e {
+            ExpressionError::Syntax { at, .. } => assert_eq!((at.line, at.column), (2, 8)),
+            other => panic!("{other:?}"),
+        }
+        let text = e.to_string();
+        assert!(text.ends_with("\n  (y * )\n       ^"), "{text}");
+        for bad in [
+            "", "x +", "(x", "x)", "sin(x", "sin x", "1e", "x $ y", "pow(x)", "x y", "1..2",
+        ] {
+            assert!(parse(bad).is_err(), "{bad}");
+        }
+        let deep = "(".repeat(10_000) + "x" + &")".repeat(10_000);
+        assert!(parse(&deep).is_err());
+        let long = vec!["x"; 10_000].join("+");
+        assert!(parse(&long).is_err());
+    }
+
+    #[test]
+    fn the_deepest_accepted_tree_is_handled_on_a_small_stack() {
+        // 999 terms: depth 998, just inside MAX_DEPTH; compiled, evaluated, printed and
+        // dropped on a 2 MiB thread (the test harness's default).
+        let text = (0..999)
+            .map(|i| format!("x_dot^2*{i}"))
+            .collect::<Vec<_>>()
+            .join(" + ");
+        let handle = std::thread::Builder::new()
+            .stack_size(2 << 20)
+            .spawn(move || {
+                let l = crate::systems::ExpressionLagrangian::parse(&text, &["x"], &[]).unwrap();
+                let printed = l.expression().to_string();
+                let again = parse(&printed).unwrap();
+                let mut lvv = [0.0];
+                crate::Lagrangian::hessian(&l, &[0.1], &[0.2], &mut [0.0], &mut [0.0], &mut lvv);
+                (again == *l.expression(), lvv[0])
+            })
+            .unwrap();
+        let (same, lvv) = handle.join().unwrap();
+        assert!(same);
+        assert_eq!(lvv, 2.0 * (0..999).sum::<i32>() as f64);
+    }
+}
