@@ -261,6 +261,11 @@ pub enum GviError {
         /// The documented limit.
         limit: f64,
     },
+    /// An expression Lagrangian (`type = "lagrangian"`) was rejected: a syntax error, an
+    /// unknown symbol, a degenerate or non-regular Lagrangian (see
+    /// [`ExpressionError`](crate::systems::expression::ExpressionError)).
+    #[error("expression Lagrangian: {0}")]
+    Expression(#[from] crate::systems::expression::ExpressionError),
     /// Serialisation failed.
     #[error("serialisation error: {0}")]
     Serialize(String),

@@ -183,6 +183,7 @@ pub fn visit_system<V: SystemVisitor>(spec: &SystemSpec, visitor: V) -> Result<V
         SystemSpec::RigidBody { .. } | SystemSpec::HeavyTop { .. } => Err(GviError::Unsupported(
             "rigid bodies live on SO(3): only `gvi run` supports them (crate::lie)".into(),
         )),
+        SystemSpec::Lagrangian(spec) => visitor.visit(&spec.build()?),
         SystemSpec::NBody { .. } => match spec.nbody()? {
             Some((system, _)) => visitor.visit(&system),
             None => Err(GviError::Scene {

@@ -1,9 +1,10 @@
 //! Scenes: small TOML files naming a system, its parameters, an initial state and a method.
 //!
 //! Built-in scenes (`harmonic`, `kepler`, `pendulum`, the rigid bodies `rigid-body` and
-//! `heavy-top`, `pendulum-3d` (run by [`crate::lie`]), and the N-body scenes `solar-system`,
+//! `heavy-top`, `pendulum-3d` (run by [`crate::lie`]), the N-body scenes `solar-system`,
 //! `outer-solar-system`, `two-body`, `figure-eight`, `lagrange-triangle` and the synthetic
-//! `planetesimal-ring`) are
+//! `planetesimal-ring`, and the expression-Lagrangian scenes `henon-heiles`,
+//! `double-pendulum` and `magnetic`) are
 //! compiled into the crate from the `scenes/` directory; any other argument is read as a path to a user's TOML file. Unknown
 //! keys are rejected so that a typo is an error, not a silently ignored setting.
 //!
@@ -32,7 +33,7 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 /// The built-in scenes: (name, TOML text).
-pub const BUILTIN_SCENES: [(&str, &str); 12] = [
+pub const BUILTIN_SCENES: [(&str, &str); 15] = [
     ("harmonic", include_str!("../scenes/harmonic.toml")),
     ("kepler", include_str!("../scenes/kepler.toml")),
     ("pendulum", include_str!("../scenes/pendulum.toml")),
@@ -54,6 +55,12 @@ pub const BUILTIN_SCENES: [(&str, &str); 12] = [
     ("rigid-body", include_str!("../scenes/rigid-body.toml")),
     ("heavy-top", include_str!("../scenes/heavy-top.toml")),
     ("pendulum-3d", include_str!("../scenes/pendulum-3d.toml")),
+    ("henon-heiles", include_str!("../scenes/henon-heiles.toml")),
+    (
+        "double-pendulum",
+        include_str!("../scenes/double-pendulum.toml"),
+    ),
+    ("magnetic", include_str!("../scenes/magnetic.toml")),
 ];
 
 /// A complete experiment: system, initial state and method.
@@ -136,6 +143,9 @@ pub enum SystemSpec {
         /// The bodies, in the order of the configuration vector (body-major flattening).
         bodies: Vec<Body>,
     },
+    /// [`ExpressionLagrangian`](crate::systems::ExpressionLagrangian): L(q, q̇) written as
+    /// an expression (see [`LagrangianSpec`](crate::systems::expression::LagrangianSpec)).
+    Lagrangian(crate::systems::expression::LagrangianSpec),
     /// [`Pendulum`](crate::systems::Pendulum).
     Pendulum {
         /// Length l.
@@ -340,7 +350,19 @@ impl Scene {
             }
             Err(e) => return Err(e),
         }
+        scene.validate()?;
         Ok(scene)
+    }
+
+    /// Checks that need the system and the initial state together: for an expression
+    /// Lagrangian, that it compiles, that q and p have one entry per coordinate and that the
+    /// Lagrangian is regular at the initial state. Called when a scene is loaded and again
+    /// after command-line overrides of the state.
+    pub fn validate(&self) -> Result<()> {
+        if let SystemSpec::Lagrangian(spec) = &self.system {
+            spec.check(&self.initial.q, &self.initial.p)?;
+        }
+        Ok(())
     }
 
     /// A built-in scene by name, or a TOML file by path.

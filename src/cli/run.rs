@@ -151,6 +151,9 @@ pub fn apply_overrides(scene: &mut Scene, a: &SceneArgs) -> Result<(), GviError>
     if let Some(p) = &a.p0 {
         scene.initial.p = parse_vector("--p0", p)?;
     }
+    if a.q0.is_some() || a.p0.is_some() {
+        scene.validate()?;
+    }
     Ok(())
 }
 

@@ -215,6 +215,9 @@ pub fn run_stability(args: StabilityArgs) -> Result<(), GviError> {
         "largest stable h (bounded energy over {} steps):",
         config.baseline_steps
     );
+    if study.baselines.is_empty() {
+        eprintln!("  (no classical baselines: the Lagrangian is not of the form ½vᵀMv − V(q))");
+    }
     for b in &study.baselines {
         eprintln!(
             "  {:<15} {:.4} (unstable at {:.4})",

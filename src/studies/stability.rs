@@ -223,6 +223,11 @@ fn study_system<S: System + Sync>(
             c
         })
         .collect();
+    // The classical baselines need L = ½ vᵀ M v − V(q): none for a non-separable Lagrangian.
+    let baselines = match system.mass_matrix() {
+        Some(_) => &baselines[..],
+        None => &[],
+    };
     let limits: Vec<BaselineLimit> = baselines
         .par_iter()
         .map(|&peer| {

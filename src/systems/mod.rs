@@ -6,6 +6,7 @@
 //! (the AD defaults are checked against them in tests) and [`System`], which adds the
 //! invariants reported in output and, where known, the exact solution.
 
+pub mod expression;
 mod harmonic;
 mod kepler;
 pub mod kepler_orbit;
@@ -14,6 +15,7 @@ pub(crate) mod nbody_scene;
 mod pendulum;
 mod ring;
 
+pub use expression::ExpressionLagrangian;
 pub use harmonic::HarmonicOscillator;
 pub use kepler::Kepler;
 pub use nbody::NBody;

@@ -333,6 +333,12 @@ fn study_system<S: System>(
     let mut fixed = vec![Peer::StormerVerlet, Peer::Rk4];
     fixed.extend(config.gauss_stages.iter().map(|&s| Peer::Gauss { s }));
     fixed.extend(CompositionScheme::ALL.map(|scheme| Peer::Composition { scheme }));
+    // The classical peers need L = ½ vᵀ M v − V(q); a non-separable Lagrangian (expression
+    // scenes `magnetic`, `double-pendulum`) is swept with the Galerkin families only.
+    let mechanical = system.mass_matrix().is_some();
+    if !mechanical {
+        fixed.clear();
+    }
     for peer in fixed {
         plan.push(
             config
@@ -343,7 +349,7 @@ fn study_system<S: System>(
                 .collect(),
         );
     }
-    if cfg!(feature = "dop853") {
+    if cfg!(feature = "dop853") && mechanical {
         plan.push(
             config
                 .tolerances
