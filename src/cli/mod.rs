@@ -86,6 +86,18 @@ pub fn main_with(cli: Cli) -> Result<(), GviError> {
     }
 }
 
+/// Refuse the flags a command would ignore because it sweeps or sets those values itself;
+/// `flags` pairs each flag with whether it was given.
+pub fn refuse_ignored(command: &str, flags: &[(&str, bool)], why: &str) -> Result<(), GviError> {
+    match flags.iter().find(|(_, given)| *given) {
+        Some((name, _)) => Err(GviError::InvalidArgument {
+            name: (*name).to_string(),
+            reason: format!("`gvi {command}` does not use {name}: {why}"),
+        }),
+        None => Ok(()),
+    }
+}
+
 /// Parse a comma-separated list of numbers, e.g. `--q0 0.4,0`.
 pub fn parse_vector(name: &str, text: &str) -> Result<Vec<f64>, GviError> {
     text.split(',')

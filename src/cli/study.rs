@@ -34,6 +34,19 @@ pub struct RefineArgs {
 
 pub fn run_refine(args: RefineArgs) -> Result<(), GviError> {
     let dir = args.out.unwrap_or_else(|| PathBuf::from("out/refine"));
+    let r = &args.run;
+    match args.vary {
+        VaryArg::N => super::refuse_ignored(
+            "refine --vary n",
+            &[("--n", r.n.is_some())],
+            "n is swept (--range)",
+        )?,
+        VaryArg::H => super::refuse_ignored(
+            "refine --vary h",
+            &[("--h", r.h.is_some())],
+            "h is swept (--range)",
+        )?,
+    }
     galerkin_vi::output::check_output_dir(&dir)?;
     let scene = load_scene(&args.run)?;
     let values = parse_range(&args.range)?;
@@ -99,6 +112,19 @@ pub fn run_compare_bases(args: CompareBasesArgs) -> Result<(), GviError> {
     let dir = args
         .out
         .unwrap_or_else(|| PathBuf::from("out/compare-bases"));
+    let r = &args.run;
+    super::refuse_ignored(
+        "compare-bases",
+        &[
+            ("--n", r.n.is_some()),
+            ("--basis", r.basis.is_some()),
+            ("--quadrature", r.quadrature.is_some()),
+            ("--quad-points", r.quad_points.is_some()),
+            ("--economical", r.economical),
+        ],
+        "it sweeps every basis and quadrature over n (set n with --range and the quadratures \
+         with --quadratures)",
+    )?;
     galerkin_vi::output::check_output_dir(&dir)?;
     use galerkin_vi::quadrature::QuadratureKind;
     let scene = load_scene(&args.run)?;
