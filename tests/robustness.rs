@@ -691,5 +691,25 @@ fn studies_refuse_the_flags_they_sweep() {
         s(&out),
     ]);
     fails_with(&o, "does not use --h");
+    let o = gvi(&[
+        "work-precision",
+        "kepler",
+        "--quick",
+        "--solver",
+        "exact",
+        "--out",
+        s(&out),
+    ]);
+    fails_with(&o, "does not use --solver");
+    let o = gvi(&[
+        "compare-refinement",
+        "kepler",
+        "--quick",
+        "--n",
+        "8",
+        "--out",
+        s(&out),
+    ]);
+    fails_with(&o, "does not use --n");
     assert!(!out.exists(), "nothing is written for a refused command");
 }

@@ -74,6 +74,20 @@ fn parse_counts(name: &str, text: &str) -> Result<Vec<usize>, GviError> {
 }
 
 pub fn run_work_precision(args: WorkPrecisionArgs) -> Result<(), GviError> {
+    let r = &args.run;
+    super::refuse_ignored(
+        "work-precision",
+        &[
+            ("--n", r.n.is_some()),
+            ("--basis", r.basis.is_some()),
+            ("--quadrature", r.quadrature.is_some()),
+            ("--quad-points", r.quad_points.is_some()),
+            ("--economical", r.economical),
+            ("--solver", r.solver.is_some()),
+        ],
+        "it sweeps the bases and n (--bases, --ns) with the default Gauss–Legendre rule and \
+         the auto stage solver",
+    )?;
     match &args.write_reference {
         Some(path) => galerkin_vi::output::check_output_path(path)?,
         None => galerkin_vi::output::check_output_dir(
@@ -246,6 +260,17 @@ pub fn run_compare_refinement(args: CompareRefinementArgs) -> Result<(), GviErro
     let dir = args
         .out
         .unwrap_or_else(|| PathBuf::from("out/compare-refinement"));
+    let r = &args.run;
+    super::refuse_ignored(
+        "compare-refinement",
+        &[
+            ("--n", r.n.is_some()),
+            ("--basis", r.basis.is_some()),
+            ("--quad-points", r.quad_points.is_some()),
+            ("--economical", r.economical),
+        ],
+        "it sweeps the bases and n with the quadrature's default number of points",
+    )?;
     galerkin_vi::output::check_output_dir(&dir)?;
     let scene = load_scene(&args.run)?;
     let config = if args.quick {
