@@ -12,6 +12,10 @@ use galerkin_vi::scene::Scene;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 
+#[path = "common/distance.rs"]
+mod distance;
+use distance::final_state_distance as distance;
+
 fn fail(eq: &mut dyn StageEquations, reason: &str) -> StepFailure {
     StepFailure {
         residual: eq.residual(),
@@ -162,21 +166,6 @@ impl Lagrangian for Magnetic {
             - (q[0] * q[0] + q[1] * q[1]) * 0.5
             - (q[0] * q[0] + q[1] * q[1]) * (q[0] * q[0] + q[1] * q[1]) * 0.125
     }
-}
-
-fn distance(a: &Trajectory, b: &Trajectory) -> f64 {
-    let k = a.steps();
-    let diff = a.q[k]
-        .iter()
-        .zip(&b.q[k])
-        .chain(a.p[k].iter().zip(&b.p[k]))
-        .map(|(x, y)| (x - y).abs())
-        .fold(0.0, f64::max);
-    let scale = a.q[k]
-        .iter()
-        .chain(&a.p[k])
-        .fold(0.0f64, |m, x| m.max(x.abs()));
-    diff / scale
 }
 
 fn builtin(n: usize, h: f64) -> GalerkinIntegrator {

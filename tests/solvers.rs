@@ -10,35 +10,13 @@ use galerkin_vi::integrator::StageSolver;
 use galerkin_vi::prelude::*;
 use galerkin_vi::scene::Scene;
 use nalgebra::DMatrix;
-use std::alloc::{GlobalAlloc, Layout, System as SystemAlloc};
-use std::cell::Cell;
 
-struct Counting;
-
-thread_local! {
-    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
-}
-
-fn allocations() -> usize {
-    ALLOCATIONS.with(Cell::get)
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
-        unsafe { SystemAlloc.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { SystemAlloc.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
-        unsafe { SystemAlloc.realloc(ptr, layout, new_size) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
+#[path = "common/counting.rs"]
+mod counting;
+use counting::allocations;
+#[path = "common/distance.rs"]
+mod distance;
+use distance::final_state_distance;
 
 /// The structured solvers and `Auto`, each compared with `Exact`.
 const SOLVERS: [StageSolver; 4] = [
@@ -88,22 +66,6 @@ fn with_solver(
         ..*gvi.options()
     };
     gvi.with_options(options)
-}
-
-/// Max-norm distance of the final states, relative to the state's size.
-fn final_state_distance(a: &Trajectory, b: &Trajectory) -> f64 {
-    let k = a.steps();
-    let diff = a.q[k]
-        .iter()
-        .zip(&b.q[k])
-        .chain(a.p[k].iter().zip(&b.p[k]))
-        .map(|(x, y)| (x - y).abs())
-        .fold(0.0, f64::max);
-    let scale = a.q[k]
-        .iter()
-        .chain(&a.p[k])
-        .fold(0.0f64, |m, x| m.max(x.abs()));
-    diff / scale.max(1e-300)
 }
 
 struct Case<'a, L: Lagrangian> {

@@ -188,59 +188,63 @@ impl NBody {
         }
         r2
     }
+
+    /// Every pair i < j with d = qᵢ − qⱼ, a = κ/r³ and b = 3κ/r⁵ (κ = G mᵢ mⱼ): the pair's
+    /// force is a·d and its Hessian block B = a I − b d dᵀ. The gradient, the Hessian, its
+    /// diagonal blocks and its products are sums over these, in this order.
+    #[inline]
+    fn for_each_pair(&self, q: &[f64], mut f: impl FnMut(usize, usize, &[f64; 3], f64, f64)) {
+        let nb = self.masses.len();
+        let mut d = [0.0; 3];
+        for i in 0..nb {
+            for j in i + 1..nb {
+                let r2 = self.separation(q, i, j, &mut d);
+                let a = self.g * self.masses[i] * self.masses[j] / (r2 * r2.sqrt());
+                f(i, j, &d, a, 3.0 * a / r2);
+            }
+        }
+    }
 }
 
 impl NBody {
     /// ∇²V(q)·x pairwise, never forming the Hessian: with B_ij = κ (I/r³ − 3 d dᵀ/r⁵) the
     /// pair block of [`Mechanical::potential_hessian`], (∇²V x)_i = Σ_j B_ij (x_i − x_j).
     fn potential_hessian_product(&self, q: &[f64], x: &[f64], out: &mut [f64]) {
-        let (k, nb) = (self.dim, self.masses.len());
+        let k = self.dim;
         out.iter_mut().for_each(|y| *y = 0.0);
-        let mut d = [0.0; 3];
-        for i in 0..nb {
-            for j in i + 1..nb {
-                let r2 = self.separation(q, i, j, &mut d);
-                let a = self.g * self.masses[i] * self.masses[j] / (r2 * r2.sqrt());
-                let b = 3.0 * a / r2;
-                let mut dx = [0.0; 3];
-                let mut dot = 0.0;
-                for c in 0..k {
-                    dx[c] = x[i * k + c] - x[j * k + c];
-                    dot += d[c] * dx[c];
-                }
-                for c in 0..k {
-                    let y = a * dx[c] - b * dot * d[c];
-                    out[i * k + c] += y;
-                    out[j * k + c] -= y;
-                }
+        self.for_each_pair(q, |i, j, d, a, b| {
+            let mut dx = [0.0; 3];
+            let mut dot = 0.0;
+            for c in 0..k {
+                dx[c] = x[i * k + c] - x[j * k + c];
+                dot += d[c] * dx[c];
             }
-        }
+            for c in 0..k {
+                let y = a * dx[c] - b * dot * d[c];
+                out[i * k + c] += y;
+                out[j * k + c] -= y;
+            }
+        });
     }
 
     /// The diagonal k×k blocks of ∇²V(q), body after body (the same sums, in the same order,
     /// as the diagonal of [`Mechanical::potential_hessian`]).
     fn potential_hessian_diagonal_blocks(&self, q: &[f64], out: &mut [f64]) {
-        let (k, nb) = (self.dim, self.masses.len());
+        let k = self.dim;
         let kk = k * k;
         out.iter_mut().for_each(|y| *y = 0.0);
-        let mut d = [0.0; 3];
-        for i in 0..nb {
-            for j in i + 1..nb {
-                let r2 = self.separation(q, i, j, &mut d);
-                let a = self.g * self.masses[i] * self.masses[j] / (r2 * r2.sqrt());
-                let b = 3.0 * a / r2;
-                for r in 0..k {
-                    for s in 0..k {
-                        let mut blk = -b * d[r] * d[s];
-                        if r == s {
-                            blk += a;
-                        }
-                        out[i * kk + r * k + s] += blk;
-                        out[j * kk + r * k + s] += blk;
+        self.for_each_pair(q, |i, j, d, a, b| {
+            for r in 0..k {
+                for s in 0..k {
+                    let mut blk = -b * d[r] * d[s];
+                    if r == s {
+                        blk += a;
                     }
+                    out[i * kk + r * k + s] += blk;
+                    out[j * kk + r * k + s] += blk;
                 }
             }
-        }
+        });
     }
 }
 
@@ -357,29 +361,23 @@ impl Mechanical for NBody {
     fn potential_hessian(&self, q: &[f64], out: &mut [f64]) {
         // Pair (i, j) with d = qᵢ − qⱼ, r = |d|, κ = G mᵢ mⱼ:
         // B = κ (I/r³ − 3 d dᵀ/r⁵) adds to blocks (i,i), (j,j) and subtracts from (i,j), (j,i).
-        let (k, nb) = (self.dim, self.masses.len());
-        let n = nb * k;
+        let k = self.dim;
+        let n = self.masses.len() * k;
         out.iter_mut().for_each(|x| *x = 0.0);
-        let mut d = [0.0; 3];
-        for i in 0..nb {
-            for j in i + 1..nb {
-                let r2 = self.separation(q, i, j, &mut d);
-                let a = self.g * self.masses[i] * self.masses[j] / (r2 * r2.sqrt());
-                let b = 3.0 * a / r2;
-                for r in 0..k {
-                    for s in 0..k {
-                        let mut blk = -b * d[r] * d[s];
-                        if r == s {
-                            blk += a;
-                        }
-                        out[(i * k + r) * n + i * k + s] += blk;
-                        out[(j * k + r) * n + j * k + s] += blk;
-                        out[(i * k + r) * n + j * k + s] -= blk;
-                        out[(j * k + r) * n + i * k + s] -= blk;
+        self.for_each_pair(q, |i, j, d, a, b| {
+            for r in 0..k {
+                for s in 0..k {
+                    let mut blk = -b * d[r] * d[s];
+                    if r == s {
+                        blk += a;
                     }
+                    out[(i * k + r) * n + i * k + s] += blk;
+                    out[(j * k + r) * n + j * k + s] += blk;
+                    out[(i * k + r) * n + j * k + s] -= blk;
+                    out[(j * k + r) * n + i * k + s] -= blk;
                 }
             }
-        }
+        });
     }
 }
 
