@@ -3,7 +3,7 @@
 //! their Jacobian are in `stage`, the initial guesses in `guess`.
 
 use super::dd::{dd_add, two_sum};
-pub use super::options::{InitialGuess, NewtonOptions, StepStats};
+pub use super::options::{InitialGuess, NewtonOptions, StepFailure, StepStats};
 use super::solver::StageSolver;
 use super::stage::Mode;
 use super::{GalerkinIntegrator, Workspace};
@@ -563,28 +563,6 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 ws.abs.clone()
             },
         })
-    }
-}
-
-/// A step's Newton failure, as returned by [`GalerkinIntegrator::step`] (and turned into
-/// [`GviError::NewtonFailure`] by `integrate`).
-#[derive(Debug, Clone, PartialEq)]
-pub struct StepFailure {
-    /// Max-norm of the stage residual at the last iterate.
-    pub residual: f64,
-    /// Iterations taken.
-    pub iterations: usize,
-    /// Why it stopped.
-    pub reason: String,
-}
-
-impl std::fmt::Display for StepFailure {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "Newton's iteration failed after {} iterations (stage residual {:.3e}): {}",
-            self.iterations, self.residual, self.reason
-        )
     }
 }
 

@@ -134,3 +134,25 @@ pub struct StepStats {
     /// The initial guess that was used.
     pub guess: InitialGuess,
 }
+
+/// A step's Newton failure, as returned by [`GalerkinIntegrator::step`](super::GalerkinIntegrator::step) (and turned into
+/// [`GviError::NewtonFailure`](crate::GviError::NewtonFailure) by `integrate`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepFailure {
+    /// Max-norm of the stage residual at the last iterate.
+    pub residual: f64,
+    /// Iterations taken.
+    pub iterations: usize,
+    /// Why it stopped.
+    pub reason: String,
+}
+
+impl std::fmt::Display for StepFailure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "Newton's iteration failed after {} iterations (stage residual {:.3e}): {}",
+            self.iterations, self.residual, self.reason
+        )
+    }
+}
