@@ -247,10 +247,11 @@ fn custom_solvers_give_the_exact_newton_map() {
     }
 }
 
-/// The matrix-free products (N-body: node force Jacobians) and the dense ones (non-separable)
-/// are the exact Jacobian's: solve_exact undoes them to round-off (measured 8.9e-14 relative
-/// for N-body, 3.7e-14 for the magnetic trap; bound 1e-9). The frozen-Hessian matrix does
-/// not (measured 1.9e-1 on the 10-body step of 12.5 d), so the check can fail.
+/// The matrix-free products are the exact Jacobian's: from node force Jacobians (N-body) and
+/// from node Hessians L_qq, L_qv, L_vv by AD (the non-separable magnetic trap), `solve_exact`
+/// (the dense Jacobian) undoes them to round-off (measured 8.9e-14 and 3.9e-14 relative; bound
+/// 1e-9). The frozen-Hessian matrix does not (measured 1.9e-1 on the 10-body step of 12.5 d),
+/// so the check can fail.
 #[test]
 fn jacobian_products_are_the_exact_jacobians() {
     let scene = Scene::load("solar-system").unwrap();

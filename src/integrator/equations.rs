@@ -146,8 +146,9 @@ pub trait StageEquations {
     /// Jacobian at the current iterate, preconditioned by the frozen matrix. Returns the GMRES
     /// iterations.
     fn solve_krylov(&mut self) -> Result<usize, StepFailure>;
-    /// y = J x with the exact Jacobian at the current iterate, matrix-free for separable
-    /// Lagrangians (node force Jacobians, O(mnD + mD²)); otherwise from the dense Jacobian.
+    /// y = J x with the exact Jacobian at the current iterate, matrix-free: from the node
+    /// force Jacobians for separable Lagrangians (pairwise for large N-body systems), from the
+    /// node Hessians L_qq, L_qv, L_vv (AD) for the others; O(mnD + mD²) either way.
     fn jacobian_product(&mut self, x: &[f64], y: &mut [f64]);
     /// Run a built-in solver from the current iterate.
     fn solve_with(&mut self, solver: StageSolver) -> Result<(), StepFailure>;
@@ -386,6 +387,18 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> StageEquations for StepEquations<'_
                 kv.product(&op, &x[..size], &mut y[..size]);
                 return;
             }
+        }
+        if self.ws.separable.is_none() {
+            // Non-separable: node Hessians by AD, applied without forming J.
+            self.stats.hessian_evaluations += self.gvi.jacobian_product_general(
+                self.lag,
+                self.ws,
+                self.hessians_fresh,
+                &x[..size],
+                &mut y[..size],
+            );
+            self.hessians_fresh = true;
+            return;
         }
         if !self.jacobian_fresh {
             self.stats.hessian_evaluations +=

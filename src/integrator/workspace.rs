@@ -76,6 +76,10 @@ pub struct Workspace {
     /// One (n−1)×(n−1) block of the Newton matrix.
     pub(crate) block: Vec<f64>,
     /// Second derivatives at one node (D×D each).
+    /// Non-separable Lagrangians: L_qq, L_qv, L_vv at every node (m × 3 × D²) and four
+    /// D-vectors of scratch, for matrix-free Jacobian products; empty otherwise.
+    pub(crate) node_hessians: Vec<f64>,
+    pub(crate) jvp_scratch: Vec<f64>,
     pub(crate) hqq: Vec<f64>,
     pub(crate) hqv: Vec<f64>,
     pub(crate) hvv: Vec<f64>,
@@ -262,6 +266,8 @@ impl Workspace {
             }
             _ => Vec::new(),
         };
+        // Non-separable: the matrix-free Jacobian products keep node Hessians.
+        let general = separable.is_none();
         Ok(Workspace {
             matrix_free,
             hall_stale: true,
@@ -297,6 +303,16 @@ impl Workspace {
             hall: vec![0.0; m * d * d],
             gram: vec![0.0; n * m],
             block: vec![0.0; n * n],
+            node_hessians: if general {
+                vec![0.0; 3 * m * d * d]
+            } else {
+                Vec::new()
+            },
+            jvp_scratch: if general {
+                vec![0.0; 4 * d]
+            } else {
+                Vec::new()
+            },
             hqq: vec![0.0; d * d],
             hqv: vec![0.0; d * d],
             hvv: vec![0.0; d * d],
