@@ -427,3 +427,80 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> StageEquations for StepEquations<'_
         )
     }
 }
+
+impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
+    /// y = J x for the initial-value step of a non-separable Lagrangian without forming J:
+    /// with δq_j = Σ_b φ_b(c_j) x_b and δv_j = Σ_b φ'_b(c_j) x_b at each node, row block a is
+    /// Σ_j b_j [φ_a (h L_qq δq_j + L_qv δv_j) + φ'_a (L_vq δq_j + L_vv δv_j / h)] — the
+    /// entries `jacobian_rows` assembles, applied to x — then row block
+    /// 0 is combined as `jacobian` does. O(mnD + mD²) per product; the node
+    /// Hessians (AD) are evaluated when `hessians_fresh` is false. Returns Hessian evaluations.
+    pub(super) fn jacobian_product_general<L: Lagrangian>(
+        &self,
+        lag: &L,
+        ws: &mut Workspace,
+        hessians_fresh: bool,
+        x: &[f64],
+        y: &mut [f64],
+    ) -> usize {
+        let t = self.tables();
+        let (n, m, d, h) = (t.n, t.m, ws.d, self.step_size());
+        let dd = d * d;
+        let k = n - 1;
+        let mut evals = 0;
+        if !hessians_fresh {
+            for j in 0..m {
+                let (q, v) = (&ws.qj[j * d..(j + 1) * d], &ws.vj[j * d..(j + 1) * d]);
+                let node = &mut ws.node_hessians[3 * dd * j..3 * dd * (j + 1)];
+                let (hqq, rest) = node.split_at_mut(dd);
+                let (hqv, hvv) = rest.split_at_mut(dd);
+                lag.hessian(q, v, hqq, hqv, hvv);
+            }
+            evals = m;
+        }
+        y[..k * d].iter_mut().for_each(|v| *v = 0.0);
+        let (dq, rest) = ws.jvp_scratch.split_at_mut(d);
+        let (dv, rest) = rest.split_at_mut(d);
+        let (fq, fv) = rest.split_at_mut(d);
+        for j in 0..m {
+            let w = t.weights[j];
+            let (phi, dphi) = (&t.phi[j * n..(j + 1) * n], &t.dphi[j * n..(j + 1) * n]);
+            dq.iter_mut().for_each(|v| *v = 0.0);
+            dv.iter_mut().for_each(|v| *v = 0.0);
+            for b in 1..n {
+                let xb = &x[(b - 1) * d..b * d];
+                for s in 0..d {
+                    dq[s] += phi[b] * xb[s];
+                    dv[s] += dphi[b] * xb[s];
+                }
+            }
+            let node = &ws.node_hessians[3 * dd * j..3 * dd * (j + 1)];
+            let (hqq, hqv, hvv) = (&node[..dd], &node[dd..2 * dd], &node[2 * dd..]);
+            for r in 0..d {
+                let (mut a, mut c) = (0.0, 0.0);
+                for s in 0..d {
+                    a += h * hqq[r * d + s] * dq[s] + hqv[r * d + s] * dv[s];
+                    c += hqv[s * d + r] * dq[s] + hvv[r * d + s] * dv[s] / h;
+                }
+                fq[r] = a;
+                fv[r] = c;
+            }
+            for a in 0..k {
+                let (pa, da) = (w * phi[a], w * dphi[a]);
+                for r in 0..d {
+                    y[a * d + r] += pa * fq[r] + da * fv[r];
+                }
+            }
+        }
+        let (first, rest) = y[..k * d].split_at_mut(d);
+        for a in 1..k {
+            let u = t.unit[a];
+            if u != 0.0 {
+                for (f, b) in first.iter_mut().zip(&rest[(a - 1) * d..a * d]) {
+                    *f += u * b;
+                }
+            }
+        }
+        evals
+    }
+}
