@@ -206,6 +206,13 @@ impl NBody {
     }
 }
 
+/// Entry (r, s) of a pair's Hessian block B = a I − b d dᵀ (a = κ/r³, b = 3κ/r⁵).
+#[inline]
+fn pair_block_entry(d: &[f64; 3], a: f64, b: f64, r: usize, s: usize) -> f64 {
+    let blk = -b * d[r] * d[s];
+    if r == s { blk + a } else { blk }
+}
+
 impl NBody {
     /// ∇²V(q)·x pairwise, never forming the Hessian: with B_ij = κ (I/r³ − 3 d dᵀ/r⁵) the
     /// pair block of [`Mechanical::potential_hessian`], (∇²V x)_i = Σ_j B_ij (x_i − x_j).
@@ -236,10 +243,7 @@ impl NBody {
         self.for_each_pair(q, |i, j, d, a, b| {
             for r in 0..k {
                 for s in 0..k {
-                    let mut blk = -b * d[r] * d[s];
-                    if r == s {
-                        blk += a;
-                    }
+                    let blk = pair_block_entry(d, a, b, r, s);
                     out[i * kk + r * k + s] += blk;
                     out[j * kk + r * k + s] += blk;
                 }
@@ -367,10 +371,7 @@ impl Mechanical for NBody {
         self.for_each_pair(q, |i, j, d, a, b| {
             for r in 0..k {
                 for s in 0..k {
-                    let mut blk = -b * d[r] * d[s];
-                    if r == s {
-                        blk += a;
-                    }
+                    let blk = pair_block_entry(d, a, b, r, s);
                     out[(i * k + r) * n + i * k + s] += blk;
                     out[(j * k + r) * n + j * k + s] += blk;
                     out[(i * k + r) * n + j * k + s] -= blk;
