@@ -289,7 +289,7 @@ pub fn fmt_number(x: f64) -> String {
 pub type Result<T, E = GviError> = std::result::Result<T, E>;
 
 /// Check that every value is finite, naming the input in the error.
-pub(crate) fn ensure_finite(what: &str, values: &[f64]) -> Result<()> {
+pub fn ensure_finite(what: &str, values: &[f64]) -> Result<()> {
     match values.iter().find(|v| !v.is_finite()) {
         Some(&value) => Err(GviError::NonFinite {
             what: what.to_string(),
@@ -300,7 +300,7 @@ pub(crate) fn ensure_finite(what: &str, values: &[f64]) -> Result<()> {
 }
 
 /// Check that a slice has the expected length.
-pub(crate) fn ensure_len(what: &str, expected: usize, got: usize) -> Result<()> {
+pub fn ensure_len(what: &str, expected: usize, got: usize) -> Result<()> {
     if expected == got {
         Ok(())
     } else {

@@ -71,8 +71,8 @@
 //!   only 6.2e-10, n = 58 8.6e-12); Kepler e = 0.9 (h = 0.25): achieved/tol ≤ 1.8, saving
 //!   3.68–4.61× (at 1e-12 no fixed n ≤ 64 meets tol); the oscillator at h = 20 (Chebyshev):
 //!   0.85–1.08×; the outer solar system: 0.68–0.76× at 1e-6…1e-10. The oracle bound of
-//!   [`crate::studies::allocation`] shows why the last two cannot be won by choosing n: an
-//!   exact per-step choice, knowing every one-step error and paying nothing to learn it,
+//!   the lab's allocation study (`gvi tolerance-study`, docs/guide/tolerance-driven-n.md)
+//!   shows why the last two cannot be won by choosing n: an exact per-step choice, knowing every one-step error and paying nothing to learn it,
 //!   saves 1.00–1.03× on the oscillator and 1.01–1.06× on the outer solar system (their need
 //!   hardly varies), against 1.2–1.6× on e = 0.6 and 5.5–6.4× on e = 0.9.
 //!   Switches (Kepler e = 0.6, h = 0.25, tol = 1e-8): without warm starts the run costs

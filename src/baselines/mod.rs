@@ -4,22 +4,18 @@
 //! symplectic), s-stage Gauss–Legendre collocation (order 2s, symplectic, simplified Newton;
 //! with compensated summation it is the high-accuracy reference of the N-body report),
 //! Yoshida-6 and Kahan–Li-8
-//! compositions of Störmer–Verlet, DOP853 (external, cargo feature `dop853`), plus an adapter
+//! compositions of Störmer–Verlet, plus an adapter
 //! that puts the Galerkin integrator behind the same interface.
 //!
 //! The classical methods integrate the canonical equations of a mechanical Lagrangian
 //! L = ½ q̇ᵀMq̇ − V(q): q̇ = M⁻¹p, ṗ = −∇V(q) ([`Lagrangian::force`]).
 
 mod composition;
-#[cfg(feature = "dop853")]
-mod dop853;
 mod gauss_collocation;
 mod rk4;
 mod verlet;
 
 pub use composition::{Composition, CompositionScheme};
-#[cfg(feature = "dop853")]
-pub use dop853::Dop853Baseline;
 pub use gauss_collocation::{GaussCollocationBaseline, MAX_GAUSS_STAGES};
 pub use rk4::Rk4;
 pub use verlet::StormerVerlet;
@@ -93,22 +89,31 @@ pub fn integrate_one_step<M: OneStepMethod + ?Sized>(
 /// M⁻¹ in the form that makes v = M⁻¹p cheapest: the identity (Kepler, oscillator, pendulum
 /// with unit mass), a diagonal (N bodies), or a dense row-major matrix.
 #[derive(Debug, Clone)]
-pub(crate) enum InverseMass {
+pub enum InverseMass {
+    /// M = I.
     Identity,
+    /// The diagonal of M⁻¹.
     Diagonal(Vec<f64>),
+    /// M⁻¹, row-major D×D.
     Dense(Vec<f64>),
 }
 
-/// The pieces of a mechanical Lagrangian the classical methods need: D and M⁻¹.
+/// The pieces of a mechanical Lagrangian the classical methods need: D and M⁻¹. Public so
+/// that peers outside the crate (the lab's DOP853 adapter) integrate the same canonical
+/// equations with the same arithmetic.
 #[derive(Debug, Clone)]
-pub(crate) struct CanonicalParts {
+pub struct CanonicalParts {
+    /// Dimension D of the configuration space.
     pub d: usize,
+    /// M⁻¹ as a matrix.
     pub inverse_mass: DMatrix<f64>,
     /// The same M⁻¹, stored for a cheap matrix–vector product.
     pub inverse: InverseMass,
 }
 
 impl CanonicalParts {
+    /// D and M⁻¹ of a mechanical Lagrangian; typed errors for h ≤ 0, a non-mechanical
+    /// Lagrangian, a mass matrix of the wrong size or a singular one.
     pub fn new<L: Lagrangian>(lag: &L, h: f64) -> Result<Self> {
         if !(h.is_finite() && h > 0.0) {
             return Err(GviError::InvalidStepSize { h });
@@ -188,6 +193,7 @@ impl CanonicalParts {
         }
     }
 
+    /// Typed errors unless q, p and the outputs q_next, p_next all have length D.
     pub fn check(&self, q: &[f64], p: &[f64], qn: &[f64], pn: &[f64]) -> Result<()> {
         ensure_len("q", self.d, q.len())?;
         ensure_len("p", self.d, p.len())?;
@@ -199,10 +205,7 @@ impl CanonicalParts {
 
 /// The force f(q) = −∇V(q) of a fixed-size position.
 #[inline(always)]
-pub(crate) fn force_static<L: Lagrangian, const D: usize>(
-    lagrangian: &L,
-    q: &[f64; D],
-) -> [f64; D] {
+pub fn force_static<L: Lagrangian, const D: usize>(lagrangian: &L, q: &[f64; D]) -> [f64; D] {
     let mut f = [0.0; D];
     lagrangian.force(q, &mut f);
     f
@@ -213,7 +216,7 @@ pub(crate) fn force_static<L: Lagrangian, const D: usize>(
 /// (the study's loop runs it for the dimensions of the built-in scenes). The caller owns the
 /// first-same-as-last force: `fsal` holds f(q) when known and receives f at the new q from the
 /// methods that end with it.
-pub(crate) trait StaticKernel: OneStepMethod {
+pub trait StaticKernel: OneStepMethod {
     /// Dimension D the method was built for.
     fn dim(&self) -> usize;
     /// One step from (q, p) at time t, in place.

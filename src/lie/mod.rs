@@ -36,8 +36,7 @@
 //! [`so3`] (hat map, exp/Cayley and their trivialised derivatives), [`body`] (rigid bodies:
 //! free body, heavy top), [`integrator`] (the method), [`elliptic`] (Jacobi elliptic
 //! functions and the exact free body), [`geometry`] (symplecticity defect in canonical
-//! coordinates of T*SO(3)), [`baselines`] (RK4, Lie–Poisson splitting, RATTLE),
-//! [`run`] (scenes and the CSV of `gvi run rigid-body`).
+//! coordinates of T*SO(3)), [`baselines`] (RK4, Lie–Poisson splitting, RATTLE).
 
 pub mod baselines;
 pub mod body;
@@ -45,7 +44,7 @@ pub mod elliptic;
 pub mod geometry;
 pub mod integrator;
 mod node;
-pub mod run;
+
 pub mod so3;
 
 pub use body::{FreeRigidBody, HeavyTop, RigidBody};

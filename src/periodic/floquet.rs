@@ -14,7 +14,7 @@
 use crate::error::{GviError, Result};
 use crate::integrator::GalerkinIntegrator;
 use crate::lagrangian::Lagrangian;
-use crate::scene::MethodSpec;
+use crate::method::MethodSpec;
 use nalgebra::{DMatrix, Schur};
 
 /// Monodromy matrix and Floquet multipliers of a periodic orbit.

@@ -11,16 +11,13 @@ mod harmonic;
 mod kepler;
 pub mod kepler_orbit;
 mod nbody;
-pub(crate) mod nbody_scene;
 mod pendulum;
-mod ring;
 
 pub use expression::ExpressionLagrangian;
 pub use harmonic::HarmonicOscillator;
 pub use kepler::Kepler;
 pub use nbody::NBody;
 pub use pendulum::Pendulum;
-pub use ring::{RingConfig, planetesimal_ring};
 
 use crate::error::Result;
 use crate::lagrangian::Lagrangian;

@@ -1,0 +1,455 @@
+//! Each peer of the work–precision study timed exactly as the study runs it
+//! (`studies::peers::run_peer`) against a bare, careful use of the same method on the same
+//! problem: Kepler e = 0.6 (μ = 1), T = 200 sampled every 2 (100 samples), fixed-step methods
+//! at h = 2/64, DOP853 at rtol = atol = 1e-12 and 1e-14 (the latter is the study's cheapest
+//! DOP853 point below 1e-9 at T = 200).
+//!
+//! The bare versions are hand-written static-size loops of the same schemes (`[f64; 2]`
+//! positions and momenta, the Kepler force written out, samples stored as `[f64; 4]`); the
+//! bare DOP853 is the `differential-equations` crate used directly: `[f64; 4]` state, a
+//! hand-written right-hand side, one method object reused for every interval through
+//! `solve_ode`, and an output handler that stores nothing.
+//!
+//! Before criterion's own measurements it prints a table of wrapper/bare ratios of median
+//! wall times (`cargo bench --bench peers`). It asserts nothing about time; it does check that
+//! wrapper and bare reach the same end state.
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use galerkin_vi::baselines::CompositionScheme;
+use galerkin_vi::systems::Kepler;
+use galerkin_vi_lab::scene::InitialState;
+use galerkin_vi_lab::studies::peers::{Peer, SampledRun, run_peer};
+use std::hint::black_box;
+use std::time::{Duration, Instant};
+
+const INTERVAL: f64 = 2.0;
+const SAMPLES: usize = 100;
+const DIVISOR: usize = 64;
+const H: f64 = INTERVAL / DIVISOR as f64;
+const Q0: [f64; 2] = [0.4, 0.0];
+const P0: [f64; 2] = [0.0, 2.0];
+
+/// The Kepler problem with μ = 1.
+static KEPLER: std::sync::LazyLock<Kepler> =
+    std::sync::LazyLock::new(|| Kepler::new(1.0).expect("μ = 1"));
+
+/// Kepler force −μq/|q|³: the system's analytic gradient (`Kepler::potential_gradient`, which
+/// is r² = q·q, k = μ/(r² √r²), ∇V = k q), on arrays. Written out here instead
+/// (`[-(k q₀), -(k q₁)]` with k = 1/(r²√r²)), LLVM made RK4's four dependent stages 1.4× slower
+/// (306 µs against 227 µs), and with the negation as a separate loop 1.7× (382 µs).
+#[inline(always)]
+fn force(q: [f64; 2]) -> [f64; 2] {
+    use galerkin_vi::Mechanical;
+    let mut g = [0.0; 2];
+    KEPLER.potential_gradient(&q, &mut g);
+    [-g[0], -g[1]]
+}
+
+/// The bare loops' output: the sample states (q, p).
+type Samples = Vec<[f64; 4]>;
+
+/// The sampling loop of the bare versions: `$step` advances `q`, `p` by one step.
+macro_rules! sampled_bare {
+    (|$q:ident, $p:ident| $step:block) => {{
+        let (mut $q, mut $p) = (Q0, P0);
+        let mut out: Samples = Vec::with_capacity(SAMPLES + 1);
+        out.push([$q[0], $q[1], $p[0], $p[1]]);
+        for _ in 0..SAMPLES {
+            for _ in 0..DIVISOR {
+                $step
+            }
+            out.push([$q[0], $q[1], $p[0], $p[1]]);
+        }
+        out
+    }};
+}
+
+fn bare_rk4() -> Samples {
+    #[inline(always)]
+    fn rhs(y: [f64; 4]) -> [f64; 4] {
+        let f = force([y[0], y[1]]);
+        [y[2], y[3], f[0], f[1]]
+    }
+    #[inline(always)]
+    fn axpy(y: &[f64; 4], a: f64, k: &[f64; 4]) -> [f64; 4] {
+        std::array::from_fn(|r| y[r] + a * k[r])
+    }
+    sampled_bare!(|q, p| {
+        let y = [q[0], q[1], p[0], p[1]];
+        let k1 = rhs(y);
+        let k2 = rhs(axpy(&y, 0.5 * H, &k1));
+        let k3 = rhs(axpy(&y, 0.5 * H, &k2));
+        let k4 = rhs(axpy(&y, H, &k3));
+        let y: [f64; 4] =
+            std::array::from_fn(|r| y[r] + H / 6.0 * (k1[r] + 2.0 * k2[r] + 2.0 * k3[r] + k4[r]));
+        (q, p) = ([y[0], y[1]], [y[2], y[3]]);
+    })
+}
+
+/// Kick–drift–kick Störmer–Verlet, the end force of one step reused by the next.
+fn bare_verlet() -> Samples {
+    let mut f = force(Q0);
+    sampled_bare!(|q, p| {
+        let half = [p[0] + 0.5 * H * f[0], p[1] + 0.5 * H * f[1]];
+        q = [q[0] + H * half[0], q[1] + H * half[1]];
+        f = force(q);
+        p = [half[0] + 0.5 * H * f[0], half[1] + 0.5 * H * f[1]];
+    })
+}
+
+/// Kick–drift–kick compositions with the end force of one step reused by the next.
+fn bare_composition<const S: usize>(gamma: [f64; S]) -> Samples {
+    let mut f = force(Q0);
+    sampled_bare!(|q, p| {
+        let mut kick = 0.5 * gamma[0] * H;
+        for k in 0..S {
+            for r in 0..2 {
+                p[r] += kick * f[r];
+            }
+            let drift = gamma[k] * H;
+            for r in 0..2 {
+                q[r] += drift * p[r];
+            }
+            f = force(q);
+            kick = 0.5 * H * (gamma[k] + if k + 1 < S { gamma[k + 1] } else { 0.0 });
+        }
+        for r in 0..2 {
+            p[r] += kick * f[r];
+        }
+    })
+}
+
+fn yoshida6() -> [f64; 7] {
+    let mut g = [0.0; 7];
+    g.copy_from_slice(&CompositionScheme::Yoshida6.coefficients());
+    g
+}
+
+/// Two-stage Gauss collocation for q̈ = f(q) with the wrapper's iteration: fixed point
+/// Z ← h² A² F(Z) from Z = 0 until the change is at round-off, then forces re-evaluated.
+fn bare_gauss2() -> Samples {
+    let h = H;
+    let s3 = 3f64.sqrt();
+    let c = [0.5 - s3 / 6.0, 0.5 + s3 / 6.0];
+    let a = [[0.25, 0.25 - s3 / 6.0], [0.25 + s3 / 6.0, 0.25]];
+    let b = [0.5, 0.5];
+    let mut a2 = [[0.0; 2]; 2];
+    let mut ba = [0.0; 2];
+    for i in 0..2 {
+        for j in 0..2 {
+            a2[i][j] = a[i][0] * a[0][j] + a[i][1] * a[1][j];
+        }
+        ba[i] = b[0] * a[0][i] + b[1] * a[1][i];
+    }
+    sampled_bare!(|q, p| {
+        let v0 = p;
+        let mut z = [[0.0; 2]; 2];
+        let mut f = [[0.0; 2]; 2];
+        let eval = |z: &[[f64; 2]; 2], f: &mut [[f64; 2]; 2]| {
+            for i in 0..2 {
+                f[i] = force([
+                    q[0] + h * c[i] * v0[0] + z[i][0],
+                    q[1] + h * c[i] * v0[1] + z[i][1],
+                ]);
+            }
+        };
+        let scale = q.iter().fold(1e-300f64, |m, x| m.max(x.abs()));
+        let mut previous = f64::INFINITY;
+        for it in 0..30 {
+            eval(&z, &mut f);
+            let mut change = 0.0f64;
+            for i in 0..2 {
+                for r in 0..2 {
+                    let zn = h * h * (a2[i][0] * f[0][r] + a2[i][1] * f[1][r]);
+                    change = change.max((zn - z[i][r]).abs());
+                    z[i][r] = zn;
+                }
+            }
+            if it >= 2 && change > 0.5 * previous {
+                assert!(change <= 1e-14 * scale, "fixed point stalled");
+                eval(&z, &mut f);
+                break;
+            }
+            if change <= 1e-15 * scale {
+                eval(&z, &mut f);
+                break;
+            }
+            previous = change;
+        }
+        for r in 0..2 {
+            let dq = h * v0[r] + h * h * (ba[0] * f[0][r] + ba[1] * f[1][r]);
+            let dp = h * (b[0] * f[0][r] + b[1] * f[1][r]);
+            q[r] += dq;
+            p[r] += dp;
+        }
+    })
+}
+
+#[cfg(feature = "dop853")]
+mod dop {
+    use super::*;
+    use differential_equations::control::ControlFlag;
+    use differential_equations::interpolate::Interpolation;
+    use differential_equations::methods::ExplicitRungeKutta;
+    use differential_equations::ode::{ODE, OrdinaryNumericalMethod, solve_ode};
+    use differential_equations::solout::Solout;
+    use differential_equations::solution::Solution;
+
+    struct KeplerRhs;
+    impl ODE<f64, [f64; 4]> for KeplerRhs {
+        #[inline]
+        fn diff(&self, _t: f64, y: &[f64; 4], dydt: &mut [f64; 4]) {
+            let f = force([y[0], y[1]]);
+            *dydt = [y[2], y[3], f[0], f[1]];
+        }
+    }
+
+    /// Stores nothing; remembers the last two accepted step lengths.
+    #[derive(Default)]
+    struct Steps {
+        last: f64,
+        before_last: f64,
+        accepted: usize,
+    }
+    impl Solout<f64, [f64; 4]> for Steps {
+        fn solout<I>(
+            &mut self,
+            t_curr: f64,
+            t_prev: f64,
+            _y: &[f64; 4],
+            _y_prev: &[f64; 4],
+            _i: &mut I,
+            _s: &mut Solution<f64, [f64; 4]>,
+        ) -> ControlFlag<f64, [f64; 4]>
+        where
+            I: Interpolation<f64, [f64; 4]> + ?Sized,
+        {
+            if t_curr != t_prev {
+                self.before_last = self.last;
+                self.last = t_curr - t_prev;
+                self.accepted += 1;
+            }
+            ControlFlag::Continue
+        }
+    }
+
+    /// DOP853 from the crate, stopped at every sample time; each interval starts with the last
+    /// full step of the one before (as the wrapper does).
+    pub fn bare_dop853(tolerance: f64) -> Samples {
+        let mut method = ExplicitRungeKutta::dop853()
+            .rtol(tolerance)
+            .atol(tolerance)
+            .max_steps(usize::MAX);
+        let mut y = [Q0[0], Q0[1], P0[0], P0[1]];
+        let mut out = Vec::with_capacity(SAMPLES + 1);
+        out.push(y);
+        let mut h0 = 0.0f64;
+        for k in 0..SAMPLES {
+            let t0 = k as f64 * INTERVAL;
+            method.h0 = h0.min(INTERVAL);
+            let mut steps = Steps::default();
+            solve_ode(&mut method, &KeplerRhs, t0, t0 + INTERVAL, &y, &mut steps)
+                .expect("DOP853 on Kepler");
+            y = *OrdinaryNumericalMethod::<f64, [f64; 4]>::y(&method);
+            if steps.accepted >= 2 {
+                h0 = steps.before_last;
+            }
+            out.push(y);
+        }
+        out
+    }
+
+    /// The previous wrapper's form, for the record: a `Vec<f64>` state, the force through the
+    /// generic `Lagrangian::force`, a new method and `IVP::solve` per interval, every step
+    /// stored in the returned `Solution`.
+    pub fn previous_dop853(kepler: &Kepler, tolerance: f64) -> Samples {
+        use differential_equations::prelude::IVP;
+        use galerkin_vi::Lagrangian;
+        struct Canonical<'a>(&'a Kepler);
+        impl ODE<f64, Vec<f64>> for Canonical<'_> {
+            fn diff(&self, _t: f64, y: &Vec<f64>, dydt: &mut Vec<f64>) {
+                let (q, p) = y.split_at(2);
+                let (dq, dp) = dydt.split_at_mut(2);
+                dq.copy_from_slice(p);
+                self.0.force(q, dp);
+            }
+        }
+        let ode = Canonical(kepler);
+        let mut y = vec![Q0[0], Q0[1], P0[0], P0[1]];
+        let mut out = Vec::with_capacity(SAMPLES + 1);
+        out.push([y[0], y[1], y[2], y[3]]);
+        let mut last: Option<f64> = None;
+        for k in 0..SAMPLES {
+            let t0 = k as f64 * INTERVAL;
+            let mut method = ExplicitRungeKutta::dop853()
+                .rtol(tolerance)
+                .atol(tolerance)
+                .max_steps(10_000_000);
+            if let Some(h0) = last {
+                method = method.h0(h0.min(INTERVAL));
+            }
+            let solution = IVP::ode(&ode, t0, t0 + INTERVAL, y.clone())
+                .method(method)
+                .solve()
+                .expect("DOP853 on Kepler");
+            let n = solution.t.len();
+            if n >= 3 {
+                last = Some(solution.t[n - 2] - solution.t[n - 3]);
+            }
+            y = solution.y[n - 1].clone();
+            out.push([y[0], y[1], y[2], y[3]]);
+        }
+        out
+    }
+}
+
+fn wrapper(kepler: &Kepler, initial: &InitialState, peer: Peer) -> SampledRun {
+    let divisor = if peer.fixed_step() { DIVISOR } else { 1 };
+    let run = run_peer(kepler, initial, peer, INTERVAL, divisor, SAMPLES).expect("run_peer");
+    assert!(run.failure.is_none(), "{:?}", run.failure);
+    run
+}
+
+/// A peer: its label, the study's wrapper, and the bare loop.
+struct Case {
+    label: &'static str,
+    peer: Peer,
+    bare: fn() -> Samples,
+}
+
+fn cases() -> Vec<Case> {
+    #[cfg_attr(not(feature = "dop853"), allow(unused_mut))]
+    let mut cases = vec![
+        Case {
+            label: "stormer-verlet",
+            peer: Peer::StormerVerlet,
+            bare: bare_verlet,
+        },
+        Case {
+            label: "rk4",
+            peer: Peer::Rk4,
+            bare: bare_rk4,
+        },
+        Case {
+            label: "gauss-2",
+            peer: Peer::Gauss { s: 2 },
+            bare: bare_gauss2,
+        },
+        Case {
+            label: "yoshida-6",
+            peer: Peer::Composition {
+                scheme: CompositionScheme::Yoshida6,
+            },
+            bare: || bare_composition(yoshida6()),
+        },
+    ];
+    #[cfg(feature = "dop853")]
+    cases.extend([
+        Case {
+            label: "dop853 (1e-12)",
+            peer: Peer::Dop853 { tolerance: 1e-12 },
+            bare: || dop::bare_dop853(1e-12),
+        },
+        Case {
+            label: "dop853 (1e-14)",
+            peer: Peer::Dop853 { tolerance: 1e-14 },
+            bare: || dop::bare_dop853(1e-14),
+        },
+    ]);
+    cases
+}
+
+fn median_time(mut f: impl FnMut(), budget: Duration) -> f64 {
+    f();
+    let mut times = Vec::new();
+    let start = Instant::now();
+    while times.len() < 7 || (start.elapsed() < budget && times.len() < 501) {
+        let t = Instant::now();
+        f();
+        times.push(t.elapsed().as_secs_f64());
+    }
+    times.sort_by(f64::total_cmp);
+    times[times.len() / 2]
+}
+
+fn peers(c: &mut Criterion) {
+    let kepler = Kepler::new(1.0).expect("μ = 1");
+    let initial = InitialState {
+        t0: 0.0,
+        q: Q0.to_vec(),
+        p: P0.to_vec(),
+    };
+    let cases = cases();
+    eprintln!(
+        "\nKepler e = 0.6, T = {}, {SAMPLES} samples; fixed steps h = 2/{DIVISOR}",
+        INTERVAL * SAMPLES as f64
+    );
+    eprintln!(
+        "{:<16} {:>12} {:>12} {:>8} {:>12}",
+        "peer", "wrapper", "bare", "ratio", "|Δ end|"
+    );
+    for case in &cases {
+        let run = wrapper(&kepler, &initial, case.peer);
+        let bare = (case.bare)();
+        let (q, p) = (&run.q[SAMPLES], &run.p[SAMPLES]);
+        let end = bare[SAMPLES];
+        let diff = [q[0] - end[0], q[1] - end[1], p[0] - end[2], p[1] - end[3]]
+            .iter()
+            .fold(0.0f64, |m, x| m.max(x.abs()));
+        assert!(
+            diff < 1e-8,
+            "{}: wrapper and bare differ by {diff:e}",
+            case.label
+        );
+        let budget = Duration::from_millis(1500);
+        let tw = median_time(
+            || {
+                black_box(wrapper(&kepler, &initial, black_box(case.peer)));
+            },
+            budget,
+        );
+        let tb = median_time(
+            || {
+                black_box((case.bare)());
+            },
+            budget,
+        );
+        eprintln!(
+            "{:<16} {:>9.1} µs {:>9.1} µs {:>7.2}× {:>12.1e}",
+            case.label,
+            tw * 1e6,
+            tb * 1e6,
+            tw / tb,
+            diff
+        );
+    }
+    #[cfg(feature = "dop853")]
+    for tolerance in [1e-12, 1e-14] {
+        let t = median_time(
+            || {
+                black_box(dop::previous_dop853(&kepler, black_box(tolerance)));
+            },
+            Duration::from_millis(1500),
+        );
+        eprintln!(
+            "previous DOP853 wrapper form (Vec state, IVP::solve per interval, history kept), tol {tolerance:e}: {:.1} µs",
+            t * 1e6
+        );
+    }
+    let mut group = c.benchmark_group("peers");
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_millis(300))
+        .measurement_time(Duration::from_secs(1));
+    for case in &cases {
+        let label = case.label.replace(" (", "-").replace(")", "");
+        group.bench_function(format!("{label}/wrapper"), |b| {
+            b.iter(|| wrapper(&kepler, &initial, black_box(case.peer)))
+        });
+        group.bench_function(format!("{label}/bare"), |b| b.iter(|| (case.bare)()));
+    }
+    group.finish();
+}
+
+criterion_group!(benches, peers);
+criterion_main!(benches);

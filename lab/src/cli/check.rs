@@ -1,0 +1,24 @@
+//! `gvi check SCENE`: symplecticity, energy and momentum-map diagnostics of a run.
+
+use super::run::{SceneArgs, load_scene};
+use crate::run::{SystemVisitor, visit_system};
+use crate::scene::Scene;
+use galerkin_vi::GviError;
+use galerkin_vi::geometry::{CheckReport, check_report};
+use galerkin_vi::systems::System;
+
+pub fn run_check(args: SceneArgs) -> Result<(), GviError> {
+    let scene = load_scene(&args)?;
+    struct Check<'a>(&'a Scene);
+    impl SystemVisitor for Check<'_> {
+        type Output = CheckReport;
+        fn visit<S: System + Sync>(self, system: &S) -> Result<CheckReport, GviError> {
+            let m = &self.0.method;
+            let gvi = m.integrator()?;
+            check_report(&gvi, system, &self.0.initial.q, &self.0.initial.p, m.steps)
+        }
+    }
+    let report = visit_system(&scene.system, Check(&scene))?;
+    println!("{report}");
+    Ok(())
+}

@@ -1,0 +1,114 @@
+//! The `gvi` command-line tool.
+
+mod check;
+mod nbody;
+mod periodic;
+mod run;
+mod scaling;
+mod study;
+mod study2;
+mod tolerance;
+
+use clap::{Parser, Subcommand};
+use galerkin_vi::GviError;
+
+/// Galerkin and spectral variational integrators (Hall & Leok).
+#[derive(Debug, Parser)]
+#[command(name = "gvi", version, about, long_about = None)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Integrate a scene (built-in name or TOML path) and write its table (CSV or JSON).
+    Run(Box<run::RunArgs>),
+    /// Geometric diagnostics: symplecticity defect of every step's exact Jacobian, energy and
+    /// momentum-map errors at step ends and along the Galerkin curves.
+    Check(Box<run::SceneArgs>),
+    /// n- or h-refinement sweep with the fitted rate (CSV, JSON, SVG in --out).
+    Refine(Box<study::RefineArgs>),
+    /// Every basis × quadrature over a range of n at fixed h: error and kinetic condition
+    /// number against n (CSV, JSON, SVG in --out).
+    CompareBases(Box<study::CompareBasesArgs>),
+    /// Regenerate the paper's experiments (charts and summary.md in --out).
+    Reproduce(study::ReproduceArgs),
+    /// Max position error against CPU time for the Galerkin method and classical peers
+    /// (Verlet, RK4, Gauss, compositions, DOP853), with the Pareto front (CSV, JSON, SVG).
+    WorkPrecision(Box<study2::WorkPrecisionArgs>),
+    /// Stability map over (h, n) of the Galerkin method and the largest stable h of each
+    /// baseline (CSV, JSON, SVG heat map).
+    Stability(Box<study2::StabilityArgs>),
+    /// n-refinement at fixed h against h-refinement at fixed n: error against force
+    /// evaluations and seconds (CSV, JSON, SVG).
+    CompareRefinement(Box<study2::CompareRefinementArgs>),
+    /// N-body accuracy report: per-body position errors, energy and momentum errors and
+    /// Mercury's perihelion drift against a Gauss-collocation reference (CSV, SVG, summary).
+    NbodyReport(Box<nbody::NBodyReportArgs>),
+    /// Tolerance-driven n against the cheapest fixed n meeting each tolerance and against
+    /// the oracle bound (best per-step n with every one-step error known): achieved error
+    /// and force evaluations against tol (CSV, Markdown, SVG in --out).
+    ToleranceStudy(Box<tolerance::ToleranceArgs>),
+    /// Time per step of every stage solver against n (Kepler, outer solar system) and the
+    /// number of bodies (planetesimal ring), with fitted exponents and auto / best ratios
+    /// (CSV, JSON, Markdown, SVG in --out).
+    SolverScaling(Box<scaling::ScalingArgs>),
+    /// Find a periodic orbit (choreography) of a scene's `[periodic]` table by periodic Galerkin
+    /// (Fourier basis, Newton on the action), with its Floquet multipliers and a closing run.
+    Periodic(Box<periodic::PeriodicArgs>),
+    /// List the built-in scenes.
+    Scenes,
+}
+
+/// Parse and run; errors are reported by the caller.
+pub fn main_with(cli: Cli) -> Result<(), GviError> {
+    match cli.command {
+        Command::Run(args) => run::run(*args),
+        Command::Check(args) => check::run_check(*args),
+        Command::Refine(args) => study::run_refine(*args),
+        Command::CompareBases(args) => study::run_compare_bases(*args),
+        Command::Reproduce(args) => study::run_reproduce(args),
+        Command::WorkPrecision(args) => study2::run_work_precision(*args),
+        Command::Stability(args) => study2::run_stability(*args),
+        Command::CompareRefinement(args) => study2::run_compare_refinement(*args),
+        Command::NbodyReport(args) => nbody::run_nbody_report(*args),
+        Command::ToleranceStudy(args) => tolerance::run_tolerance_study(*args),
+        Command::SolverScaling(args) => scaling::run_solver_scaling(*args),
+        Command::Periodic(args) => periodic::run_periodic(*args),
+        Command::Scenes => {
+            for name in crate::scene::Scene::builtin_names() {
+                let scene = crate::scene::Scene::load(name)?;
+                println!("{name:<20} {}", scene.description);
+            }
+            Ok(())
+        }
+    }
+}
+
+/// Refuse the flags a command would ignore because it sweeps or sets those values itself;
+/// `flags` pairs each flag with whether it was given.
+pub fn refuse_ignored(command: &str, flags: &[(&str, bool)], why: &str) -> Result<(), GviError> {
+    match flags.iter().find(|(_, given)| *given) {
+        Some((name, _)) => Err(GviError::InvalidArgument {
+            name: (*name).to_string(),
+            reason: format!("`gvi {command}` does not use {name}: {why}"),
+        }),
+        None => Ok(()),
+    }
+}
+
+/// Parse a comma-separated list of numbers, e.g. `--q0 0.4,0`.
+pub fn parse_vector(name: &str, text: &str) -> Result<Vec<f64>, GviError> {
+    text.split(',')
+        .map(|s| {
+            let s = s.trim();
+            s.parse::<f64>().map_err(|_| GviError::InvalidArgument {
+                name: name.to_string(),
+                reason: format!("'{s}' is not a number (expected a comma-separated list)"),
+            })
+        })
+        .collect()
+}
+
+pub use crate::output::write_output;

@@ -1,0 +1,85 @@
+//! `gvi periodic SCENE`: find a periodic orbit by periodic Galerkin and analyse it.
+
+use super::run::Format;
+use super::{parse_vector, write_output};
+use crate::periodic::{PeriodicRequest, analyse_scene};
+use crate::scene::Scene;
+use clap::Args;
+use galerkin_vi::GviError;
+use std::path::PathBuf;
+
+#[derive(Debug, Args)]
+pub struct PeriodicArgs {
+    /// Built-in scene name or TOML path; the scene needs a `[periodic]` table.
+    pub scene: String,
+    /// Fourier modes K (default: the scene's). A comma-separated list refines in K: the
+    /// largest is the main solve, and the Euler–Lagrange residual against K is fitted.
+    #[arg(long)]
+    pub modes: Option<String>,
+    /// Output format of --output (or stdout).
+    #[arg(long, value_enum, default_value = "json")]
+    pub format: Format,
+    /// Write the report (JSON) or the orbit table (CSV) here instead of stdout.
+    #[arg(long)]
+    pub output: Option<PathBuf>,
+    /// Write an SVG of the orbit (the choreography) here.
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+    /// Write an SVG of the refinement in K here (with a --modes list).
+    #[arg(long)]
+    pub refine_plot: Option<PathBuf>,
+    /// Periods of the closing run with the time-stepping integrator (0: skip).
+    #[arg(long, default_value_t = 100)]
+    pub periods: usize,
+}
+
+pub fn run_periodic(args: PeriodicArgs) -> Result<(), GviError> {
+    let scene = Scene::load(&args.scene)?;
+    let mut request = PeriodicRequest {
+        periods: args.periods,
+        ..PeriodicRequest::default()
+    };
+    if let Some(text) = &args.modes {
+        let values = parse_vector("--modes", text)?;
+        for v in values {
+            if !(v.is_finite() && v >= 1.0 && v.fract() == 0.0 && v <= 4096.0) {
+                return Err(GviError::InvalidArgument {
+                    name: "--modes".into(),
+                    reason: format!("K must be an integer in 1..=4096, got {v}"),
+                });
+            }
+            request.modes.push(v as usize);
+        }
+    }
+    let report = analyse_scene(&scene, &request)?;
+    let text = match args.format {
+        Format::Json => report.to_json()?,
+        Format::Csv => report.to_csv(),
+    };
+    write_output(args.output.as_deref(), &text)?;
+    let summary = report.summary();
+    if args.output.is_some() {
+        print!("{summary}");
+    } else {
+        eprint!("{summary}");
+    }
+    if let Some(path) = &args.plot {
+        report
+            .orbit_chart()
+            .save_svg(path)
+            .map_err(|e| GviError::Plot(e.to_string()))?;
+    }
+    if let Some(path) = &args.refine_plot {
+        if report.refinement.len() < 2 {
+            return Err(GviError::InvalidArgument {
+                name: "--refine-plot".into(),
+                reason: "needs a list of modes, e.g. --modes 10,20,30,40".into(),
+            });
+        }
+        report
+            .refinement_chart()
+            .save_svg(path)
+            .map_err(|e| GviError::Plot(e.to_string()))?;
+    }
+    Ok(())
+}

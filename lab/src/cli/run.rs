@@ -1,0 +1,328 @@
+//! `gvi run SCENE`.
+
+use super::{parse_vector, write_output};
+use crate::output::{AtomicFile, check_output_path, ensure_distinct};
+use crate::run::stream::{bytes_per_step, stream_scene};
+use crate::run::{RunOptions, RunSummary, run_scene};
+use crate::scene::{Scene, SystemSpec};
+use clap::{Args, ValueEnum};
+use galerkin_vi::GviError;
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Format {
+    Csv,
+    Json,
+}
+
+#[derive(Debug, Args)]
+pub struct SceneArgs {
+    /// Built-in scene name (see `gvi scenes`) or path to a TOML scene file.
+    pub scene: String,
+    /// Basis: chebyshev (default), legendre, hermite or fourier.
+    #[arg(long)]
+    pub basis: Option<String>,
+    /// Quadrature: gauss-legendre (default), gauss-lobatto, clenshaw-curtis or
+    /// trapezoid.
+    #[arg(long)]
+    pub quadrature: Option<String>,
+    /// Number of basis functions n.
+    #[arg(long)]
+    pub n: Option<usize>,
+    /// Number of quadrature points (default: the rule's default for n; 2n Gauss points).
+    #[arg(long)]
+    pub quad_points: Option<usize>,
+    /// Use the economical number of quadrature points (⌈3n/2⌉ for Gauss–Legendre: the
+    /// paper's accuracy with 25 % fewer force evaluations) unless --quad-points is given.
+    #[arg(long)]
+    pub economical: bool,
+    /// Step size h.
+    #[arg(long, allow_hyphen_values = true)]
+    pub h: Option<f64>,
+    /// Stage solver: auto (default; exact for --tol runs), exact, kronecker, newton-krylov or
+    /// fixed-point. Every solver gives the same map to round-off; they differ in cost
+    /// (docs/solvers.md).
+    #[arg(long)]
+    pub solver: Option<String>,
+    /// Number of steps.
+    #[arg(long)]
+    pub steps: Option<usize>,
+    /// Rigid-body scenes: the Lie group chart, exp (default) or cayley.
+    #[arg(long)]
+    pub retraction: Option<String>,
+    /// Initial position, comma-separated (e.g. 0.4,0).
+    #[arg(long, allow_hyphen_values = true)]
+    pub q0: Option<String>,
+    /// Initial momentum, comma-separated.
+    #[arg(long, allow_hyphen_values = true)]
+    pub p0: Option<String>,
+}
+
+/// `gvi run`: the scene and method, and what only a run uses (tolerance, outputs).
+#[derive(Debug, Args)]
+pub struct RunArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Tolerance on the max position error: choose n per step (adds the CSV columns `n` and
+    /// `indicator`; with --plot also writes STEM-n.svg).
+    #[arg(long, allow_hyphen_values = true)]
+    pub tol: Option<f64>,
+    /// Error control of a --tol run: embedded (default; every step also solved at the next n,
+    /// CSV column `estimate`), indicator, or calibrated (experimental).
+    #[arg(long, requires = "tol")]
+    pub control: Option<String>,
+    /// Values of n a --tol run may use, comma-separated (default 4,6,…,64).
+    #[arg(long, requires = "tol")]
+    pub ladder: Option<String>,
+    /// With --tol: choose one h for the run (same horizon h·steps) from the tolerance and the
+    /// system's time scale by short pilot runs; the choice is reported.
+    #[arg(long, requires = "tol")]
+    pub auto_h: bool,
+    /// Output format.
+    #[arg(long, value_enum, default_value_t = Format::Csv)]
+    pub format: Format,
+    /// Output file (default: stdout).
+    #[arg(long, short)]
+    pub output: Option<PathBuf>,
+    /// Also write an SVG chart of the run (orbit for 2-D systems, q(t) otherwise; N-body: one
+    /// orbit per body, xy projection, and for the solar system a zoom on the inner planets
+    /// written next to it as `<stem>-inner.svg`).
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+    /// Make the sanity warnings errors (exit status 1): a relative energy or position error
+    /// above 1e-2, an unresolved close encounter. The table is still written.
+    #[arg(long)]
+    pub strict: bool,
+}
+
+/// Load the scene named on the command line and apply the flag overrides.
+pub fn load_scene(a: &SceneArgs) -> Result<Scene, GviError> {
+    let mut scene = Scene::load(&a.scene)?;
+    apply_overrides(&mut scene, a)?;
+    let init = &scene.initial;
+    let named = [
+        ("initial position q0 (--q0, or q in [initial])", &init.q),
+        ("initial momentum p0 (--p0, or p in [initial])", &init.p),
+        ("initial time t0 (t0 in [initial])", &vec![init.t0]),
+    ];
+    for (what, values) in named {
+        if let Some(&value) = values.iter().find(|x| !x.is_finite()) {
+            return Err(GviError::NonFinite {
+                what: what.into(),
+                value,
+            });
+        }
+    }
+    Ok(scene)
+}
+
+/// Apply command-line overrides to a scene.
+pub fn apply_overrides(scene: &mut Scene, a: &SceneArgs) -> Result<(), GviError> {
+    if let Some(b) = &a.basis {
+        scene.method.basis = b.parse()?;
+    }
+    if let Some(q) = &a.quadrature {
+        scene.method.quadrature = q.parse()?;
+    }
+    if let Some(n) = a.n {
+        scene.method.n = n;
+    }
+    if let Some(s) = &a.solver {
+        scene.method.solver = s.parse()?;
+    }
+    if a.quad_points.is_some() {
+        scene.method.quad_points = a.quad_points;
+    }
+    if a.economical && a.quad_points.is_none() {
+        scene.method.quad_points = Some(scene.method.quadrature.economical_points(scene.method.n));
+    }
+    if let Some(h) = a.h {
+        scene.method.h = h;
+    }
+    if let Some(s) = a.steps {
+        scene.method.steps = s;
+    }
+    if let Some(r) = &a.retraction {
+        scene.method.retraction = Some(r.parse()?);
+    }
+    if let Some(q) = &a.q0 {
+        scene.initial.q = parse_vector("--q0", q)?;
+    }
+    if let Some(p) = &a.p0 {
+        scene.initial.p = parse_vector("--p0", p)?;
+    }
+    if a.q0.is_some() || a.p0.is_some() {
+        scene.validate()?;
+    }
+    Ok(())
+}
+
+/// Apply the tolerance flags of `gvi run` to a scene.
+fn apply_tolerance(scene: &mut Scene, a: &RunArgs) -> Result<(), GviError> {
+    if a.tol.is_some() {
+        scene.method.tol = a.tol;
+    }
+    if let Some(c) = &a.control {
+        scene.method.control = Some(c.parse()?);
+    }
+    if a.auto_h {
+        scene.method.auto_h = true;
+    }
+    if let Some(l) = &a.ladder {
+        let values = parse_vector("--ladder", l)?;
+        let mut ladder = Vec::with_capacity(values.len());
+        for v in values {
+            if !(v.is_finite() && v >= 2.0 && v.fract() == 0.0) {
+                return Err(GviError::InvalidArgument {
+                    name: "--ladder".into(),
+                    reason: format!("{v} is not a whole number of basis functions ≥ 2"),
+                });
+            }
+            ladder.push(v as usize);
+        }
+        scene.method.ladder = Some(ladder);
+    }
+    Ok(())
+}
+
+/// In-memory runs whose estimated memory exceeds this are refused up front (streamed runs
+/// hold one row at a time and have no such limit).
+const MEMORY_LIMIT_BYTES: f64 = 4e9;
+
+/// `<stem><suffix>.svg` next to `path`.
+fn sibling(path: &Path, suffix: &str, fallback: &str) -> PathBuf {
+    let stem = path
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or(fallback);
+    path.with_file_name(format!("{stem}{suffix}.svg"))
+}
+
+pub fn run(args: RunArgs) -> Result<(), GviError> {
+    let mut scene = load_scene(&args.scene)?;
+    apply_tolerance(&mut scene, &args)?;
+    // Every output is checked before any work: usable, distinct, and not the scene file.
+    let mut outputs: Vec<(&str, PathBuf)> = Vec::new();
+    if let Some(o) = &args.output {
+        outputs.push(("--output", o.clone()));
+    }
+    if let Some(p) = &args.plot {
+        outputs.push(("--plot", p.clone()));
+        if matches!(scene.system, SystemSpec::NBody { .. }) {
+            outputs.push(("the inner-bodies chart", sibling(p, "-inner", "orbits")));
+        }
+        if scene.method.tol.is_some() {
+            outputs.push(("the n chart", sibling(p, "-n", "run")));
+        }
+    }
+    for (_, path) in &outputs {
+        check_output_path(path)?;
+    }
+    let scene_path = Path::new(&args.scene.scene);
+    let inputs: Vec<(&str, &Path)> = if scene_path.is_file() {
+        vec![("scene file", scene_path)]
+    } else {
+        Vec::new()
+    };
+    let out_refs: Vec<(&str, &Path)> = outputs.iter().map(|(r, p)| (*r, p.as_path())).collect();
+    ensure_distinct(&out_refs, &inputs)?;
+
+    // Rigid bodies run on SO(3) by their own integrator (galerkin_vi::lie), in memory.
+    let on_so3 = matches!(
+        scene.system,
+        SystemSpec::RigidBody { .. } | SystemSpec::HeavyTop { .. }
+    );
+    let streamed =
+        args.plot.is_none() && args.format == Format::Csv && scene.method.tol.is_none() && !on_so3;
+    let samples = RunOptions::default().curve_samples_per_step;
+    let (summary, failure) = if streamed {
+        let outcome = match &args.output {
+            Some(path) => {
+                let mut file = AtomicFile::create(path)?;
+                let outcome = stream_scene(&scene, samples, &mut file)?;
+                // Committed even when the run stopped early: the rows before a failure are kept.
+                file.commit()?;
+                outcome
+            }
+            None => {
+                let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+                stream_scene(&scene, samples, &mut out)?
+            }
+        };
+        (outcome.summary, outcome.failure)
+    } else {
+        refuse_if_too_big(&scene, &args)?;
+        run_in_memory(&scene, &args)?
+    };
+    eprintln!("{summary}");
+    if let Some(e) = failure {
+        return Err(e);
+    }
+    if args.strict && !summary.warnings.is_empty() {
+        return Err(GviError::Untrustworthy(summary.warnings.join("; ")));
+    }
+    Ok(())
+}
+
+/// Refuse an in-memory run (chart, JSON or --tol) whose estimated memory is absurd.
+fn refuse_if_too_big(scene: &Scene, args: &RunArgs) -> Result<(), GviError> {
+    let d = scene.initial.q.len();
+    let n = match scene.method.tol {
+        // A tolerance-driven run may use the largest n of its ladder.
+        Some(_) => scene
+            .method
+            .ladder
+            .as_ref()
+            .and_then(|l| l.iter().max().copied())
+            .unwrap_or(64),
+        None => scene.method.n,
+    };
+    let columns = 2 + 2 * d + 6;
+    let per_step = bytes_per_step(columns, n, d, args.format == Format::Json);
+    let estimate = per_step * scene.method.steps as f64;
+    if estimate > MEMORY_LIMIT_BYTES {
+        return Err(GviError::MemoryTooHigh {
+            steps: scene.method.steps,
+            bytes_per_step: per_step,
+            estimate,
+            limit: MEMORY_LIMIT_BYTES,
+        });
+    }
+    Ok(())
+}
+
+fn run_in_memory(
+    scene: &Scene,
+    args: &RunArgs,
+) -> Result<(RunSummary, Option<GviError>), GviError> {
+    let options = RunOptions {
+        chart: args.plot.is_some(),
+        ..RunOptions::default()
+    };
+    let result = run_scene(scene, options)?;
+    let text = match args.format {
+        Format::Csv => result.to_csv(),
+        Format::Json => result.to_json()?,
+    };
+    write_output(args.output.as_deref(), &text)?;
+    let plot = |chart: &crate::plot::Chart, path: &Path, what: &str| {
+        chart
+            .save_svg(path)
+            .map_err(|e| GviError::Plot(e.to_string()))
+            .map(|_| eprintln!("{what} written to {}", path.display()))
+    };
+    if let (Some(path), Some(chart)) = (&args.plot, &result.chart) {
+        plot(chart, path, "chart")?;
+        if let Some(inner) = &result.inner_chart {
+            plot(
+                inner,
+                &sibling(path, "-inner", "orbits"),
+                "inner-bodies chart",
+            )?;
+        }
+        if let Some(nc) = &result.n_chart {
+            plot(nc, &sibling(path, "-n", "run"), "n-against-time chart")?;
+        }
+    }
+    Ok((result.summary, result.failure))
+}

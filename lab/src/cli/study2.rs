@@ -1,0 +1,304 @@
+//! `gvi work-precision`, `gvi stability` and `gvi compare-refinement`.
+
+use super::run::{SceneArgs, load_scene};
+use crate::studies::compare_refinement::{CompareConfig, compare_refinement};
+use crate::studies::stability::{Class, StabilityConfig, stability};
+use crate::studies::work_precision::{
+    WorkPrecisionConfig, read_external_csv, reference_csv, work_precision,
+};
+use crate::studies::write_file;
+use clap::Args;
+use galerkin_vi::GviError;
+use std::path::PathBuf;
+
+#[derive(Debug, Args)]
+pub struct WorkPrecisionArgs {
+    /// Time span (default: the scene's h · steps). Samples every scene h.
+    #[arg(long)]
+    pub horizon: Option<f64>,
+    /// Timed repetitions per configuration (the median is reported; default 5, 1 with
+    /// --long).
+    #[arg(long)]
+    pub repeats: Option<usize>,
+    /// A reduced sweep (seconds), for smoke tests.
+    #[arg(long)]
+    pub quick: bool,
+    /// The long-run sweep: T = 20,000 (unless --horizon is given), only the accurate end of
+    /// each family (Legendre and Chebyshev n = 16…32 at h = Δ/2, Δ/4; DOP853 at 1e-10…1e-14),
+    /// one repeat (about a minute on Kepler).
+    #[arg(long, conflicts_with = "quick")]
+    pub long: bool,
+    /// Output directory (default ./out/work-precision).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Merge the rows of an external peer's CSV (the study's schema, e.g. written by
+    /// scripts/rebound/work_precision.py) into the table, Pareto front, fastest table and
+    /// chart, marked external. Repeatable. Every file is checked before the sweep runs; a bad
+    /// file is an error naming the file and line, and nothing is written.
+    #[arg(long, value_name = "FILE.csv")]
+    pub external: Vec<PathBuf>,
+    /// Write the reference positions at the study's sample times (k,t,q0,q1,…; the exact
+    /// solution or the study's reference run) to FILE and exit without running the sweep.
+    #[arg(long, value_name = "FILE.csv")]
+    pub write_reference: Option<PathBuf>,
+    /// Galerkin bases to sweep, comma-separated (default: the preset's; e.g.
+    /// chebyshev,legendre).
+    #[arg(long)]
+    pub bases: Option<String>,
+    /// Galerkin numbers of basis functions, comma-separated (default: the preset's).
+    #[arg(long)]
+    pub ns: Option<String>,
+    /// Galerkin steps per sample interval, comma-separated (h = Δ/m; default: the preset's).
+    #[arg(long)]
+    pub divisors: Option<String>,
+    #[command(flatten)]
+    pub run: SceneArgs,
+}
+
+/// A comma-separated list of whole numbers ≥ 1.
+fn parse_counts(name: &str, text: &str) -> Result<Vec<usize>, GviError> {
+    text.split(',')
+        .map(|s| {
+            let s = s.trim();
+            s.parse::<usize>()
+                .ok()
+                .filter(|&v| v >= 1)
+                .ok_or_else(|| GviError::InvalidArgument {
+                    name: name.to_string(),
+                    reason: format!(
+                        "'{s}' is not a whole number ≥ 1 (expected a comma-separated list)"
+                    ),
+                })
+        })
+        .collect()
+}
+
+pub fn run_work_precision(args: WorkPrecisionArgs) -> Result<(), GviError> {
+    let r = &args.run;
+    super::refuse_ignored(
+        "work-precision",
+        &[
+            ("--n", r.n.is_some()),
+            ("--basis", r.basis.is_some()),
+            ("--quadrature", r.quadrature.is_some()),
+            ("--quad-points", r.quad_points.is_some()),
+            ("--economical", r.economical),
+            ("--solver", r.solver.is_some()),
+        ],
+        "it sweeps the bases and n (--bases, --ns) with the default Gauss–Legendre rule and \
+         the auto stage solver",
+    )?;
+    match &args.write_reference {
+        Some(path) => crate::output::check_output_path(path)?,
+        None => crate::output::check_output_dir(
+            args.out
+                .as_deref()
+                .unwrap_or(std::path::Path::new("out/work-precision")),
+        )?,
+    }
+    let scene = load_scene(&args.run)?;
+    let mut config = if args.quick {
+        WorkPrecisionConfig::quick()
+    } else if args.long {
+        WorkPrecisionConfig::long()
+    } else {
+        WorkPrecisionConfig::full()
+    };
+    if args.horizon.is_some() {
+        config.horizon = args.horizon;
+    }
+    config.repeats = args.repeats.unwrap_or(if args.long { 1 } else { 5 }).max(1);
+    if let Some(b) = &args.bases {
+        config.bases = b
+            .split(',')
+            .map(str::parse)
+            .collect::<Result<Vec<_>, _>>()?;
+    }
+    if let Some(n) = &args.ns {
+        config.ns = parse_counts("--ns", n)?;
+    }
+    if let Some(m) = &args.divisors {
+        config.galerkin_divisors = parse_counts("--divisors", m)?;
+    }
+    if let Some(path) = &args.write_reference {
+        let reference = reference_csv(&scene, &config)?;
+        write_file(path, &reference.csv())?;
+        eprintln!(
+            "{}: {} samples of the {} at t = {} … {}\n  wrote {}",
+            reference.scene,
+            reference.t.len(),
+            reference.reference,
+            reference.t.first().copied().unwrap_or(f64::NAN),
+            reference.t.last().copied().unwrap_or(f64::NAN),
+            path.display()
+        );
+        return Ok(());
+    }
+    // Check every external file before the sweep: a bad one writes nothing.
+    let external = args
+        .external
+        .iter()
+        .map(|path| read_external_csv(path).map(|points| (path, points)))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut study = work_precision(&scene, &config)?;
+    for (path, points) in external {
+        study.merge_external(&path.display().to_string(), points);
+    }
+    let dir = args
+        .out
+        .unwrap_or_else(|| PathBuf::from("out/work-precision"));
+    let files = study.write(&dir)?;
+    eprint!("{}", study.summary());
+    for f in files {
+        eprintln!("  wrote {}", f.display());
+    }
+    Ok(())
+}
+
+#[derive(Debug, Args)]
+pub struct StabilityArgs {
+    /// Steps per Galerkin cell.
+    #[arg(long, default_value_t = 100)]
+    pub cell_steps: usize,
+    /// A reduced grid, for smoke tests.
+    #[arg(long)]
+    pub quick: bool,
+    /// Output directory (default ./out/stability).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    #[command(flatten)]
+    pub run: SceneArgs,
+}
+
+pub fn run_stability(args: StabilityArgs) -> Result<(), GviError> {
+    let dir = args.out.unwrap_or_else(|| PathBuf::from("out/stability"));
+    crate::output::check_output_dir(&dir)?;
+    // The map sweeps h and n itself and takes its steps from --cell-steps.
+    for (flag, given) in [
+        ("--h", args.run.h.is_some()),
+        ("--n", args.run.n.is_some()),
+        ("--steps", args.run.steps.is_some()),
+        ("--quad-points", args.run.quad_points.is_some()),
+        ("--economical", args.run.economical),
+    ] {
+        if given {
+            return Err(GviError::InvalidArgument {
+                name: flag.into(),
+                reason: "stability sweeps h and n over its own grid and takes the steps per \
+                         cell from --cell-steps; this flag would be ignored"
+                    .into(),
+            });
+        }
+    }
+    if args.cell_steps == 0 {
+        return Err(GviError::InvalidArgument {
+            name: "--cell-steps".into(),
+            reason: "need at least one step per cell".into(),
+        });
+    }
+    let scene = load_scene(&args.run)?;
+    let mut config = if args.quick {
+        StabilityConfig::quick()
+    } else {
+        StabilityConfig::full()
+    };
+    config.steps = args.cell_steps;
+    let study = stability(&scene, &config)?;
+    if study.cells.iter().all(|c| c.class == Class::SolverFailure) {
+        return Err(GviError::AllRunsFailed {
+            runs: study.cells.len(),
+            first: study
+                .cells
+                .first()
+                .and_then(|c| c.message.clone())
+                .unwrap_or_default(),
+        });
+    }
+    let files = study.write(&dir)?;
+    let counts = study.counts();
+    eprintln!(
+        "{}: {} cells ({} steps each):",
+        study.scene,
+        study.cells.len(),
+        config.steps
+    );
+    for (k, c) in Class::ALL.iter().zip(counts) {
+        eprintln!("  {:<15} {c}", k.as_str());
+    }
+    eprintln!(
+        "largest stable h (bounded energy over {} steps):",
+        config.baseline_steps
+    );
+    if study.baselines.is_empty() {
+        eprintln!("  (no classical baselines: the Lagrangian is not of the form ½vᵀMv − V(q))");
+    }
+    for b in &study.baselines {
+        eprintln!(
+            "  {:<15} {:.4} (unstable at {:.4})",
+            b.method, b.largest_stable_h, b.smallest_unstable_h
+        );
+    }
+    for f in files {
+        eprintln!("  wrote {}", f.display());
+    }
+    Ok(())
+}
+
+#[derive(Debug, Args)]
+pub struct CompareRefinementArgs {
+    /// A reduced sweep, for smoke tests.
+    #[arg(long)]
+    pub quick: bool,
+    /// Output directory (default ./out/compare-refinement).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    #[command(flatten)]
+    pub run: SceneArgs,
+}
+
+pub fn run_compare_refinement(args: CompareRefinementArgs) -> Result<(), GviError> {
+    let dir = args
+        .out
+        .unwrap_or_else(|| PathBuf::from("out/compare-refinement"));
+    let r = &args.run;
+    super::refuse_ignored(
+        "compare-refinement",
+        &[
+            ("--n", r.n.is_some()),
+            ("--basis", r.basis.is_some()),
+            ("--quad-points", r.quad_points.is_some()),
+            ("--economical", r.economical),
+        ],
+        "it sweeps the bases and n with the quadrature's default number of points",
+    )?;
+    crate::output::check_output_dir(&dir)?;
+    let scene = load_scene(&args.run)?;
+    let config = if args.quick {
+        CompareConfig::quick()
+    } else {
+        CompareConfig::full()
+    };
+    let study = compare_refinement(&scene, &config)?;
+    let files = study.write(&dir)?;
+    eprintln!(
+        "{}: T = {}, errors against the {}; cheapest path per target:",
+        study.scene, study.horizon, study.reference
+    );
+    for c in &study.cheapest {
+        let ev = c
+            .by_evaluations
+            .as_ref()
+            .map(|(l, n, h, e)| format!("{l} (n = {n}, h = {h}): {e} evaluations"))
+            .unwrap_or_else(|| "not reached".into());
+        let s = c
+            .by_seconds
+            .as_ref()
+            .map(|(l, n, h, s)| format!("{l} (n = {n}, h = {h}): {s:.3e} s"))
+            .unwrap_or_else(|| "not reached".into());
+        eprintln!("  {:.0e}: {ev}; fastest {s}", c.target);
+    }
+    for f in files {
+        eprintln!("  wrote {}", f.display());
+    }
+    Ok(())
+}

@@ -1,0 +1,125 @@
+//! `gvi tolerance-study SCENE`.
+
+use super::parse_vector;
+use crate::scene::Scene;
+use crate::studies::tolerance::{ToleranceConfig, tolerance_study};
+use clap::Args;
+use galerkin_vi::GviError;
+use galerkin_vi::adaptive::ErrorControl;
+use std::path::PathBuf;
+
+#[derive(Debug, Args)]
+pub struct ToleranceArgs {
+    /// Built-in scene name (see `gvi scenes`) or path to a TOML scene file.
+    pub scene: String,
+    /// Tolerances: `A:B` for every decade from A to B (e.g. 1e-6:1e-12), or a comma list.
+    #[arg(long, default_value = "1e-6:1e-12")]
+    pub tols: String,
+    /// Error controls to compare, comma-separated (indicator, embedded, calibrated).
+    #[arg(long, default_value = "calibrated,embedded")]
+    pub controls: String,
+    /// Ladder of n, comma-separated (default 4,6,…,64); fixed n runs scan its range.
+    #[arg(long)]
+    pub ladder: Option<String>,
+    /// Basis (default: the scene's).
+    #[arg(long)]
+    pub basis: Option<String>,
+    /// Step size (default: the scene's).
+    #[arg(long)]
+    pub h: Option<f64>,
+    /// Number of steps (default: the scene's).
+    #[arg(long)]
+    pub steps: Option<usize>,
+    /// Kepler scenes only: start at periapsis of the orbit with semi-major axis 1 and this
+    /// eccentricity.
+    #[arg(long)]
+    pub eccentricity: Option<f64>,
+    /// Output directory for CSV, Markdown and SVG (default: print the table only).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+}
+
+fn parse_tols(text: &str) -> Result<Vec<f64>, GviError> {
+    let bad = |reason: String| GviError::InvalidArgument {
+        name: "--tols".into(),
+        reason,
+    };
+    let tols = match text.split_once(':') {
+        Some((a, b)) => {
+            let (a, b) = (
+                a.trim().parse::<f64>().map_err(|_| bad(format!("'{a}'")))?,
+                b.trim().parse::<f64>().map_err(|_| bad(format!("'{b}'")))?,
+            );
+            if !(a > 0.0 && b > 0.0 && a.is_finite() && b.is_finite()) {
+                return Err(bad("the range ends must be positive".into()));
+            }
+            let (hi, lo) = (
+                a.max(b).log10().round() as i32,
+                a.min(b).log10().round() as i32,
+            );
+            (lo..=hi).rev().map(|e| 10f64.powi(e)).collect()
+        }
+        None => parse_vector("--tols", text)?,
+    };
+    if tols.is_empty() || tols.iter().any(|t| !(t.is_finite() && *t > 0.0)) {
+        return Err(bad("tolerances must be finite and positive".into()));
+    }
+    Ok(tols)
+}
+
+pub fn run_tolerance_study(args: ToleranceArgs) -> Result<(), GviError> {
+    if let Some(dir) = &args.out {
+        crate::output::check_output_dir(dir)?;
+    }
+    let mut scene = Scene::load(&args.scene)?;
+    if let Some(b) = &args.basis {
+        scene.method.basis = b.parse()?;
+    }
+    if let Some(h) = args.h {
+        scene.method.h = h;
+    }
+    if let Some(s) = args.steps {
+        scene.method.steps = s;
+    }
+    if let Some(e) = args.eccentricity {
+        if !(0.0..1.0).contains(&e) || scene.initial.q.len() != 2 {
+            return Err(GviError::InvalidArgument {
+                name: "--eccentricity".into(),
+                reason: "needs 0 ≤ e < 1 and a planar two-dimensional (Kepler) scene".into(),
+            });
+        }
+        scene.initial.q = vec![1.0 - e, 0.0];
+        scene.initial.p = vec![0.0, ((1.0 + e) / (1.0 - e)).sqrt()];
+        scene.name = format!("{}-e{e}", scene.name);
+    }
+    let mut config = ToleranceConfig {
+        tols: parse_tols(&args.tols)?,
+        ..ToleranceConfig::default()
+    };
+    config.controls = args
+        .controls
+        .split(',')
+        .map(|s| s.trim().parse::<ErrorControl>())
+        .collect::<Result<_, _>>()?;
+    if let Some(l) = &args.ladder {
+        let mut ladder = Vec::new();
+        for v in parse_vector("--ladder", l)? {
+            if !(v.is_finite() && v >= 2.0 && v.fract() == 0.0) {
+                return Err(GviError::InvalidArgument {
+                    name: "--ladder".into(),
+                    reason: format!("{v} is not a whole number of basis functions ≥ 2"),
+                });
+            }
+            ladder.push(v as usize);
+        }
+        config.ladder = ladder;
+    }
+    let study = tolerance_study(&scene, &config)?;
+    println!("{}", study.to_markdown());
+    if let Some(dir) = &args.out {
+        for p in study.write_to(dir)? {
+            eprintln!("written {}", p.display());
+        }
+    }
+    Ok(())
+}

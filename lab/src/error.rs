@@ -1,0 +1,2 @@
+//! Errors of the lab.
+pub use galerkin_vi::error::*;

@@ -1,0 +1,42 @@
+//! # galerkin-vi lab
+//!
+//! The application around the [`galerkin_vi`] library: the `gvi` command-line tool and the
+//! measured studies it regenerates. The library integrates; this crate reads scenes (TOML files
+//! and the built-in ones), runs them, sweeps methods, fits rates, draws charts and writes
+//! reports. It owns the application dependencies (clap, plotters, indicatif, toml, serde_json,
+//! the DOP853 peer), so that a user of the library pulls in none of them.
+//!
+//! - [`scene`]: the scene file format and the built-in scenes.
+//! - [`run`]: one run of a scene (`gvi run`), streamed or in memory, with monitors.
+//! - [`studies`]: refinement, basis comparison, work–precision, stability, tolerance and scaling
+//!   studies, and the paper's experiments.
+//! - [`nbody_report`], [`periodic`], [`lie_run`]: N-body accuracy reports, periodic orbits of
+//!   scenes, rigid-body runs.
+//! - [`fit`], [`plot`], [`output`], [`progress`]: rate fits, SVG charts, atomic file output and
+//!   progress bars.
+//! - [`cli`]: the `gvi` command line.
+//!
+//! The guide (docs/guide/ in the repository) documents every command and study with the command
+//! that regenerates its numbers; docs/DESIGN.md describes the architecture.
+
+#![warn(missing_docs)]
+#![allow(clippy::needless_range_loop)]
+
+pub mod cli;
+#[cfg(feature = "dop853")]
+pub mod dop853;
+pub mod error;
+pub mod fit;
+pub mod lie_run;
+pub mod nbody_report;
+pub mod nbody_scene;
+pub mod output;
+pub mod periodic;
+pub mod plot;
+pub mod progress;
+pub mod ring;
+pub mod run;
+pub mod scene;
+pub mod studies;
+
+pub use error::{GviError, Result, ensure_finite, ensure_len};

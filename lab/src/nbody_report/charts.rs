@@ -1,0 +1,57 @@
+//! Orbit charts of N-body runs: one series per body, xy projection of the Galerkin curves.
+
+use crate::error::Result;
+use crate::plot::{Chart, Series};
+use galerkin_vi::trajectory::Trajectory;
+
+/// Samples per step along the Galerkin curves in orbit charts (dense enough to draw Mercury's
+/// 88-day orbit inside a 100-day step smoothly).
+pub const ORBIT_SAMPLES_PER_STEP: usize = 64;
+
+/// The orbit chart of an N-body trajectory (xy projection, one colour per body: the Galerkin
+/// curves sampled [`ORBIT_SAMPLES_PER_STEP`] times per step as lines, the step ends as
+/// markers of the same colour) and, when at least three bodies' orbits stay within a tenth
+/// of the largest orbit's extent, a zoomed chart of those inner bodies.
+///
+/// `names` gives the bodies in the trajectory's (body-major) order; the body dimension is
+/// `traj.dim / names.len()`.
+pub fn orbit_charts(
+    names: &[String],
+    title: &str,
+    traj: &Trajectory,
+) -> Result<(Chart, Option<Chart>)> {
+    let nb = names.len().max(1);
+    let k = (traj.dim / nb).max(1);
+    let mut curves: Vec<Vec<(f64, f64)>> = vec![Vec::new(); nb];
+    let mut extent = vec![0.0f64; nb];
+    for t in traj.sample_times(ORBIT_SAMPLES_PER_STEP) {
+        let q = traj.position_at(t)?;
+        for b in 0..nb {
+            let (x, y) = (q[b * k], if k > 1 { q[b * k + 1] } else { 0.0 });
+            extent[b] = extent[b].max(x.hypot(y));
+            curves[b].push((x, y));
+        }
+    }
+    let ends: Vec<Vec<(f64, f64)>> = (0..nb)
+        .map(|b| {
+            traj.q
+                .iter()
+                .map(|q| (q[b * k], if k > 1 { q[b * k + 1] } else { 0.0 }))
+                .collect()
+        })
+        .collect();
+    let build = |bodies: &[usize], title: String| {
+        let mut chart = Chart::new(title, "x", "y").equal_aspect().size(900, 900);
+        for &b in bodies {
+            chart.push(Series::line(names[b].clone(), curves[b].clone()).with_color(b));
+            chart.push(Series::markers("", ends[b].clone()).with_color(b));
+        }
+        chart
+    };
+    let all: Vec<usize> = (0..nb).collect();
+    let chart = build(&all, format!("{title} (xy projection; dots: step ends)"));
+    let largest = extent.iter().cloned().fold(0.0, f64::max);
+    let inner: Vec<usize> = (0..nb).filter(|&b| extent[b] < 0.1 * largest).collect();
+    let inner_chart = (inner.len() >= 3).then(|| build(&inner, format!("{title} — inner bodies")));
+    Ok((chart, inner_chart))
+}

@@ -1,0 +1,417 @@
+//! The line / marker [`Chart`] model ([`Series`], [`Style`]) and its SVG
+//! rendering.
+
+use std::path::Path;
+
+use plotters::element::DashedPathElement;
+use plotters::prelude::*;
+
+use super::axis::{Axis, Scale, min_max, padded_range, to_plot, valid_range, widen};
+use super::error::{PlotError, backend_err};
+use super::layout::{FONT, frame, palette, plot_area_size, titled, write_file};
+
+/// How a [`Series`] is drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Style {
+    /// Solid polyline.
+    Line,
+    /// Filled circular markers only.
+    Markers,
+    /// Solid polyline with a marker at every point.
+    LineMarkers,
+    /// Dashed polyline.
+    DashedLine,
+}
+
+/// One data series of a [`Chart`].
+#[derive(Debug, Clone)]
+pub struct Series {
+    /// Legend label; an empty label gives no legend entry.
+    pub label: String,
+    /// Data points `(x, y)`, drawn in order; dropped (invalid) points break the line.
+    pub points: Vec<(f64, f64)>,
+    /// Drawing style.
+    pub style: Style,
+    /// Explicit palette index (modulo the palette size); `None` uses the
+    /// series' position in [`Chart::series`].
+    pub color: Option<usize>,
+}
+
+impl Series {
+    /// Creates a series with the given style and automatic colour.
+    pub fn new(
+        label: impl Into<String>,
+        points: impl IntoIterator<Item = (f64, f64)>,
+        style: Style,
+    ) -> Self {
+        let (label, points) = (label.into(), points.into_iter().collect());
+        Self {
+            label,
+            points,
+            style,
+            color: None,
+        }
+    }
+    /// A solid line series.
+    pub fn line(label: impl Into<String>, points: impl IntoIterator<Item = (f64, f64)>) -> Self {
+        Self::new(label, points, Style::Line)
+    }
+    /// A markers-only series.
+    pub fn markers(label: impl Into<String>, points: impl IntoIterator<Item = (f64, f64)>) -> Self {
+        Self::new(label, points, Style::Markers)
+    }
+    /// A line series with a marker at every point.
+    pub fn line_markers(
+        label: impl Into<String>,
+        points: impl IntoIterator<Item = (f64, f64)>,
+    ) -> Self {
+        Self::new(label, points, Style::LineMarkers)
+    }
+    /// A dashed line series.
+    pub fn dashed(label: impl Into<String>, points: impl IntoIterator<Item = (f64, f64)>) -> Self {
+        Self::new(label, points, Style::DashedLine)
+    }
+    /// Uses palette colour `index` (modulo the palette size) for this series.
+    pub fn with_color(mut self, index: usize) -> Self {
+        self.color = Some(index);
+        self
+    }
+}
+
+/// A 2-D line/marker chart rendered to SVG.
+///
+/// Axis ranges are chosen from the data with a 5 % margin (in log space for
+/// log axes). Each series gets a colour from a fixed 10-colour palette
+/// (cycling) and, if labelled, an entry in the legend box (upper right).
+/// Series left without valid points are skipped, legend entry included.
+///
+/// # Example
+///
+/// ```
+/// use galerkin_vi_lab::plot::{Chart, Series};
+///
+/// // Error of a 4th-order method against the step size.
+/// let steps = (1..=6).map(|k| 0.5f64.powi(k));
+/// let errors: Vec<(f64, f64)> = steps.map(|h| (h, 3.0 * h.powi(4))).collect();
+/// let chart = Chart::new("Convergence", "step size h", "max energy error")
+///     .log_x()
+///     .log_y()
+///     .with_series(Series::line_markers("order 4", errors));
+/// let svg = chart.to_svg_string()?;
+/// assert!(svg.contains("Convergence") && svg.contains("order 4"));
+/// assert!(svg.contains("1e-4")); // log-axis tick label
+/// // chart.save_svg("target/plots/convergence.svg")?;
+/// # Ok::<(), galerkin_vi_lab::plot::PlotError>(())
+/// ```
+#[derive(Debug, Clone)]
+pub struct Chart {
+    /// Title drawn above the plot (omitted if empty).
+    pub title: String,
+    /// x-axis description.
+    pub x_label: String,
+    /// y-axis description.
+    pub y_label: String,
+    /// x-axis scale.
+    pub x_scale: Scale,
+    /// y-axis scale.
+    pub y_scale: Scale,
+    /// Series, drawn in order (later series on top).
+    pub series: Vec<Series>,
+    /// Give both axes the same data units per pixel (orbit plots) by widening
+    /// the shorter range; applied in log space on log axes.
+    pub equal_aspect: bool,
+    /// Image width in pixels (clamped to `320..=16384`).
+    pub width: u32,
+    /// Image height in pixels (clamped to `240..=16384`).
+    pub height: u32,
+}
+
+/// Palette index, series, and its valid points in plot space split into
+/// unbroken runs.
+struct Prepared<'a>(usize, &'a Series, Vec<Vec<(f64, f64)>>);
+
+impl Chart {
+    /// Creates an empty 800×600 chart with linear axes.
+    pub fn new(
+        title: impl Into<String>,
+        x_label: impl Into<String>,
+        y_label: impl Into<String>,
+    ) -> Self {
+        Self {
+            title: title.into(),
+            x_label: x_label.into(),
+            y_label: y_label.into(),
+            x_scale: Scale::Linear,
+            y_scale: Scale::Linear,
+            series: Vec::new(),
+            equal_aspect: false,
+            width: 800,
+            height: 600,
+        }
+    }
+    /// Uses a base-10 logarithmic y axis.
+    pub fn log_y(mut self) -> Self {
+        self.y_scale = Scale::Log10;
+        self
+    }
+    /// Uses a base-10 logarithmic x axis.
+    pub fn log_x(mut self) -> Self {
+        self.x_scale = Scale::Log10;
+        self
+    }
+    /// Enables equal aspect ratio (same data units per pixel on both axes).
+    pub fn equal_aspect(mut self) -> Self {
+        self.equal_aspect = true;
+        self
+    }
+    /// Sets the image size in pixels.
+    pub fn size(mut self, width: u32, height: u32) -> Self {
+        (self.width, self.height) = (width, height);
+        self
+    }
+    /// Adds a series (builder style).
+    pub fn with_series(mut self, s: Series) -> Self {
+        self.series.push(s);
+        self
+    }
+    /// Adds a series.
+    pub fn push(&mut self, s: Series) {
+        self.series.push(s);
+    }
+
+    /// Renders the chart to an SVG document.
+    ///
+    /// Fails with [`PlotError::NoData`] if no series has a drawable point.
+    pub fn to_svg_string(&self) -> Result<String, PlotError> {
+        let mut out = String::new();
+        self.render(&mut out)?;
+        Ok(out)
+    }
+
+    /// Renders the chart and writes it to `path`, creating parent directories.
+    pub fn save_svg(&self, path: impl AsRef<Path>) -> Result<(), PlotError> {
+        write_file(path.as_ref(), &self.to_svg_string()?)
+    }
+
+    /// Maps a data point to plot space; `None` if it cannot be drawn.
+    fn to_plot(&self, (x, y): (f64, f64)) -> Option<(f64, f64)> {
+        Some((to_plot(x, self.x_scale)?, to_plot(y, self.y_scale)?))
+    }
+
+    fn prepared(&self) -> Vec<Prepared<'_>> {
+        let runs = |s: &Series| -> Vec<Vec<(f64, f64)>> {
+            let runs = s.points.split(|&p| self.to_plot(p).is_none());
+            let runs = runs.map(|r| {
+                r.iter()
+                    .filter_map(|&p| self.to_plot(p))
+                    .collect::<Vec<_>>()
+            });
+            runs.filter(|r| !r.is_empty()).collect()
+        };
+        let all = self.series.iter().enumerate();
+        let all = all.map(|(i, s)| Prepared(s.color.unwrap_or(i), s, runs(s)));
+        all.filter(|p| !p.2.is_empty()).collect()
+    }
+
+    /// Image size and axes (in plot space) for the prepared data.
+    fn layout(&self, data: &[Prepared]) -> Result<((u32, u32), Axis, Axis), PlotError> {
+        let pts = || data.iter().flat_map(|d| d.2.iter().flatten());
+        let bad = |what| PlotError::invalid(&self.title, what);
+        let (xlog, ylog) = (self.x_scale == Scale::Log10, self.y_scale == Scale::Log10);
+        let xr = min_max(pts().map(|p| p.0)).ok_or_else(|| PlotError::no_data(&self.title))?;
+        let yr = min_max(pts().map(|p| p.1)).ok_or_else(|| PlotError::no_data(&self.title))?;
+        let mut x = padded_range(xr, xlog, 0.05).ok_or_else(|| bad("x range overflows"))?;
+        let mut y = padded_range(yr, ylog, 0.05).ok_or_else(|| bad("y range overflows"))?;
+        let size = (self.width, self.height);
+        let size = (size.0.clamp(320, 16_384), size.1.clamp(240, 16_384));
+        if self.equal_aspect {
+            let (pw, ph) = plot_area_size(size, &self.title);
+            let (ux, uy) = ((x.1 - x.0) / f64::from(pw), (y.1 - y.0) / f64::from(ph));
+            if ux < uy {
+                x = widen(x, uy * f64::from(pw));
+            } else {
+                y = widen(y, ux * f64::from(ph));
+            }
+            x = valid_range(x).ok_or_else(|| bad("equal-aspect x range overflows"))?;
+            y = valid_range(y).ok_or_else(|| bad("equal-aspect y range overflows"))?;
+        }
+        Ok((size, Axis::new(x, xlog, 10), Axis::new(y, ylog, 8)))
+    }
+
+    /// Draws into `out`; returns the plotting-area size used by plotters.
+    fn render(&self, out: &mut String) -> Result<(u32, u32), PlotError> {
+        let data = self.prepared();
+        let (size, x, y) = self.layout(&data)?;
+        let root = SVGBackend::with_string(out, size).into_drawing_area();
+        root.fill(&WHITE).map_err(backend_err)?;
+        let area = titled(&root, &self.title)?;
+        let mut chart = frame(&area, [&self.x_label, &self.y_label], x, y, true)?;
+        let mut any_label = false;
+        for Prepared(color, s, runs) in &data {
+            let (line, dot) = (palette(*color).stroke_width(2), palette(*color).filled());
+            let markers = || runs.iter().flatten().map(move |&p| Circle::new(p, 3, dot));
+            let anno = match s.style {
+                Style::Line | Style::LineMarkers => {
+                    chart.draw_series(runs.iter().map(|r| PathElement::new(r.clone(), line)))
+                }
+                Style::DashedLine => chart.draw_series(
+                    runs.iter()
+                        .map(|r| DashedPathElement::new(r.clone(), 8, 5, line)),
+                ),
+                Style::Markers => chart.draw_series(markers()),
+            }
+            .map_err(backend_err)?;
+            if !s.label.is_empty() {
+                any_label = true;
+                anno.label(s.label.as_str());
+                let at = |p: (i32, i32)| EmptyElement::at(p);
+                match s.style {
+                    Style::Line => {
+                        anno.legend(move |p| at(p) + PathElement::new([(0, 0), (20, 0)], line))
+                    }
+                    Style::DashedLine => anno.legend(move |p| {
+                        at(p)
+                            + PathElement::new([(0, 0), (7, 0)], line)
+                            + PathElement::new([(12, 0), (20, 0)], line)
+                    }),
+                    Style::Markers => anno.legend(move |p| at(p) + Circle::new((10, 0), 3, dot)),
+                    Style::LineMarkers => anno.legend(move |p| {
+                        at(p)
+                            + PathElement::new([(0, 0), (20, 0)], line)
+                            + Circle::new((10, 0), 3, dot)
+                    }),
+                };
+            }
+            if s.style == Style::LineMarkers {
+                chart.draw_series(markers()).map_err(backend_err)?;
+            }
+        }
+        if any_label {
+            chart
+                .configure_series_labels()
+                .position(SeriesLabelPosition::UpperRight)
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .label_font((FONT, 16))
+                .draw()
+                .map_err(backend_err)?;
+        }
+        let dims = chart.plotting_area().dim_in_pixel();
+        root.present().map_err(backend_err)?;
+        Ok(dims)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::plot::tests::{assert_contains, decay, energy_chart};
+
+    fn ellipse() -> Vec<(f64, f64)> {
+        let th = (0..=200).map(|i| f64::from(i) * std::f64::consts::TAU / 200.0);
+        th.map(|t| (2.0 * t.cos() - 1.0, t.sin())).collect()
+    }
+
+    #[test]
+    fn svg_contains_title_labels_ticks_and_legend() {
+        let svg = energy_chart().to_svg_string().unwrap();
+        assert_contains(&svg, &["Energy &lt;error&gt;", "time t", "|H(t) - H(0)|"]);
+        assert_contains(&svg, &["cG(2)", "Störmer-Verlet", "spectral", "order 4"]);
+        assert_contains(
+            &svg,
+            &["1e-12", "1e-2", "1e0", ">\n0\n</text>", ">\n40\n</text>"],
+        );
+        assert!(
+            svg.matches("<polyline").count() > 50,
+            "dashes are separate polylines"
+        );
+    }
+
+    #[test]
+    fn log_axes_drop_bad_points() {
+        let bad = [
+            (2.0, -1.0),
+            (3.0, 0.0),
+            (4.0, f64::NAN),
+            (f64::INFINITY, 1.0),
+        ];
+        let pts = [&[(1.0, 1e-3)], &bad[..], &[(5.0, 0.1)]].concat();
+        let chart = Chart::new("t", "x", "y")
+            .log_y()
+            .with_series(Series::markers("m", pts));
+        // Two surviving points plus the legend marker.
+        assert_eq!(chart.to_svg_string().unwrap().matches("<circle").count(), 3);
+        let chart = chart.log_x();
+        let runs = &chart.prepared()[0].2;
+        assert_eq!(runs, &[vec![(0.0, -3.0)], vec![(5f64.log10(), -1.0)]]);
+    }
+
+    #[test]
+    fn no_data_errors() {
+        let empty = Chart::new("nothing", "x", "y");
+        let err = empty.to_svg_string();
+        assert!(matches!(err, Err(PlotError::NoData { title }) if title == "nothing"));
+        let bad = Series::line("b", [(1.0, -2.0), (f64::NAN, 1.0)]);
+        let chart = empty
+            .log_y()
+            .with_series(Series::line("a", vec![]))
+            .with_series(bad);
+        assert!(matches!(
+            chart.to_svg_string(),
+            Err(PlotError::NoData { .. })
+        ));
+        // An empty series next to a good one is skipped, legend entry included.
+        let mut chart = Chart::new("ok", "x", "y").with_series(Series::line("empty", vec![]));
+        chart.push(Series::line("good", decay(1.0)));
+        let svg = chart.to_svg_string().unwrap();
+        assert!(svg.contains("good") && !svg.contains("empty"));
+    }
+
+    #[test]
+    fn extreme_inputs_do_not_panic() {
+        let huge = Series::dashed("d", [(f64::MAX, 1.0), (-f64::MAX, -1.0)]);
+        let huge = Chart::new("big", "x", "y")
+            .with_series(huge)
+            .to_svg_string();
+        assert!(matches!(huge, Err(PlotError::InvalidData { .. })));
+        let single = Chart::new("", "", "").with_series(Series::line_markers("", [(1.0, 1.0)]));
+        assert!(single.clone().size(0, 0).to_svg_string().is_ok());
+        assert!(
+            single
+                .log_x()
+                .log_y()
+                .equal_aspect()
+                .to_svg_string()
+                .is_ok()
+        );
+        let odd = [
+            (5e-324, 1e-320),
+            (1.0, 1.0 + 1e-15),
+            (f64::MAX, f64::MIN_POSITIVE),
+        ];
+        let odd = Series::line_markers("p", odd).with_color(99);
+        let chart = Chart::new("a", "x", "y").with_series(odd);
+        assert!(chart.to_svg_string().is_ok());
+        assert!(chart.log_x().log_y().equal_aspect().to_svg_string().is_ok());
+        let flat = Series::line("f", [(0.0, 0.0), (0.0, 0.0)]);
+        let flat = Chart::new("flat", "x", "y")
+            .with_series(flat)
+            .size(20_000, 1);
+        assert!(flat.equal_aspect().to_svg_string().is_ok());
+    }
+
+    #[test]
+    fn equal_aspect_orbit() {
+        for title in ["Kepler orbit", ""] {
+            let chart = Chart::new(title, "q1", "q2").with_series(Series::line("orbit", ellipse()));
+            let chart = chart.equal_aspect();
+            let (size, x, y) = chart.layout(&chart.prepared()).unwrap();
+            let (pw, ph) = plot_area_size(size, title);
+            // The layout arithmetic must match plotters' actual plotting area.
+            assert_eq!(chart.render(&mut String::new()).unwrap(), (pw, ph));
+            let (ux, uy) = ((x.hi - x.lo) / f64::from(pw), (y.hi - y.lo) / f64::from(ph));
+            assert!((ux - uy).abs() < 1e-12 * ux, "{ux} vs {uy}");
+            assert!(x.lo < -3.0 && x.hi > 1.0 && y.lo < -1.0 && y.hi > 1.0);
+        }
+    }
+}

@@ -1,0 +1,530 @@
+//! Running a scene: build the system and the integrator, integrate, and tabulate the states,
+//! invariants and (where an exact solution exists) errors. This is what `gvi run` does.
+
+use crate::error::{GviError, Result};
+use crate::plot::{Chart, Series};
+use crate::scene::{Scene, SystemSpec};
+use galerkin_vi::adaptive::{AdaptiveOptions, integrate_adaptive};
+use galerkin_vi::systems::{HarmonicOscillator, Kepler, Pendulum, System};
+use galerkin_vi::trajectory::Trajectory;
+use serde::Serialize;
+use std::time::Instant;
+
+mod monitor;
+pub mod stream;
+use monitor::Monitor;
+pub use monitor::{Encounter, SANITY_THRESHOLD};
+
+/// What a run produced. On a Newton failure `failure` is set and the table holds the steps
+/// completed before it.
+#[derive(Debug, Serialize)]
+pub struct RunResult {
+    /// The scene, with command-line overrides applied.
+    pub scene: Scene,
+    /// Column names: `step,t,q0,…,p0,…` then invariants, then `position_error` if known.
+    pub columns: Vec<String>,
+    /// One row per step end.
+    pub rows: Vec<Vec<f64>>,
+    /// Totals and maxima.
+    pub summary: RunSummary,
+    /// The trajectory (states, Galerkin coefficients, per-step cost).
+    pub trajectory: Option<Trajectory>,
+    /// The solver error, if the run stopped early.
+    #[serde(serialize_with = "serialize_error")]
+    pub failure: Option<GviError>,
+    /// Chart of the run (orbit for 2-D systems, q(t) otherwise; for N-body systems one orbit
+    /// per body, xy projection), when requested.
+    #[serde(skip)]
+    pub chart: Option<Chart>,
+    /// For N-body runs whose orbits span more than a factor 10 in size (the solar system):
+    /// a zoomed chart of the inner bodies (those whose orbit stays within a tenth of the
+    /// largest), when a chart was requested and at least three bodies qualify.
+    #[serde(skip)]
+    pub inner_chart: Option<Chart>,
+    /// n against time, for tolerance-driven runs with a chart.
+    #[serde(skip)]
+    pub n_chart: Option<Chart>,
+}
+
+fn serialize_error<S: serde::Serializer>(e: &Option<GviError>, s: S) -> Result<S::Ok, S::Error> {
+    match e {
+        Some(e) => s.serialize_some(&e.to_string()),
+        None => s.serialize_none(),
+    }
+}
+
+/// Summary numbers of a run.
+#[derive(Debug, Clone, Serialize)]
+pub struct RunSummary {
+    /// System name.
+    pub system: String,
+    /// Method description.
+    pub method: String,
+    /// Steps completed.
+    pub steps: usize,
+    /// Max over step ends of the max-norm position error (one-step map), if exact known.
+    pub max_position_error: Option<f64>,
+    /// Max over t of the Galerkin curves' position error (sampled), if exact known.
+    pub max_curve_error: Option<f64>,
+    /// Max |I(t_k) − I(t_0)| for each invariant.
+    pub invariant_errors: Vec<(String, f64)>,
+    /// Max |I(t_k) − I(t_0)| / |I(t_0)| for the energy (NaN for the other invariants, which
+    /// are often zero up to round-off, and where I(t_0) = 0).
+    pub relative_invariant_errors: Vec<(String, f64)>,
+    /// For point masses: the closest approach of two bodies at a step end.
+    pub closest_approach: Option<Encounter>,
+    /// Newton iterations per step (mean).
+    pub newton_iterations_per_step: f64,
+    /// Wall-clock seconds of the integration.
+    pub seconds: f64,
+    /// Force (first-derivative) evaluations, including rejected attempts of `--tol` runs.
+    pub force_evaluations: usize,
+    /// Warnings (e.g. a tolerance not met at the largest n: best effort kept).
+    pub warnings: Vec<String>,
+    /// The step size chosen from the tolerance (`auto_h`), with its pilot runs (their force
+    /// evaluations are not included in `force_evaluations`).
+    pub step_choice: Option<galerkin_vi::adaptive::StepChoice>,
+}
+
+impl std::fmt::Display for RunSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(f, "{}: {}, {} steps", self.system, self.method, self.steps)?;
+        if let Some(e) = self.max_position_error {
+            writeln!(f, "  max position error at step ends: {e:.3e}")?;
+        }
+        if let Some(e) = self.max_curve_error {
+            writeln!(f, "  max position error along the Galerkin curves: {e:.3e}")?;
+        }
+        for ((name, e), (_, rel)) in self
+            .invariant_errors
+            .iter()
+            .zip(&self.relative_invariant_errors)
+        {
+            if rel.is_nan() {
+                writeln!(f, "  max {name} error: {e:.3e}")?;
+            } else {
+                writeln!(f, "  max {name} error: {e:.3e} (relative {rel:.3e})")?;
+            }
+        }
+        if let Some(c) = &self.closest_approach {
+            writeln!(
+                f,
+                "  closest approach: {} and {} at {:.3e} (t = {:.6e})",
+                c.a, c.b, c.separation, c.t
+            )?;
+        }
+        write!(
+            f,
+            "  Newton iterations per step: {:.2}; force evaluations: {}; integration time: {:.3} s",
+            self.newton_iterations_per_step, self.force_evaluations, self.seconds
+        )?;
+        if let Some(c) = &self.step_choice {
+            write!(
+                f,
+                "\n  h chosen from tol: {:.6e} ({} steps; time scale {:.4e}; pilot force \
+                 evaluations per unit time: {}; pilots cost {} evaluations)",
+                c.h,
+                c.steps,
+                c.time_scale,
+                c.pilots
+                    .iter()
+                    .map(|p| format!("h = {:.3e}: {:.4e}", p.h, p.cost_per_time))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                c.pilot_evaluations
+            )?;
+        }
+        for w in &self.warnings {
+            write!(f, "\n  warning: {w}")?;
+        }
+        Ok(())
+    }
+}
+
+/// Options for [`run_scene`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunOptions {
+    /// Samples per step for the error along the Galerkin curves (0: skip).
+    pub curve_samples_per_step: usize,
+    /// Build a chart.
+    pub chart: bool,
+}
+
+impl Default for RunOptions {
+    fn default() -> Self {
+        RunOptions {
+            curve_samples_per_step: 16,
+            chart: false,
+        }
+    }
+}
+
+/// Something to do with a concrete system, whatever its type: the way scene files (which
+/// name a system at run time) reach code that is generic over [`System`].
+pub trait SystemVisitor {
+    /// What the visit returns.
+    type Output;
+    /// Do it with the concrete system.
+    fn visit<S: System + Sync>(self, system: &S) -> Result<Self::Output>;
+}
+
+/// Build the system a scene names and hand it to `visitor`.
+pub fn visit_system<V: SystemVisitor>(spec: &SystemSpec, visitor: V) -> Result<V::Output> {
+    match spec {
+        SystemSpec::Harmonic { mass, stiffness } => {
+            visitor.visit(&HarmonicOscillator::new(*mass, *stiffness)?)
+        }
+        SystemSpec::Kepler { mu } => visitor.visit(&Kepler::new(*mu)?),
+        SystemSpec::Pendulum {
+            length,
+            gravity,
+            mass,
+        } => visitor.visit(&Pendulum::new(*length, *gravity, *mass)?),
+        SystemSpec::RigidBody { .. } | SystemSpec::HeavyTop { .. } => Err(GviError::Unsupported(
+            "rigid bodies live on SO(3): only `gvi run` supports them (galerkin_vi::lie)".into(),
+        )),
+        SystemSpec::Lagrangian(spec) => visitor.visit(&spec.build()?),
+        SystemSpec::NBody { .. } => match spec.nbody()? {
+            Some((system, _)) => visitor.visit(&system),
+            None => Err(GviError::Scene {
+                source_name: "[system]".into(),
+                reason: "not an N-body system".into(),
+            }),
+        },
+    }
+}
+
+/// Run a scene. Invalid input is an `Err`; a Newton failure is `Ok` with
+/// [`RunResult::failure`] set and the partial trajectory kept.
+pub fn run_scene(scene: &Scene, options: RunOptions) -> Result<RunResult> {
+    if let Some(result) = crate::lie_run::run_rigid_body_scene(scene, options)? {
+        return Ok(result);
+    }
+    struct Run<'a>(&'a Scene, RunOptions);
+    impl SystemVisitor for Run<'_> {
+        type Output = RunResult;
+        fn visit<S: System + Sync>(self, system: &S) -> Result<RunResult> {
+            run_system(system, self.0, self.1)
+        }
+    }
+    visit_system(&scene.system, Run(scene, options))
+}
+
+/// Per-step outputs of a tolerance-driven run for the table.
+struct AdaptiveColumns {
+    indicators: Vec<f64>,
+    estimates: Vec<Option<f64>>,
+    warnings: Vec<String>,
+    evaluations: usize,
+}
+
+/// Run a scene's initial state and method on any [`System`].
+pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> Result<RunResult> {
+    let m = &scene.method;
+    let init = &scene.initial;
+    let gvi = m.integrator()?;
+    let d = system.dim();
+    crate::error::ensure_len("initial q (system dimension)", d, init.q.len())?;
+    crate::error::ensure_len("initial p (system dimension)", d, init.p.len())?;
+    let exact = system.exact_solution(init.t0, &init.q, &init.p)?;
+    let start = Instant::now();
+    let mut adaptive: Option<AdaptiveColumns> = None;
+    let mut step_choice = None;
+    if m.auto_h && m.tol.is_none() {
+        return Err(crate::error::GviError::InvalidArgument {
+            name: "auto_h".into(),
+            reason: "choosing h needs a tolerance (tol)".into(),
+        });
+    }
+    let (h, steps) = (m.h, m.steps);
+    monitor::check_time_span(init.t0, h, steps)?;
+    let outcome = match m.tol {
+        None => gvi.integrate(system, init.t0, &init.q, &init.p, m.steps),
+        Some(tol) => {
+            let mut opts = AdaptiveOptions::new(tol, m.basis, m.quadrature, m.h);
+            if let Some(l) = &m.ladder {
+                opts.ladder = l.clone();
+            }
+            if let Some(c) = m.control {
+                opts.control = c;
+            }
+            if m.solver != galerkin_vi::integrator::StageSolver::Auto {
+                opts.solver = m.solver;
+            }
+            let mut steps = steps;
+            if m.auto_h {
+                let c = galerkin_vi::adaptive::choose_step(
+                    system,
+                    &opts,
+                    init.t0,
+                    &init.q,
+                    &init.p,
+                    h * steps as f64,
+                )?;
+                (opts.h, steps) = (c.h, c.steps);
+                step_choice = Some(c);
+            }
+            integrate_adaptive(system, &opts, init.t0, &init.q, &init.p, steps).map(|run| {
+                adaptive = Some(AdaptiveColumns {
+                    indicators: run.indicators,
+                    estimates: run.estimates,
+                    warnings: run.warnings,
+                    evaluations: run.gradient_evaluations,
+                });
+                run.trajectory
+            })
+        }
+    };
+    let (mut trajectory, failure) = match outcome {
+        Ok(t) => (t, None),
+        Err(f) => match f.partial {
+            Some(partial) => (*partial, Some(f.error)),
+            None => return Err(f.error),
+        },
+    };
+    let seconds = start.elapsed().as_secs_f64();
+
+    let names = system.invariant_names();
+    let mut columns = vec!["step".to_string(), "t".to_string()];
+    columns.extend((0..d).map(|i| format!("q{i}")));
+    columns.extend((0..d).map(|i| format!("p{i}")));
+    columns.extend(names.iter().map(|s| s.to_string()));
+    if exact.is_some() {
+        columns.push("position_error".into());
+    }
+    if m.tol.is_some() {
+        columns.push("n".into());
+        columns.push("indicator".into());
+        columns.push("estimate".into());
+    }
+    let mut monitor = Monitor::new(system, &init.q, &init.p, init.t0)?;
+    let mut rows = Vec::with_capacity(trajectory.q.len());
+    let mut failure = failure;
+    for k in 0..trajectory.q.len() {
+        let t = trajectory.time(k);
+        let (q, p) = (&trajectory.q[k], &trajectory.p[k]);
+        let mut row = vec![k as f64, t];
+        row.extend_from_slice(q);
+        row.extend_from_slice(p);
+        if let Err(e) = monitor.observe(system, exact.as_ref(), k, t, q, p, &mut row) {
+            // The first non-finite step end: keep the steps before it.
+            failure = Some(e);
+            truncate(&mut trajectory, k);
+            break;
+        }
+        if let Some(a) = &adaptive {
+            // Row k is the state at t_k: report the n, indicator and embedded estimate (NaN:
+            // not checked) of the step that led there.
+            let (n, i, e) = match k {
+                0 => (f64::NAN, f64::NAN, f64::NAN),
+                _ => (
+                    trajectory.n_of_step(k - 1) as f64,
+                    a.indicators.get(k - 1).copied().unwrap_or(f64::NAN),
+                    a.estimates
+                        .get(k - 1)
+                        .copied()
+                        .flatten()
+                        .unwrap_or(f64::NAN),
+                ),
+            };
+            row.push(n);
+            row.push(i);
+            row.push(e);
+        }
+        rows.push(row);
+    }
+    let max_pos = monitor.max_pos;
+    let max_curve_error = match (&exact, options.curve_samples_per_step) {
+        (Some(ex), s) if s > 0 && trajectory.steps() > 0 => {
+            let mut worst = 0.0f64;
+            for t in trajectory.sample_times(s) {
+                worst = worst.max(max_norm_diff(&trajectory.position_at(t)?, &ex.position(t)));
+            }
+            Some(worst)
+        }
+        _ => None,
+    };
+    let steps = trajectory.steps();
+    let n_range = (!trajectory.step_n.is_empty()).then(|| {
+        let lo = trajectory.step_n.iter().copied().min().unwrap_or(0);
+        let hi = trajectory.step_n.iter().copied().max().unwrap_or(0);
+        (lo, hi)
+    });
+    let method = match (m.tol, n_range) {
+        (Some(tol), Some((lo, hi))) => format!(
+            "{} basis, n chosen per step in {lo}…{hi} for tol = {tol:e}, {} (default points), h = {}, {} solver",
+            m.basis,
+            m.quadrature,
+            fmt_number(trajectory.h),
+            m.solver
+        ),
+        _ => format!(
+            "{} basis n = {}, {} with {} points, h = {}, {} solver",
+            m.basis,
+            m.n,
+            gvi.rule().kind,
+            gvi.rule().len(),
+            fmt_number(m.h),
+            m.solver
+        ),
+    };
+    let (mut warnings, force_evaluations) = match &adaptive {
+        Some(a) => (a.warnings.clone(), a.evaluations),
+        None => (Vec::new(), trajectory.gradient_evaluations()),
+    };
+    warnings.extend(monitor.warnings());
+    let summary = RunSummary {
+        system: system.name().to_string(),
+        method,
+        warnings,
+        force_evaluations,
+        step_choice,
+        steps,
+        max_position_error: max_pos,
+        max_curve_error,
+        invariant_errors: names
+            .iter()
+            .map(|s| s.to_string())
+            .zip(monitor.inv_err.iter().copied())
+            .collect(),
+        relative_invariant_errors: names
+            .iter()
+            .map(|s| s.to_string())
+            .zip(monitor.relative_errors())
+            .collect(),
+        closest_approach: monitor.encounter.clone(),
+        newton_iterations_per_step: trajectory.newton_iterations() as f64 / steps.max(1) as f64,
+        seconds,
+    };
+    let (chart, inner_chart) = if options.chart && steps > 0 {
+        match system.body_names() {
+            Some(names) => {
+                let (all, inner) =
+                    crate::nbody_report::orbit_charts(&names, &scene.name, &trajectory)?;
+                (Some(all), inner)
+            }
+            None => (
+                Some(run_chart(system, scene, &trajectory, exact.as_ref())?),
+                None,
+            ),
+        }
+    } else {
+        (None, None)
+    };
+    let n_chart = (options.chart && !trajectory.step_n.is_empty()).then(|| {
+        let pts: Vec<(f64, f64)> = (0..trajectory.steps())
+            .map(|k| {
+                (
+                    trajectory.time(k) + 0.5 * trajectory.h,
+                    trajectory.n_of_step(k) as f64,
+                )
+            })
+            .collect();
+        Chart::new(
+            format!(
+                "{}: n chosen per step (tol = {:e})",
+                scene.name,
+                m.tol.unwrap_or(f64::NAN)
+            ),
+            "t (step midpoint)",
+            "n",
+        )
+        .with_series(Series::line_markers("n", pts))
+    });
+    Ok(RunResult {
+        n_chart,
+        scene: scene.clone(),
+        columns,
+        rows,
+        summary,
+        trajectory: Some(trajectory),
+        failure,
+        chart,
+        inner_chart,
+    })
+}
+
+pub use crate::error::fmt_number;
+
+/// Keep the first `states` step ends (and the `states − 1` steps between them).
+fn truncate(traj: &mut Trajectory, states: usize) {
+    let steps = states.saturating_sub(1);
+    traj.q.truncate(states);
+    traj.p.truncate(states);
+    traj.coefficients.truncate(steps);
+    traj.stats.truncate(steps);
+    traj.step_n.truncate(steps);
+}
+
+fn max_norm_diff(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max)
+}
+
+/// Orbit (2-D) or q(t) (1-D) chart: Galerkin curves, step ends and, if known, the exact
+/// solution.
+fn run_chart<S: System>(
+    system: &S,
+    scene: &Scene,
+    traj: &Trajectory,
+    exact: Option<&galerkin_vi::systems::ExactSolution>,
+) -> Result<Chart> {
+    let samples = traj.sample_times(32);
+    let title = format!("{} — {}", scene.name, scene.description);
+    let two_d = system.dim() >= 2;
+    let point = |q: &[f64], t: f64| if two_d { (q[0], q[1]) } else { (t, q[0]) };
+    let mut curve = Vec::with_capacity(samples.len());
+    for &t in &samples {
+        curve.push(point(&traj.position_at(t)?, t));
+    }
+    let ends: Vec<(f64, f64)> = (0..traj.q.len())
+        .map(|k| point(&traj.q[k], traj.time(k)))
+        .collect();
+    let mut chart = if two_d {
+        Chart::new(title, "q0", "q1").equal_aspect()
+    } else {
+        Chart::new(title, "t", "q")
+    };
+    if let Some(ex) = exact {
+        let pts: Vec<(f64, f64)> = samples.iter().map(|&t| point(&ex.position(t), t)).collect();
+        chart.push(Series::dashed("exact solution", pts));
+    }
+    chart.push(Series::line("Galerkin curves", curve));
+    chart.push(Series::markers("step ends (q_k)", ends));
+    Ok(chart)
+}
+
+impl RunResult {
+    /// The table as CSV text (header line, then one row per step end).
+    pub fn to_csv(&self) -> String {
+        let mut out = self.columns.join(",");
+        out.push('\n');
+        for row in &self.rows {
+            let cells: Vec<String> = row
+                .iter()
+                .enumerate()
+                .map(|(i, x)| {
+                    let integer =
+                        matches!(self.columns.get(i).map(String::as_str), Some("step" | "n"));
+                    if x.is_nan() {
+                        String::new()
+                    } else if integer {
+                        format!("{}", *x as u64)
+                    } else {
+                        format!("{x:e}")
+                    }
+                })
+                .collect();
+            out.push_str(&cells.join(","));
+            out.push('\n');
+        }
+        out
+    }
+
+    /// The whole result as JSON (scene, columns, rows, summary, trajectory with coefficients).
+    pub fn to_json(&self) -> Result<String> {
+        serde_json::to_string_pretty(self).map_err(|e| GviError::Serialize(e.to_string()))
+    }
+}

@@ -1,0 +1,226 @@
+//! Streamed `gvi run`: each CSV row is written as its step completes, so memory stays flat in
+//! the number of steps and a run stopped early (a failure, a kill) has written every step
+//! before it. Used when nothing needs the whole trajectory (no chart, no JSON, no `--tol`).
+//!
+//! The table and summary are those of [`super::run_system`]: the same monitor watches the
+//! step ends, and the error along the Galerkin curves is sampled from each step's
+//! coefficients while they are in the workspace.
+
+use super::{Monitor, RunSummary};
+use crate::error::{GviError, Result};
+use crate::scene::Scene;
+use galerkin_vi::basis::Basis;
+use galerkin_vi::systems::System;
+use std::io::Write;
+use std::time::Instant;
+
+/// Bytes held per step by an in-memory run ([`super::run_scene`]) with `columns` table
+/// columns, n basis functions and dimension d: the trajectory (states, coefficients, step
+/// statistics, vector headers), the table row, and the output text (about 25 bytes per
+/// written number; JSON also writes the coefficients). An estimate for refusing runs up
+/// front; measured at 0.46–1.1 KB per step for the shipped scenes.
+pub fn bytes_per_step(columns: usize, n: usize, d: usize, json: bool) -> f64 {
+    let trajectory = 8 * (n * d + 2 * d) + 3 * 24 + 64;
+    let row = 8 * columns + 24;
+    let text = 25 * (columns + if json { n * d + 2 * d } else { 0 });
+    (trajectory + row + text) as f64
+}
+
+/// What a streamed run reports once its rows are written.
+#[derive(Debug)]
+pub struct StreamOutcome {
+    /// Totals and maxima, as for an in-memory run.
+    pub summary: RunSummary,
+    /// The failure that stopped the run early (the rows before it are written).
+    pub failure: Option<GviError>,
+}
+
+/// Integrate a scene (without `tol`) and write its CSV table to `out` step by step.
+/// `curve_samples_per_step` as in [`super::RunOptions`].
+pub fn stream_scene(
+    scene: &Scene,
+    curve_samples_per_step: usize,
+    out: &mut dyn Write,
+) -> Result<StreamOutcome> {
+    struct Stream<'a>(&'a Scene, usize, &'a mut dyn Write);
+    impl super::SystemVisitor for Stream<'_> {
+        type Output = StreamOutcome;
+        fn visit<S: System + Sync>(self, system: &S) -> Result<StreamOutcome> {
+            stream_system(system, self.0, self.1, self.2)
+        }
+    }
+    super::visit_system(&scene.system, Stream(scene, curve_samples_per_step, out))
+}
+
+fn write_row(out: &mut dyn Write, row: &[f64]) -> std::io::Result<()> {
+    for (i, x) in row.iter().enumerate() {
+        if i > 0 {
+            out.write_all(b",")?;
+        }
+        if i == 0 {
+            write!(out, "{}", *x as u64)?;
+        } else {
+            write!(out, "{x:e}")?;
+        }
+    }
+    out.write_all(b"\n")
+}
+
+fn stream_system<S: System>(
+    system: &S,
+    scene: &Scene,
+    samples: usize,
+    out: &mut dyn Write,
+) -> Result<StreamOutcome> {
+    let m = &scene.method;
+    let init = &scene.initial;
+    if m.tol.is_some() {
+        return Err(GviError::Unsupported(
+            "a tolerance-driven run is not streamed (it keeps the whole trajectory)".into(),
+        ));
+    }
+    let gvi = m.integrator()?;
+    let d = system.dim();
+    crate::error::ensure_len("initial q (system dimension)", d, init.q.len())?;
+    crate::error::ensure_len("initial p (system dimension)", d, init.p.len())?;
+    crate::error::ensure_finite("initial position q0", &init.q)?;
+    crate::error::ensure_finite("initial momentum p0", &init.p)?;
+    let steps = m.steps;
+    if steps == 0 || steps > galerkin_vi::integrator::MAX_STEPS {
+        return Err(GviError::InvalidStepCount {
+            steps,
+            reason: format!("need 1 ≤ steps ≤ {}", galerkin_vi::integrator::MAX_STEPS),
+        });
+    }
+    super::monitor::check_time_span(init.t0, m.h, steps)?;
+    let exact = system.exact_solution(init.t0, &init.q, &init.p)?;
+    let mut monitor = Monitor::new(system, &init.q, &init.p, init.t0)?;
+    let io = |source| GviError::Io {
+        path: "<output>".into(),
+        source,
+    };
+
+    let names = system.invariant_names();
+    let mut header = vec!["step".to_string(), "t".to_string()];
+    header.extend((0..d).map(|i| format!("q{i}")));
+    header.extend((0..d).map(|i| format!("p{i}")));
+    header.extend(names.iter().map(|s| s.to_string()));
+    if exact.is_some() {
+        header.push("position_error".into());
+    }
+    writeln!(out, "{}", header.join(",")).map_err(io)?;
+
+    let start = Instant::now();
+    let mut ws = gvi.workspace(system)?;
+    let n = gvi.n();
+    let h = gvi.step_size();
+    let (mut q, mut p) = (init.q.clone(), init.p.clone());
+    let (mut q_next, mut p_next) = (vec![0.0; d], vec![0.0; d]);
+    let (mut q_err, mut p_err) = (vec![0.0; d], vec![0.0; d]);
+    let (mut phi, mut dphi, mut qc) = (vec![0.0; n], vec![0.0; n], vec![0.0; d]);
+    let mut row = Vec::with_capacity(header.len());
+    let (mut iterations, mut evaluations, mut done) = (0usize, 0usize, 0usize);
+    let mut curve_error: Option<f64> = (exact.is_some() && samples > 0).then_some(0.0);
+    let mut failure = None;
+    let mut emit = |row: &mut Vec<f64>, k: usize, q: &[f64], p: &[f64], mon: &mut Monitor| {
+        let t = init.t0 + k as f64 * h;
+        row.clear();
+        row.push(k as f64);
+        row.push(t);
+        row.extend_from_slice(q);
+        row.extend_from_slice(p);
+        mon.observe(system, exact.as_ref(), k, t, q, p, row)?;
+        write_row(out, row).map_err(io)
+    };
+    emit(&mut row, 0, &init.q, &init.p, &mut monitor)?;
+    for k in 0..steps {
+        let result = if gvi.options().compensated {
+            gvi.step_compensated(system, &mut ws, &mut q, &mut q_err, &mut p, &mut p_err)
+        } else {
+            gvi.step(system, &mut ws, &q, &p, &mut q_next, &mut p_next)
+                .inspect(|_| {
+                    std::mem::swap(&mut q, &mut q_next);
+                    std::mem::swap(&mut p, &mut p_next);
+                })
+        };
+        let stats = match result {
+            Ok(stats) => stats,
+            Err(f) => {
+                failure = Some(GviError::NewtonFailure {
+                    step: k,
+                    t: init.t0 + k as f64 * h,
+                    residual: f.residual,
+                    iterations: f.iterations,
+                    reason: f.reason,
+                });
+                break;
+            }
+        };
+        match emit(&mut row, k + 1, &q, &p, &mut monitor) {
+            Ok(()) => {}
+            Err(e @ GviError::Io { .. }) => return Err(e),
+            Err(e) => {
+                failure = Some(e);
+                break;
+            }
+        }
+        iterations += stats.iterations;
+        evaluations += stats.gradient_evaluations;
+        done += 1;
+        if let (Some(ex), Some(worst)) = (&exact, curve_error.as_mut()) {
+            // Sample this step's curve while its coefficients are in the workspace.
+            let c = ws.coefficients();
+            for s in 0..samples {
+                let tau = s as f64 / samples as f64;
+                gvi.basis().eval(tau, &mut phi, &mut dphi);
+                qc.iter_mut().for_each(|x| *x = 0.0);
+                for i in 0..n {
+                    for r in 0..d {
+                        qc[r] += phi[i] * c[i * d + r];
+                    }
+                }
+                let t = init.t0 + (k as f64 + tau) * h;
+                let e = ex
+                    .position(t)
+                    .iter()
+                    .zip(&qc)
+                    .map(|(x, y)| (x - y).abs())
+                    .fold(0.0, f64::max);
+                *worst = worst.max(e);
+            }
+        }
+    }
+    out.flush().map_err(io)?;
+    let seconds = start.elapsed().as_secs_f64();
+    let method = format!(
+        "{} basis n = {}, {} with {} points, h = {}, {} solver (streamed)",
+        m.basis,
+        m.n,
+        gvi.rule().kind,
+        gvi.rule().len(),
+        super::fmt_number(m.h),
+        m.solver
+    );
+    let label = |v: Vec<f64>| -> Vec<(String, f64)> {
+        names.iter().map(|s| s.to_string()).zip(v).collect()
+    };
+    let summary = RunSummary {
+        system: system.name().to_string(),
+        method,
+        steps: done,
+        max_position_error: monitor.max_pos,
+        max_curve_error: curve_error.filter(|_| done > 0).map(|c| {
+            // The final time, as in the in-memory run's samples.
+            c.max(monitor.max_pos.unwrap_or(0.0))
+        }),
+        invariant_errors: label(monitor.inv_err.clone()),
+        relative_invariant_errors: label(monitor.relative_errors()),
+        closest_approach: monitor.encounter.clone(),
+        newton_iterations_per_step: iterations as f64 / done.max(1) as f64,
+        seconds,
+        force_evaluations: evaluations,
+        warnings: monitor.warnings(),
+        step_choice: None,
+    };
+    Ok(StreamOutcome { summary, failure })
+}

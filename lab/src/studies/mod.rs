@@ -1,0 +1,378 @@
+//! Studies: refinement sweeps with fitted rates, the paper's experiments, work–precision
+//! against classical peers, stability maps, and n- versus h-refinement cost.
+//!
+//! Every study measures [`Measurement`]s — one integration of a scene's system with one method
+//! — against a [`Reference`] (the exact solution where one is known, otherwise a
+//! high-resolution spectral run), writes CSV/JSON tables and SVG charts, and never aborts on a
+//! solver failure: the failure is recorded in the measurement and shown.
+
+pub mod allocation;
+pub mod compare_bases;
+pub mod compare_refinement;
+pub mod peers;
+pub mod refine;
+pub mod reproduce;
+pub mod scaling;
+pub mod stability;
+pub mod tolerance;
+pub mod work_precision;
+
+use crate::error::{GviError, Result};
+use crate::scene::{InitialState, MethodSpec};
+use galerkin_vi::baselines::GaussCollocationBaseline;
+use galerkin_vi::integrator::GalerkinIntegrator;
+use galerkin_vi::systems::{ExactSolution, System};
+use galerkin_vi::trajectory::Trajectory;
+use serde::Serialize;
+use std::time::Instant;
+
+/// What the errors are measured against.
+pub enum Reference {
+    /// A closed-form solution.
+    Exact(ExactSolution),
+    /// A high-resolution numerical solution (dense output).
+    Numerical(Box<Trajectory>),
+    /// Positions sampled every `dt` from `t0` (a Gauss-collocation reference for systems with
+    /// many degrees of freedom); only sample times have values.
+    Sampled {
+        /// First sample time.
+        t0: f64,
+        /// Sample spacing.
+        dt: f64,
+        /// Positions at t0 + k dt.
+        q: Vec<Vec<f64>>,
+    },
+}
+
+impl Reference {
+    /// The reference position at t.
+    pub fn position(&self, t: f64) -> Result<Vec<f64>> {
+        match self {
+            Reference::Exact(e) => Ok(e.position(t)),
+            Reference::Numerical(tr) => tr.position_at(t),
+            Reference::Sampled { t0, dt, q } => {
+                let x = (t - t0) / dt;
+                let k = x.round();
+                if (x - k).abs() > 1e-6 || k < 0.0 || k as usize >= q.len() {
+                    return Err(GviError::Unsupported(format!(
+                        "the reference is sampled every {dt} from {t0}; no value at t = {t}"
+                    )));
+                }
+                Ok(q[k as usize].clone())
+            }
+        }
+    }
+
+    /// The exact solution, or a spectral run at n = 48, h/4 over `horizon` (documented as
+    /// the reference for systems without a closed form).
+    pub fn for_system<S: System>(
+        system: &S,
+        initial: &InitialState,
+        h: f64,
+        horizon: f64,
+    ) -> Result<Reference> {
+        if let Some(e) = system.exact_solution(initial.t0, &initial.q, &initial.p)? {
+            return Ok(Reference::Exact(e));
+        }
+        if let (Some(tau), true) = (
+            system.shortest_time_scale(&initial.q, &initial.p),
+            system.dim() > 4,
+        ) {
+            // Many degrees of freedom: Gauss collocation (s = 6, order 12) with compensated
+            // summation, ≥ 256 steps per shortest period, sampled 16 times per step h.
+            let per = 16 * ((h * 256.0 / tau / 16.0).ceil() as usize).clamp(1, 10_000);
+            let steps = (horizon / h).ceil().max(1.0) as usize;
+            let mut gauss = GaussCollocationBaseline::new(system, 6, h / per as f64)?;
+            let (q, _) =
+                gauss.integrate_compensated(&initial.q, &initial.p, steps * per, per / 16)?;
+            return Ok(Reference::Sampled {
+                t0: initial.t0,
+                dt: h / 16.0,
+                q,
+            });
+        }
+        let href = (h / 4.0).min(1.0);
+        let steps = (horizon / href).ceil().max(1.0) as usize;
+        let gvi = GalerkinIntegrator::spectral(48, href)?;
+        let traj = gvi.integrate(system, initial.t0, &initial.q, &initial.p, steps)?;
+        Ok(Reference::Numerical(Box::new(traj)))
+    }
+
+    /// The integration steps [`Reference::for_system`] would take (0 for an exact solution),
+    /// computed without running it, so that absurd horizons can be refused up front.
+    pub fn estimated_steps<S: System>(
+        system: &S,
+        initial: &InitialState,
+        h: f64,
+        horizon: f64,
+    ) -> f64 {
+        if matches!(
+            system.exact_solution(initial.t0, &initial.q, &initial.p),
+            Ok(Some(_))
+        ) {
+            return 0.0;
+        }
+        if let (Some(tau), true) = (
+            system.shortest_time_scale(&initial.q, &initial.p),
+            system.dim() > 4,
+        ) {
+            let per = 16.0 * (h * 256.0 / tau / 16.0).ceil().clamp(1.0, 10_000.0);
+            return (horizon / h).ceil().max(1.0) * per;
+        }
+        (horizon / (h / 4.0).min(1.0)).ceil().max(1.0)
+    }
+
+    /// Short description for reports.
+    pub fn describe(&self) -> &'static str {
+        match self {
+            Reference::Exact(_) => "exact solution",
+            Reference::Numerical(_) => "spectral reference run (n = 48, h/4)",
+            Reference::Sampled { .. } => {
+                "Gauss collocation reference (s = 6, compensated, ≥ 256 steps per shortest period)"
+            }
+        }
+    }
+}
+
+/// One integration and its errors and cost.
+#[derive(Debug, Clone, Serialize)]
+pub struct Measurement {
+    /// Basis.
+    pub basis: String,
+    /// Quadrature.
+    pub quadrature: String,
+    /// Number of basis functions.
+    pub n: usize,
+    /// Step size.
+    pub h: f64,
+    /// Steps requested.
+    pub steps: usize,
+    /// Max over step ends of the max-norm position error (the one-step map).
+    pub map_error: f64,
+    /// Max over sampled t of the Galerkin curves' position error.
+    pub curve_error: f64,
+    /// Max |I₀(t_k) − I₀(t_0)| of the first invariant (the energy).
+    pub energy_error: f64,
+    /// Max error of the second invariant (e.g. angular momentum), if the system has one.
+    pub momentum_error: Option<f64>,
+    /// Total Newton iterations.
+    pub newton_iterations: usize,
+    /// Force / first-derivative evaluations (per quadrature point).
+    pub gradient_evaluations: usize,
+    /// Wall-clock seconds of the integration.
+    pub seconds: f64,
+    /// The solver's error, if the run failed (errors then cover the completed steps only).
+    pub failure: Option<String>,
+}
+
+/// Integrate `system` from `initial` with `method` and measure everything against
+/// `reference`; `curve_samples` points per step for the curve error.
+pub fn measure<S: System>(
+    system: &S,
+    initial: &InitialState,
+    method: &MethodSpec,
+    reference: &Reference,
+    curve_samples: usize,
+) -> Measurement {
+    let mut m = Measurement {
+        basis: method.basis.to_string(),
+        quadrature: method.quadrature.to_string(),
+        n: method.n,
+        h: method.h,
+        steps: method.steps,
+        map_error: f64::NAN,
+        curve_error: f64::NAN,
+        energy_error: f64::NAN,
+        momentum_error: None,
+        newton_iterations: 0,
+        gradient_evaluations: 0,
+        seconds: 0.0,
+        failure: None,
+    };
+    let gvi = match GalerkinIntegrator::from_kinds(
+        method.basis,
+        method.n,
+        method.quadrature,
+        method.quad_points,
+        method.h,
+    ) {
+        Ok(g) => g,
+        Err(e) => {
+            m.failure = Some(e.to_string());
+            return m;
+        }
+    };
+    let start = Instant::now();
+    let result = gvi.integrate(system, initial.t0, &initial.q, &initial.p, method.steps);
+    m.seconds = start.elapsed().as_secs_f64();
+    let traj = match result {
+        Ok(t) => t,
+        Err(f) => {
+            m.failure = Some(f.error.to_string());
+            match f.partial {
+                Some(p) => *p,
+                None => return m,
+            }
+        }
+    };
+    if let Err(e) = fill_errors(system, initial, &traj, reference, curve_samples, &mut m) {
+        m.failure.get_or_insert(e.to_string());
+    }
+    if m.failure.is_some() {
+        // A failed run has no error figures: the partial run's would look like a success.
+        m.map_error = f64::NAN;
+        m.curve_error = f64::NAN;
+        m.energy_error = f64::NAN;
+        m.momentum_error = None;
+    }
+    m
+}
+
+fn fill_errors<S: System>(
+    system: &S,
+    initial: &InitialState,
+    traj: &Trajectory,
+    reference: &Reference,
+    curve_samples: usize,
+    m: &mut Measurement,
+) -> Result<()> {
+    m.newton_iterations = traj.newton_iterations();
+    m.gradient_evaluations = traj.gradient_evaluations();
+    let mut map = 0.0f64;
+    for k in 0..traj.q.len() {
+        map = nan_max(
+            map,
+            max_norm_diff(&traj.q[k], &reference.position(traj.time(k))?),
+        );
+    }
+    m.map_error = map;
+    if !map.is_finite() {
+        return Err(GviError::NonFinite {
+            what: "position error at a step end".into(),
+            value: map,
+        });
+    }
+    let mut curve = map;
+    if traj.steps() > 0 && curve_samples > 0 {
+        for t in traj.sample_times(curve_samples) {
+            curve = nan_max(
+                curve,
+                max_norm_diff(&traj.position_at(t)?, &reference.position(t)?),
+            );
+        }
+    }
+    m.curve_error = curve;
+    if !curve.is_finite() {
+        return Err(GviError::NonFinite {
+            what: "position error along the Galerkin curves".into(),
+            value: curve,
+        });
+    }
+    let k = system.invariant_names().len();
+    if k > 0 {
+        let (mut i0, mut i) = (vec![0.0; k], vec![0.0; k]);
+        system.invariants(&initial.q, &initial.p, &mut i0);
+        let mut worst = vec![0.0f64; k];
+        for s in 0..traj.q.len() {
+            system.invariants(&traj.q[s], &traj.p[s], &mut i);
+            for c in 0..k {
+                worst[c] = nan_max(worst[c], (i[c] - i0[c]).abs());
+            }
+        }
+        if let Some(&w) = worst.iter().find(|w| !w.is_finite()) {
+            return Err(GviError::NonFinite {
+                what: "invariant error".into(),
+                value: w,
+            });
+        }
+        m.energy_error = worst[0];
+        m.momentum_error = worst.get(1).copied();
+    }
+    Ok(())
+}
+
+/// max(a, b), but NaN if either is NaN (`f64::max` drops a NaN, which turns a run that blew
+/// up into a perfect-looking error of 0).
+pub(crate) fn nan_max(a: f64, b: f64) -> f64 {
+    if a.is_nan() || b.is_nan() {
+        f64::NAN
+    } else {
+        a.max(b)
+    }
+}
+
+/// Max-norm of a − b; NaN if any difference is NaN.
+pub(crate) fn max_norm_diff(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, nan_max)
+}
+
+/// Memory above which a study is refused before it starts.
+pub const MAX_STUDY_BYTES: f64 = 4e9;
+
+/// Refuse a study whose runs would hold an absurd amount of memory: each run keeps its
+/// trajectory (about 8(nD + 2D) + 136 bytes per step), and rayon runs as many at once as it
+/// has threads.
+pub fn refuse_memory(steps_per_run: f64, n: usize, d: usize) -> Result<()> {
+    let per_step = (8 * (n * d + 2 * d) + 136) as f64;
+    let parallel = rayon::current_num_threads().max(1) as f64;
+    let estimate = steps_per_run * per_step * parallel;
+    if estimate.is_nan() || estimate > MAX_STUDY_BYTES {
+        return Err(GviError::CostTooHigh {
+            what: format!(
+                "the memory in bytes ({steps_per_run:.3e} steps per run at about {per_step:.0} \
+                 bytes each, {parallel} runs at once; lower --steps or the range)"
+            ),
+            estimate,
+            limit: MAX_STUDY_BYTES,
+        });
+    }
+    Ok(())
+}
+
+/// Refuse a study whose every run failed: there is nothing to report.
+pub fn ensure_some_succeeded(ms: &[Measurement]) -> Result<()> {
+    if !ms.is_empty() && ms.iter().all(|m| m.failure.is_some()) {
+        return Err(GviError::AllRunsFailed {
+            runs: ms.len(),
+            first: ms[0].failure.clone().unwrap_or_default(),
+        });
+    }
+    Ok(())
+}
+
+/// Measurements as CSV.
+pub fn measurements_csv(ms: &[Measurement]) -> String {
+    let mut out = String::from(
+        "basis,quadrature,n,h,steps,map_error,curve_error,energy_error,momentum_error,\
+         newton_iterations,gradient_evaluations,seconds,failure\n",
+    );
+    for m in ms {
+        out.push_str(&format!(
+            "{},{},{},{:e},{},{:e},{:e},{:e},{},{},{},{:e},{}\n",
+            m.basis,
+            m.quadrature,
+            m.n,
+            m.h,
+            m.steps,
+            m.map_error,
+            m.curve_error,
+            m.energy_error,
+            m.momentum_error
+                .map(|x| format!("{x:e}"))
+                .unwrap_or_default(),
+            m.newton_iterations,
+            m.gradient_evaluations,
+            m.seconds,
+            m.failure
+                .as_deref()
+                .map(|f| format!("\"{}\"", f.replace('"', "'")))
+                .unwrap_or_default()
+        ));
+    }
+    out
+}
+
+pub use crate::output::write_file;

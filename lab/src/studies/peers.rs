@@ -1,0 +1,251 @@
+//! Running the Galerkin method and the classical baselines the same way, sampled on a common
+//! grid t_k = t₀ + k·Δ (the work–precision and stability studies).
+
+use crate::error::{GviError, Result};
+use crate::scene::InitialState;
+use galerkin_vi::baselines::{
+    Composition, CompositionScheme, GalerkinMethod, GaussCollocationBaseline, OneStepMethod, Rk4,
+    StaticKernel, StormerVerlet,
+};
+use galerkin_vi::basis::BasisKind;
+use galerkin_vi::integrator::GalerkinIntegrator;
+use galerkin_vi::quadrature::QuadratureKind;
+use galerkin_vi::systems::System;
+use serde::Serialize;
+
+/// A method that can be run on the sampling grid.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(rename_all = "kebab-case", tag = "method")]
+pub enum Peer {
+    /// The Galerkin integrator with `n` functions of `basis`, default quadrature, step Δ/`divisor`.
+    Galerkin {
+        /// Basis.
+        basis: BasisKind,
+        /// Number of basis functions.
+        n: usize,
+    },
+    /// Störmer–Verlet.
+    StormerVerlet,
+    /// Classical RK4.
+    Rk4,
+    /// s-stage Gauss–Legendre collocation.
+    Gauss {
+        /// Stages.
+        s: usize,
+    },
+    /// Symplectic composition of Störmer–Verlet.
+    Composition {
+        /// Which one.
+        scheme: CompositionScheme,
+    },
+    /// DOP853 (adaptive) with rtol = atol = tolerance, stopped at every sample time.
+    Dop853 {
+        /// Tolerance.
+        tolerance: f64,
+    },
+}
+
+impl Peer {
+    /// The method family, e.g. `galerkin-chebyshev`, `gauss-2`, `dop853`.
+    pub fn family(&self) -> String {
+        match self {
+            Peer::Galerkin { basis, .. } => format!("galerkin-{basis}"),
+            Peer::StormerVerlet => "stormer-verlet".into(),
+            Peer::Rk4 => "rk4".into(),
+            Peer::Gauss { s } => format!("gauss-{s}"),
+            Peer::Composition { scheme } => scheme.as_str().into(),
+            Peer::Dop853 { .. } => "dop853".into(),
+        }
+    }
+
+    /// Whether the step is fixed (and divides the sample interval).
+    pub fn fixed_step(&self) -> bool {
+        !matches!(self, Peer::Dop853 { .. })
+    }
+}
+
+/// States at the sample times and the cost of getting them.
+#[derive(Debug, Clone)]
+pub struct SampledRun {
+    /// q at t₀ + kΔ, k = 0 … (samples completed).
+    pub q: Vec<Vec<f64>>,
+    /// p at the same times.
+    pub p: Vec<Vec<f64>>,
+    /// Force evaluations.
+    pub force_evaluations: usize,
+    /// The error that stopped the run early, if any.
+    pub failure: Option<String>,
+}
+
+/// Run `peer` from `initial` for `samples` sample intervals of length `interval`, with
+/// `divisor` fixed steps per interval (ignored by DOP853).
+pub fn run_peer<S: System>(
+    system: &S,
+    initial: &InitialState,
+    peer: Peer,
+    interval: f64,
+    divisor: usize,
+    samples: usize,
+) -> Result<SampledRun> {
+    if divisor == 0 || !(interval.is_finite() && interval > 0.0) {
+        return Err(GviError::InvalidArgument {
+            name: "sampling".into(),
+            reason: format!("interval {interval} with {divisor} steps per interval"),
+        });
+    }
+    let h = interval / divisor as f64;
+    Ok(match peer {
+        Peer::Galerkin { basis, n } => {
+            let gvi = GalerkinIntegrator::from_kinds(basis, n, QuadratureKind::default(), None, h)?;
+            let mut m = GalerkinMethod::new(&gvi, system)?;
+            sampled(&mut m, initial, divisor, samples)
+        }
+        Peer::StormerVerlet => {
+            let mut m = StormerVerlet::new(system, h)?;
+            sampled_fixed(&mut m, initial, divisor, samples)
+        }
+        Peer::Rk4 => sampled_fixed(&mut Rk4::new(system, h)?, initial, divisor, samples),
+        Peer::Gauss { s } => sampled_fixed(
+            &mut GaussCollocationBaseline::new(system, s, h)?,
+            initial,
+            divisor,
+            samples,
+        ),
+        Peer::Composition { scheme } => sampled_fixed(
+            &mut Composition::new(system, scheme, h)?,
+            initial,
+            divisor,
+            samples,
+        ),
+        Peer::Dop853 { tolerance } => dop853(system, initial, interval, tolerance, samples)?,
+    })
+}
+
+#[cfg(feature = "dop853")]
+fn dop853<S: System>(
+    system: &S,
+    initial: &InitialState,
+    interval: f64,
+    tolerance: f64,
+    samples: usize,
+) -> Result<SampledRun> {
+    let mut m = crate::dop853::Dop853Baseline::new(system, interval, tolerance)?;
+    Ok(sampled(&mut m, initial, 1, samples))
+}
+
+#[cfg(not(feature = "dop853"))]
+fn dop853<S: System>(
+    _system: &S,
+    _initial: &InitialState,
+    _interval: f64,
+    _tolerance: f64,
+    _samples: usize,
+) -> Result<SampledRun> {
+    Err(GviError::Unsupported(
+        "DOP853 needs the cargo feature `dop853`".into(),
+    ))
+}
+
+/// The generic loop (monomorphised per method, so timings compare like with like).
+fn sampled<M: OneStepMethod>(
+    m: &mut M,
+    initial: &InitialState,
+    divisor: usize,
+    samples: usize,
+) -> SampledRun {
+    let h = m.step_size();
+    let d = initial.q.len();
+    let mut run = SampledRun {
+        q: Vec::with_capacity(samples + 1),
+        p: Vec::with_capacity(samples + 1),
+        force_evaluations: 0,
+        failure: None,
+    };
+    run.q.push(initial.q.clone());
+    run.p.push(initial.p.clone());
+    let (mut q, mut p) = (initial.q.clone(), initial.p.clone());
+    let (mut qn, mut pn) = (vec![0.0; d], vec![0.0; d]);
+    'outer: for k in 0..samples {
+        for j in 0..divisor {
+            let t = initial.t0 + (k * divisor + j) as f64 * h;
+            if let Err(e) = m.step(t, &q, &p, &mut qn, &mut pn) {
+                run.failure = Some(e.to_string());
+                break 'outer;
+            }
+            std::mem::swap(&mut q, &mut qn);
+            std::mem::swap(&mut p, &mut pn);
+        }
+        if q.iter().chain(&p).any(|x| !x.is_finite()) {
+            run.failure = Some(format!("non-finite state at sample {}", k + 1));
+            break;
+        }
+        run.q.push(q.clone());
+        run.p.push(p.clone());
+    }
+    run.force_evaluations = m.force_evaluations();
+    run
+}
+
+/// A fixed-step baseline on the sampling grid: for the dimensions of the built-in scenes
+/// (D = 1, 2, 4, 6, 18, 30) the fixed-size kernel on `[f64; D]` states (the same arithmetic
+/// as [`OneStepMethod::step`]), otherwise the generic loop.
+pub(crate) fn sampled_fixed<M: StaticKernel>(
+    m: &mut M,
+    initial: &InitialState,
+    divisor: usize,
+    samples: usize,
+) -> SampledRun {
+    let d = initial.q.len();
+    if initial.p.len() != d || m.dim() != d {
+        // The generic loop reports the mismatch.
+        return sampled(m, initial, divisor, samples);
+    }
+    match d {
+        1 => sampled_static::<M, 1>(m, initial, divisor, samples),
+        2 => sampled_static::<M, 2>(m, initial, divisor, samples),
+        4 => sampled_static::<M, 4>(m, initial, divisor, samples),
+        6 => sampled_static::<M, 6>(m, initial, divisor, samples),
+        18 => sampled_static::<M, 18>(m, initial, divisor, samples),
+        30 => sampled_static::<M, 30>(m, initial, divisor, samples),
+        _ => sampled(m, initial, divisor, samples),
+    }
+}
+
+/// [`sampled`] with `[f64; D]` states (the caller has checked the lengths).
+fn sampled_static<M: StaticKernel, const D: usize>(
+    m: &mut M,
+    initial: &InitialState,
+    divisor: usize,
+    samples: usize,
+) -> SampledRun {
+    let mut run = SampledRun {
+        q: Vec::with_capacity(samples + 1),
+        p: Vec::with_capacity(samples + 1),
+        force_evaluations: 0,
+        failure: None,
+    };
+    run.q.push(initial.q.clone());
+    run.p.push(initial.p.clone());
+    let (mut q, mut p) = ([0.0; D], [0.0; D]);
+    q.copy_from_slice(&initial.q);
+    p.copy_from_slice(&initial.p);
+    let h = m.step_size();
+    let mut fsal = None;
+    'outer: for k in 0..samples {
+        for j in 0..divisor {
+            let t = initial.t0 + (k * divisor + j) as f64 * h;
+            if let Err(e) = m.advance(t, &mut q, &mut p, &mut fsal) {
+                run.failure = Some(e.to_string());
+                break 'outer;
+            }
+        }
+        if q.iter().chain(&p).any(|x| !x.is_finite()) {
+            run.failure = Some(format!("non-finite state at sample {}", k + 1));
+            break;
+        }
+        run.q.push(q.to_vec());
+        run.p.push(p.to_vec());
+    }
+    run.force_evaluations = m.force_evaluations();
+    run
+}

@@ -1,0 +1,468 @@
+//! `gvi stability`: where each method works, over a grid of step sizes (and, for the Galerkin
+//! method, numbers of basis functions).
+//!
+//! Every Galerkin cell (h, n) runs a fixed number of steps (default 100, so the horizon grows
+//! with h) and is classified by the relative energy error |E_k − E₀|/|E₀| over the run:
+//! - `accurate`: ≤ 10⁻⁶, and (when an exact solution is known) the max-norm position error
+//!   at the step ends is ≤ 10⁻⁴·max(1, |q₀|);
+//! - `bounded`: ≤ 1 and not growing (the max over the second half of the run is at most ten
+//!   times the max over the first half, or below 10⁻³);
+//! - `solver failure`: the Newton solve failed (the typed error's message is kept);
+//! - `blow-up`: a non-finite state, an energy error > 1, or a growing one.
+//!
+//! For the baselines (Störmer–Verlet, RK4, Gauss s = 2, Yoshida-6, Kahan–Li-8) the largest
+//! stable h is found by bisection with "bounded" over `baseline_steps` steps as the criterion
+//! (doubling from h = 10⁻² to bracket it, then bisecting to a relative width `tolerance`;
+//! capped at `h_max`). This assumes one boundary; on non-linear problems it is the first one
+//! met from small h.
+//!
+//! ```
+//! use galerkin_vi_lab::scene::Scene;
+//! use galerkin_vi_lab::studies::stability::{stability, StabilityConfig};
+//! let scene = Scene::load("harmonic").unwrap();
+//! let study = stability(&scene, &StabilityConfig::quick()).unwrap();
+//! let verlet = study.baselines.iter().find(|b| b.method == "stormer-verlet").unwrap();
+//! assert!((verlet.largest_stable_h - 2.0).abs() < 0.01);
+//! ```
+
+use super::peers::{Peer, run_peer};
+use super::write_file;
+use crate::error::{GviError, Result};
+use crate::plot::HeatMap;
+use crate::run::{SystemVisitor, visit_system};
+use crate::scene::Scene;
+use galerkin_vi::baselines::CompositionScheme;
+use galerkin_vi::integrator::GalerkinIntegrator;
+use galerkin_vi::systems::System;
+use rayon::prelude::*;
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+
+/// The grid and criteria.
+#[derive(Debug, Clone, Serialize)]
+pub struct StabilityConfig {
+    /// Step sizes (the map's columns).
+    pub hs: Vec<f64>,
+    /// Numbers of basis functions (the map's rows).
+    pub ns: Vec<usize>,
+    /// Steps per Galerkin cell.
+    pub steps: usize,
+    /// Steps per baseline stability test.
+    pub baseline_steps: usize,
+    /// Largest h tried for the baselines.
+    pub h_max: f64,
+    /// Relative width at which the bisection stops.
+    pub tolerance: f64,
+}
+
+impl StabilityConfig {
+    /// 12 log-spaced h from 0.1 to 100, n = 2, 4, …, 40, 100 steps per cell; baselines over
+    /// 2000 steps, h ≤ 1000, bisection to 10⁻³.
+    pub fn full() -> Self {
+        StabilityConfig {
+            hs: (0..12)
+                .map(|i| 0.1 * 1000f64.powf(i as f64 / 11.0))
+                .collect(),
+            ns: (2..=40).step_by(2).collect(),
+            steps: 100,
+            baseline_steps: 2000,
+            h_max: 1000.0,
+            tolerance: 1e-3,
+        }
+    }
+
+    /// A small grid (h = 1, 20; n = 4, 24, 40; 20 steps) for tests.
+    pub fn quick() -> Self {
+        StabilityConfig {
+            hs: vec![1.0, 20.0],
+            ns: vec![4, 24, 40],
+            steps: 20,
+            baseline_steps: 2000,
+            h_max: 1000.0,
+            tolerance: 1e-3,
+        }
+    }
+}
+
+/// A cell's class.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Class {
+    /// Energy (and position, if known) accurate.
+    Accurate,
+    /// Energy error bounded but not accurate.
+    Bounded,
+    /// The implicit solve failed.
+    SolverFailure,
+    /// Non-finite, energy error > 1, or growing.
+    BlowUp,
+}
+
+impl Class {
+    /// All classes in legend order.
+    pub const ALL: [Class; 4] = [
+        Class::Accurate,
+        Class::Bounded,
+        Class::SolverFailure,
+        Class::BlowUp,
+    ];
+
+    /// Label.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Class::Accurate => "accurate",
+            Class::Bounded => "bounded",
+            Class::SolverFailure => "solver failure",
+            Class::BlowUp => "blow-up",
+        }
+    }
+}
+
+/// One Galerkin cell.
+#[derive(Debug, Clone, Serialize)]
+pub struct Cell {
+    /// Step size.
+    pub h: f64,
+    /// Basis functions.
+    pub n: usize,
+    /// Class.
+    pub class: Class,
+    /// Max relative energy error over the completed steps.
+    pub energy_error: f64,
+    /// Max position error at the step ends, if an exact solution is known.
+    pub position_error: Option<f64>,
+    /// The solver's error message.
+    pub message: Option<String>,
+}
+
+/// A baseline's largest stable step.
+#[derive(Debug, Clone, Serialize)]
+pub struct BaselineLimit {
+    /// Method family.
+    pub method: String,
+    /// Largest h found stable (0 if even h = 10⁻² is not).
+    pub largest_stable_h: f64,
+    /// Smallest h found unstable (∞ if stable up to `h_max`).
+    pub smallest_unstable_h: f64,
+}
+
+/// The result of a stability study.
+#[derive(Debug, Clone, Serialize)]
+pub struct StabilityStudy {
+    /// Scene name.
+    pub scene: String,
+    /// The grid and criteria.
+    pub config: StabilityConfig,
+    /// Cells, row-major over (n, h).
+    pub cells: Vec<Cell>,
+    /// The baselines' limits.
+    pub baselines: Vec<BaselineLimit>,
+}
+
+/// Run the stability study.
+pub fn stability(scene: &Scene, config: &StabilityConfig) -> Result<StabilityStudy> {
+    if config.hs.is_empty() || config.ns.is_empty() || config.steps == 0 {
+        return Err(GviError::InvalidArgument {
+            name: "stability grid".into(),
+            reason: "needs at least one h, one n and one step".into(),
+        });
+    }
+    let total = (config.hs.len() * config.ns.len()) as f64 * config.steps as f64;
+    let limit = super::work_precision::MAX_TOTAL_STEPS;
+    if total > limit {
+        return Err(GviError::CostTooHigh {
+            what: format!(
+                "the total number of integration steps ({} cells × {} steps per cell; lower \
+                 --cell-steps)",
+                config.hs.len() * config.ns.len(),
+                config.steps
+            ),
+            estimate: total,
+            limit,
+        });
+    }
+    let max_n = config.ns.iter().copied().max().unwrap_or(0);
+    super::refuse_memory(config.steps as f64, max_n, scene.initial.q.len())?;
+    struct Visit<'a>(&'a Scene, &'a StabilityConfig);
+    impl SystemVisitor for Visit<'_> {
+        type Output = StabilityStudy;
+        fn visit<S: System + Sync>(self, system: &S) -> Result<StabilityStudy> {
+            study_system(system, self.0, self.1)
+        }
+    }
+    visit_system(&scene.system, Visit(scene, config))
+}
+
+fn study_system<S: System + Sync>(
+    system: &S,
+    scene: &Scene,
+    config: &StabilityConfig,
+) -> Result<StabilityStudy> {
+    let grid: Vec<(usize, f64)> = config
+        .ns
+        .iter()
+        .flat_map(|&n| config.hs.iter().map(move |&h| (n, h)))
+        .collect();
+    let baselines = [
+        Peer::StormerVerlet,
+        Peer::Rk4,
+        Peer::Gauss { s: 2 },
+        Peer::Composition {
+            scheme: CompositionScheme::Yoshida6,
+        },
+        Peer::Composition {
+            scheme: CompositionScheme::KahanLi8,
+        },
+    ];
+    let pb = crate::progress::bar(grid.len() + baselines.len(), "stability");
+    let cells: Vec<Cell> = grid
+        .par_iter()
+        .map(|&(n, h)| {
+            let c = galerkin_cell(system, scene, n, h, config.steps);
+            pb.inc(1);
+            c
+        })
+        .collect();
+    // The classical baselines need L = ½ vᵀ M v − V(q): none for a non-separable Lagrangian.
+    let baselines = match system.mass_matrix() {
+        Some(_) => &baselines[..],
+        None => &[],
+    };
+    let limits: Vec<BaselineLimit> = baselines
+        .par_iter()
+        .map(|&peer| {
+            let l = largest_stable_h(system, scene, peer, config);
+            pb.inc(1);
+            l
+        })
+        .collect();
+    pb.finish_and_clear();
+    Ok(StabilityStudy {
+        scene: scene.name.clone(),
+        config: config.clone(),
+        cells,
+        baselines: limits,
+    })
+}
+
+/// Max relative energy error over the states, and whether it grows (second half > 10 × first
+/// half and above 10⁻³).
+fn energy_profile<S: System>(system: &S, q: &[Vec<f64>], p: &[Vec<f64>]) -> (f64, bool) {
+    if system.invariant_names().is_empty() || q.is_empty() {
+        return (f64::NAN, false);
+    }
+    let mut inv = vec![0.0; system.invariant_names().len()];
+    system.invariants(&q[0], &p[0], &mut inv);
+    let e0 = inv[0];
+    let scale = e0.abs().max(1e-300);
+    let half = q.len() / 2;
+    let (mut first, mut second) = (0.0f64, 0.0f64);
+    for k in 0..q.len() {
+        system.invariants(&q[k], &p[k], &mut inv);
+        let e = (inv[0] - e0).abs() / scale;
+        let e = if e.is_finite() { e } else { f64::INFINITY };
+        if k <= half {
+            first = first.max(e);
+        } else {
+            second = second.max(e);
+        }
+    }
+    let worst = first.max(second);
+    (worst, second > 1e-3 && second > 10.0 * first)
+}
+
+fn classify(energy: f64, growing: bool, position_ok: bool) -> Class {
+    if !energy.is_finite() || energy > 1.0 || growing {
+        Class::BlowUp
+    } else if energy <= 1e-6 && position_ok {
+        Class::Accurate
+    } else {
+        Class::Bounded
+    }
+}
+
+fn galerkin_cell<S: System>(system: &S, scene: &Scene, n: usize, h: f64, steps: usize) -> Cell {
+    let init = &scene.initial;
+    let m = &scene.method;
+    let mut cell = Cell {
+        h,
+        n,
+        class: Class::SolverFailure,
+        energy_error: f64::NAN,
+        position_error: None,
+        message: None,
+    };
+    let gvi = match GalerkinIntegrator::from_kinds(m.basis, n, m.quadrature, None, h) {
+        Ok(g) => g,
+        Err(e) => {
+            cell.message = Some(e.to_string());
+            return cell;
+        }
+    };
+    let traj = match gvi.integrate(system, init.t0, &init.q, &init.p, steps) {
+        Ok(t) => t,
+        Err(f) => {
+            cell.message = Some(f.error.to_string());
+            if let Some(p) = f.partial {
+                cell.energy_error = energy_profile(system, &p.q, &p.p).0;
+            }
+            return cell;
+        }
+    };
+    let (energy, growing) = energy_profile(system, &traj.q, &traj.p);
+    cell.energy_error = energy;
+    if let Ok(Some(exact)) = system.exact_solution(init.t0, &init.q, &init.p) {
+        let err = (0..traj.q.len())
+            .map(|k| super::max_norm_diff(&traj.q[k], &exact.position(traj.time(k))))
+            .fold(0.0, f64::max);
+        cell.position_error = Some(if err.is_finite() { err } else { f64::INFINITY });
+    }
+    let scale = init.q.iter().fold(1.0f64, |a, x| a.max(x.abs()));
+    let position_ok = cell.position_error.is_none_or(|e| e <= 1e-4 * scale);
+    cell.class = classify(energy, growing, position_ok);
+    cell
+}
+
+/// Whether `peer` keeps a bounded energy over `steps` steps of size h.
+pub fn bounded_at<S: System>(system: &S, scene: &Scene, peer: Peer, h: f64, steps: usize) -> bool {
+    match run_peer(system, &scene.initial, peer, h, 1, steps) {
+        Ok(run) if run.failure.is_none() => {
+            let (e, growing) = energy_profile(system, &run.q, &run.p);
+            matches!(classify(e, growing, true), Class::Accurate | Class::Bounded)
+        }
+        _ => false,
+    }
+}
+
+fn largest_stable_h<S: System>(
+    system: &S,
+    scene: &Scene,
+    peer: Peer,
+    config: &StabilityConfig,
+) -> BaselineLimit {
+    let ok = |h: f64| bounded_at(system, scene, peer, h, config.baseline_steps);
+    let (mut lo, mut hi) = (0.0, 1e-2);
+    while hi <= config.h_max && ok(hi) {
+        lo = hi;
+        hi *= 2.0;
+    }
+    if hi > config.h_max {
+        hi = f64::INFINITY;
+    } else if lo > 0.0 {
+        while hi - lo > config.tolerance * hi {
+            let mid = 0.5 * (lo + hi);
+            if ok(mid) {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+    }
+    BaselineLimit {
+        method: peer.family(),
+        largest_stable_h: lo,
+        smallest_unstable_h: hi,
+    }
+}
+
+impl StabilityStudy {
+    /// The cell at (n, h), if on the grid.
+    pub fn cell(&self, n: usize, h: f64) -> Option<&Cell> {
+        self.cells
+            .iter()
+            .find(|c| c.n == n && (c.h - h).abs() <= 1e-12 * h)
+    }
+
+    /// Number of cells in each class, in [`Class::ALL`] order.
+    pub fn counts(&self) -> [usize; 4] {
+        Class::ALL.map(|k| self.cells.iter().filter(|c| c.class == k).count())
+    }
+
+    /// The heat map over (h, n).
+    pub fn heat_map(&self) -> HeatMap {
+        let cfg = &self.config;
+        let cells = cfg
+            .ns
+            .iter()
+            .map(|&n| {
+                cfg.hs
+                    .iter()
+                    .map(|&h| {
+                        self.cell(n, h)
+                            .and_then(|c| Class::ALL.iter().position(|&k| k == c.class))
+                            .unwrap_or(usize::MAX)
+                    })
+                    .collect()
+            })
+            .collect();
+        HeatMap {
+            title: format!(
+                "{}: Galerkin stability map ({} steps per cell)",
+                self.scene, cfg.steps
+            ),
+            x_label: "h (step size)".into(),
+            y_label: "n (basis functions)".into(),
+            x_values: cfg.hs.clone(),
+            y_values: cfg.ns.iter().map(|&n| n as f64).collect(),
+            x_log: true,
+            cells,
+            categories: vec![
+                ("accurate".into(), (46, 160, 67)),
+                ("bounded".into(), (120, 180, 230)),
+                ("solver failure".into(), (240, 160, 40)),
+                ("blow-up".into(), (200, 40, 40)),
+            ],
+        }
+    }
+
+    /// CSV of the cells, then the baselines' limits.
+    pub fn csv(&self) -> String {
+        let mut out = String::from("h,n,class,energy_error,position_error,message\n");
+        for c in &self.cells {
+            out.push_str(&format!(
+                "{:e},{},{},{:e},{},{}\n",
+                c.h,
+                c.n,
+                c.class.as_str(),
+                c.energy_error,
+                c.position_error
+                    .map(|e| format!("{e:e}"))
+                    .unwrap_or_default(),
+                c.message
+                    .as_deref()
+                    .map(|m| format!("\"{}\"", m.replace('"', "'")))
+                    .unwrap_or_default()
+            ));
+        }
+        out
+    }
+
+    /// The baselines' limits as CSV.
+    pub fn baselines_csv(&self) -> String {
+        let mut out = String::from("method,largest_stable_h,smallest_unstable_h\n");
+        for b in &self.baselines {
+            out.push_str(&format!(
+                "{},{:e},{:e}\n",
+                b.method, b.largest_stable_h, b.smallest_unstable_h
+            ));
+        }
+        out
+    }
+
+    /// Write `stability.{csv,json,svg}` and `stability_baselines.csv` into `dir`.
+    pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>> {
+        let csv = dir.join("stability.csv");
+        write_file(&csv, &self.csv())?;
+        let base = dir.join("stability_baselines.csv");
+        write_file(&base, &self.baselines_csv())?;
+        let json = dir.join("stability.json");
+        let text =
+            serde_json::to_string_pretty(self).map_err(|e| GviError::Serialize(e.to_string()))?;
+        write_file(&json, &text)?;
+        let svg = dir.join("stability.svg");
+        self.heat_map()
+            .save_svg(&svg)
+            .map_err(|e| GviError::Plot(e.to_string()))?;
+        Ok(vec![csv, base, json, svg])
+    }
+}

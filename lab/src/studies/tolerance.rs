@@ -1,0 +1,470 @@
+//! `gvi tolerance-study`: does a tolerance-driven run ([`galerkin_vi::adaptive`]) meet the requested
+//! tolerance, and is it cheaper than the cheapest fixed n that meets it?
+//!
+//! For every requested tolerance and every error control, the scene is run with
+//! [`integrate_adaptive`] (the scene's basis, quadrature, h and steps) and its max position
+//! error over the step ends (max-norm) is measured against a reference; every fixed n from the
+//! smallest to the largest rung of the ladder is run once with the same h and steps, and the
+//! cheapest one (force evaluations, [`Trajectory::gradient_evaluations`]) whose error meets
+//! the tolerance is the competitor. The reference is the exact solution where one is known,
+//! for N-body scenes Gauss collocation with 6 stages at h/K (K as in
+//! [`crate::nbody_report`]: the shortest two-body period spans ≥ 256 reference steps, and at
+//! least 16 substeps), otherwise the spectral run of [`Reference::for_system`].
+//!
+//! Each row also carries the oracle bound of [`super::allocation`]: the cheapest choice of n
+//! per step with every one-step error known (n from the smallest rung to four above the
+//! largest cheapest fixed n, one-step errors against a solve eight above that), within the
+//! summed one-step error of the cheapest fixed n — what choosing n alone could save.
+
+use super::allocation::{Allocation, one_step_errors};
+use super::{Reference, max_norm_diff, write_file};
+use crate::error::Result;
+use crate::plot::{Chart, Series};
+use crate::run::{SystemVisitor, visit_system};
+use crate::scene::Scene;
+use galerkin_vi::adaptive::{AdaptiveOptions, DEFAULT_LADDER, ErrorControl, integrate_adaptive};
+use galerkin_vi::baselines::GaussCollocationBaseline;
+use galerkin_vi::integrator::GalerkinIntegrator;
+use galerkin_vi::systems::{NBody, System};
+use galerkin_vi::trajectory::Trajectory;
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+
+/// What to measure.
+#[derive(Debug, Clone, Serialize)]
+pub struct ToleranceConfig {
+    /// Requested tolerances (max position error over the run).
+    pub tols: Vec<f64>,
+    /// Error controls to compare.
+    pub controls: Vec<ErrorControl>,
+    /// The ladder of n (also the range of the fixed-n scan).
+    pub ladder: Vec<usize>,
+}
+
+impl Default for ToleranceConfig {
+    fn default() -> Self {
+        ToleranceConfig {
+            tols: vec![1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12],
+            controls: vec![ErrorControl::Calibrated, ErrorControl::Embedded],
+            ladder: DEFAULT_LADDER.to_vec(),
+        }
+    }
+}
+
+/// One adaptive run at one tolerance, with the cheapest fixed n meeting the same tolerance.
+#[derive(Debug, Clone, Serialize)]
+pub struct ToleranceRow {
+    /// Requested tolerance.
+    pub tol: f64,
+    /// Error control.
+    pub control: ErrorControl,
+    /// Achieved max position error.
+    pub error: f64,
+    /// error / tol.
+    pub factor: f64,
+    /// Force evaluations of the adaptive run (including checks and rejected attempts).
+    pub cost: usize,
+    /// Smallest and largest n used.
+    pub n_range: (usize, usize),
+    /// Steps solved at two rungs.
+    pub checks: usize,
+    /// Warnings of the run (tolerance not met at the largest n) or its failure.
+    pub warnings: usize,
+    /// Cheapest fixed n meeting tol: (n, error, cost).
+    pub fixed: Option<(usize, f64, usize)>,
+    /// fixed cost / adaptive cost (> 1: the adaptive run is cheaper).
+    pub saving: Option<f64>,
+    /// Wall time of the adaptive run, seconds (secondary to the deterministic cost).
+    pub seconds: f64,
+    /// Wall time of the cheapest fixed-n run meeting tol, seconds.
+    pub fixed_seconds: Option<f64>,
+    /// The oracle bound ([`super::allocation`]): the cheapest per-step allocation of n whose
+    /// summed one-step error is at most that of the cheapest fixed n.
+    pub oracle: Option<Allocation>,
+    /// The oracle's budget: the summed one-step error of the cheapest fixed n.
+    pub oracle_budget: Option<f64>,
+}
+
+/// The study of one scene.
+#[derive(Debug, Clone, Serialize)]
+pub struct ToleranceStudy {
+    /// Scene name.
+    pub scene: String,
+    /// Step size and steps.
+    pub h: f64,
+    /// Number of steps.
+    pub steps: usize,
+    /// Reference description.
+    pub reference: String,
+    /// Every fixed n run: (n, error, cost); error NaN for a failed run.
+    pub fixed: Vec<(usize, f64, usize)>,
+    /// Wall time of every fixed n run, seconds (same order as `fixed`).
+    pub fixed_seconds: Vec<f64>,
+    /// One row per tolerance and control.
+    pub rows: Vec<ToleranceRow>,
+}
+
+/// Run the study on a scene (its method's basis, quadrature, h and steps).
+pub fn tolerance_study(scene: &Scene, config: &ToleranceConfig) -> Result<ToleranceStudy> {
+    struct V<'a>(&'a Scene, &'a ToleranceConfig);
+    impl SystemVisitor for V<'_> {
+        type Output = ToleranceStudy;
+        fn visit<S: System + Sync>(self, system: &S) -> Result<ToleranceStudy> {
+            let (reference, label) = step_end_reference(system, self.0)?;
+            study_system(system, self.0, self.1, &reference, label)
+        }
+    }
+    visit_system(&scene.system, V(scene, config))
+}
+
+/// Reference positions at the step ends t0 + k h, k = 0…steps.
+fn step_end_reference<S: System>(system: &S, scene: &Scene) -> Result<(Vec<Vec<f64>>, String)> {
+    let (m, init) = (&scene.method, &scene.initial);
+    if let Some((nbody, _)) = scene.system.nbody()? {
+        let k = gauss_substeps(&nbody, &init.q, m.h);
+        let mut gauss = GaussCollocationBaseline::new(&nbody, 6, m.h / k as f64)?;
+        let (rq, _) = gauss.integrate_compensated(&init.q, &init.p, m.steps * k, k)?;
+        return Ok((rq, format!("Gauss collocation s = 6, h/{k}")));
+    }
+    let reference = Reference::for_system(system, init, m.h, m.h * m.steps as f64)?;
+    let qs = (0..=m.steps)
+        .map(|k| reference.position(init.t0 + k as f64 * m.h))
+        .collect::<Result<Vec<_>>>()?;
+    Ok((qs, reference.describe().to_string()))
+}
+
+fn gauss_substeps(system: &NBody, q: &[f64], h: f64) -> usize {
+    let (nb, k) = (system.bodies(), system.body_dim());
+    let ms = system.masses();
+    let mut shortest = f64::INFINITY;
+    for i in 0..nb {
+        for j in i + 1..nb {
+            let r2: f64 = (0..k).map(|c| (q[i * k + c] - q[j * k + c]).powi(2)).sum();
+            let period =
+                std::f64::consts::TAU * (r2 * r2.sqrt() / (system.g() * (ms[i] + ms[j]))).sqrt();
+            shortest = shortest.min(period);
+        }
+    }
+    if shortest.is_finite() && shortest > 0.0 {
+        ((h * 256.0 / shortest).ceil() as usize).clamp(16, 100_000)
+    } else {
+        64
+    }
+}
+
+/// Index of the cheapest fixed-n run (n, error, cost) whose error meets tol.
+fn cheapest_fixed(fixed: &[(usize, f64, usize)], tol: f64) -> Option<usize> {
+    fixed
+        .iter()
+        .enumerate()
+        .filter(|(_, f)| f.1 <= tol)
+        .min_by_key(|(_, f)| f.2)
+        .map(|(i, _)| i)
+}
+
+fn max_error(traj: &Trajectory, reference: &[Vec<f64>]) -> f64 {
+    if traj.q.len() != reference.len() {
+        return f64::NAN;
+    }
+    traj.q
+        .iter()
+        .zip(reference)
+        .map(|(a, b)| max_norm_diff(a, b))
+        .fold(0.0, f64::max)
+}
+
+fn study_system<S: System>(
+    system: &S,
+    scene: &Scene,
+    config: &ToleranceConfig,
+    reference: &[Vec<f64>],
+    label: String,
+) -> Result<ToleranceStudy> {
+    let (m, init) = (&scene.method, &scene.initial);
+    let lo = config.ladder.first().copied().unwrap_or(4);
+    let hi = config.ladder.last().copied().unwrap_or(64);
+    let mut fixed = Vec::new();
+    let mut fixed_seconds = Vec::new();
+    for n in lo..=hi {
+        let gvi = GalerkinIntegrator::from_kinds(m.basis, n, m.quadrature, None, m.h)?;
+        let clock = std::time::Instant::now();
+        let result = gvi.integrate(system, init.t0, &init.q, &init.p, m.steps);
+        fixed_seconds.push(clock.elapsed().as_secs_f64());
+        let (err, cost) = match result {
+            Ok(t) => (max_error(&t, reference), t.gradient_evaluations()),
+            Err(_) => (f64::NAN, 0),
+        };
+        fixed.push((n, err, cost));
+    }
+    // The oracle bound: one-step errors for n from the smallest rung to a few above the
+    // largest cheapest fixed n, against a solve eight above that.
+    let needed = config
+        .tols
+        .iter()
+        .filter_map(|&tol| cheapest_fixed(&fixed, tol).map(|i| fixed[i].0))
+        .max();
+    let one_step = match needed {
+        Some(nf) => {
+            let cap = (nf + 4).min(hi);
+            let ns: Vec<usize> = (lo..=cap).collect();
+            let cost: Vec<f64> = fixed[..ns.len()]
+                .iter()
+                .map(|f| {
+                    if f.1.is_finite() {
+                        f.2 as f64 / m.steps as f64
+                    } else {
+                        f64::INFINITY
+                    }
+                })
+                .collect();
+            one_step_errors(system, scene, &ns, &cost, (cap + 8).min(hi.max(cap + 1))).ok()
+        }
+        None => None,
+    };
+    let mut rows = Vec::new();
+    for &tol in &config.tols {
+        let cheapest_at = cheapest_fixed(&fixed, tol);
+        let cheapest = cheapest_at.map(|i| fixed[i]);
+        let cheapest_seconds = cheapest_at.map(|i| fixed_seconds[i]);
+        let oracle_budget = match (&one_step, cheapest) {
+            (Some(e), Some((n, _, _))) => e.fixed_error_sum(n),
+            _ => None,
+        };
+        let oracle = match (&one_step, cheapest, oracle_budget) {
+            (Some(e), Some((n, _, cost)), Some(budget)) => e.cheapest_within(budget).map(|a| {
+                // The fixed choice itself is feasible: never report more than it.
+                if a.cost <= cost as f64 {
+                    a
+                } else {
+                    Allocation {
+                        cost: cost as f64,
+                        error_sum: budget,
+                        n_range: (n, n),
+                    }
+                }
+            }),
+            _ => None,
+        };
+        for &control in &config.controls {
+            let mut opts = AdaptiveOptions::new(tol, m.basis, m.quadrature, m.h);
+            opts.ladder = config.ladder.clone();
+            opts.control = control;
+            let clock = std::time::Instant::now();
+            let result = integrate_adaptive(system, &opts, init.t0, &init.q, &init.p, m.steps);
+            let seconds = clock.elapsed().as_secs_f64();
+            let row = match result {
+                Ok(run) => {
+                    let t = &run.trajectory;
+                    let error = max_error(t, reference);
+                    let n_lo = t.step_n.iter().copied().min().unwrap_or(0);
+                    let n_hi = t.step_n.iter().copied().max().unwrap_or(0);
+                    ToleranceRow {
+                        tol,
+                        control,
+                        error,
+                        factor: error / tol,
+                        cost: run.gradient_evaluations,
+                        n_range: (n_lo, n_hi),
+                        checks: run.checks,
+                        warnings: run.warnings.len(),
+                        fixed: cheapest,
+                        saving: cheapest.map(|f| f.2 as f64 / run.gradient_evaluations as f64),
+                        seconds,
+                        fixed_seconds: cheapest_seconds,
+                        oracle,
+                        oracle_budget,
+                    }
+                }
+                Err(_) => ToleranceRow {
+                    tol,
+                    control,
+                    error: f64::NAN,
+                    factor: f64::NAN,
+                    cost: 0,
+                    n_range: (0, 0),
+                    checks: 0,
+                    warnings: 1,
+                    fixed: cheapest,
+                    saving: None,
+                    seconds,
+                    fixed_seconds: cheapest_seconds,
+                    oracle,
+                    oracle_budget,
+                },
+            };
+            rows.push(row);
+        }
+    }
+    Ok(ToleranceStudy {
+        scene: scene.name.clone(),
+        h: m.h,
+        steps: m.steps,
+        reference: label,
+        fixed,
+        fixed_seconds,
+        rows,
+    })
+}
+
+impl ToleranceStudy {
+    /// The rows as CSV.
+    pub fn to_csv(&self) -> String {
+        let mut out = String::from(
+            "scene,tol,control,error,factor,cost,n_min,n_max,checks,warnings,fixed_n,\
+             fixed_error,fixed_cost,saving,seconds,fixed_seconds,oracle_cost,oracle_n_min,\
+             oracle_n_max\n",
+        );
+        for r in &self.rows {
+            let (fname, ferr, fcost) = match r.fixed {
+                Some((n, e, c)) => (n.to_string(), format!("{e:e}"), c.to_string()),
+                None => Default::default(),
+            };
+            let (ocost, olo, ohi) = match r.oracle {
+                Some(a) => (
+                    format!("{:.0}", a.cost),
+                    a.n_range.0.to_string(),
+                    a.n_range.1.to_string(),
+                ),
+                None => Default::default(),
+            };
+            out.push_str(&format!(
+                "{},{:e},{},{:e},{:.3},{},{},{},{},{},{},{},{},{},{:.4},{},{},{},{}\n",
+                self.scene,
+                r.tol,
+                r.control,
+                r.error,
+                r.factor,
+                r.cost,
+                r.n_range.0,
+                r.n_range.1,
+                r.checks,
+                r.warnings,
+                fname,
+                ferr,
+                fcost,
+                r.saving.map(|s| format!("{s:.3}")).unwrap_or_default(),
+                r.seconds,
+                r.fixed_seconds
+                    .map(|s| format!("{s:.4}"))
+                    .unwrap_or_default(),
+                ocost,
+                olo,
+                ohi
+            ));
+        }
+        out
+    }
+
+    /// The rows as a Markdown table.
+    pub fn to_markdown(&self) -> String {
+        let mut out = format!(
+            "{} (h = {}, {} steps; reference: {})\n\n| tol | control | achieved | ×tol | cost | n | \
+             checks | cheapest fixed n | its error | its cost | saving | time (ms) | fixed time (ms) | \
+             oracle per-step n: cost (n) | oracle saving |\n\
+             |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+            self.scene, self.h, self.steps, self.reference
+        );
+        for r in &self.rows {
+            let fixed = match r.fixed {
+                Some((n, e, c)) => format!("{n} | {e:.1e} | {c}"),
+                None => "none ≤ ladder max | – | –".into(),
+            };
+            let (oracle, oracle_saving) = match (r.oracle, r.fixed) {
+                (Some(a), Some(f)) => (
+                    format!("{:.0} ({}–{})", a.cost, a.n_range.0, a.n_range.1),
+                    format!("{:.2}×", f.2 as f64 / a.cost),
+                ),
+                _ => ("–".into(), "–".into()),
+            };
+            out.push_str(&format!(
+                "| {:.0e} | {} | {:.1e} | {:.2} | {} | {}–{} | {} | {} |{} | {:.1} | {} | {} | {} |\n",
+                r.tol,
+                r.control,
+                r.error,
+                r.factor,
+                r.cost,
+                r.n_range.0,
+                r.n_range.1,
+                r.checks,
+                fixed,
+                r.saving.map(|s| format!(" {s:.2}×")).unwrap_or(" –".into()),
+                1e3 * r.seconds,
+                r.fixed_seconds
+                    .map(|s| format!("{:.1}", 1e3 * s))
+                    .unwrap_or("–".into()),
+                oracle,
+                oracle_saving,
+            ));
+        }
+        out
+    }
+
+    /// Achieved error and cost against tol: adaptive (per control) and cheapest fixed n.
+    pub fn charts(&self) -> (Chart, Chart) {
+        let title = format!("{}: tolerance-driven n against fixed n", self.scene);
+        let mut err = Chart::new(&title, "requested tolerance", "achieved max position error")
+            .log_x()
+            .log_y();
+        let mut cost = Chart::new(&title, "requested tolerance", "force evaluations")
+            .log_x()
+            .log_y();
+        let tols: Vec<f64> = self.rows.iter().map(|r| r.tol).collect();
+        err.push(Series::dashed("error = tol", tols.iter().map(|&t| (t, t))).with_color(0));
+        let mut controls: Vec<ErrorControl> = self.rows.iter().map(|r| r.control).collect();
+        controls.dedup();
+        controls.sort_by_key(|c| c.to_string());
+        controls.dedup();
+        for (i, c) in controls.iter().enumerate() {
+            let rs = self.rows.iter().filter(|r| r.control == *c);
+            err.push(
+                Series::line_markers(
+                    format!("adaptive ({c})"),
+                    rs.clone().map(|r| (r.tol, r.error)),
+                )
+                .with_color(i + 1),
+            );
+            cost.push(
+                Series::line_markers(
+                    format!("adaptive ({c})"),
+                    rs.map(|r| (r.tol, r.cost as f64)),
+                )
+                .with_color(i + 1),
+            );
+        }
+        let fx = self.rows.iter().filter_map(|r| r.fixed.map(|f| (r.tol, f)));
+        err.push(
+            Series::line_markers("cheapest fixed n", fx.clone().map(|(t, f)| (t, f.1)))
+                .with_color(6),
+        );
+        cost.push(
+            Series::line_markers("cheapest fixed n", fx.map(|(t, f)| (t, f.2 as f64)))
+                .with_color(6),
+        );
+        let oracle = self
+            .rows
+            .iter()
+            .filter_map(|r| r.oracle.map(|a| (r.tol, a.cost)));
+        cost.push(Series::dashed("oracle per-step n (bound)", oracle).with_color(5));
+        (err, cost)
+    }
+
+    /// Write `<scene>-tolerance.csv`, `.md`, `-error.svg` and `-cost.svg` to `dir`.
+    pub fn write_to(&self, dir: &Path) -> Result<Vec<PathBuf>> {
+        let stem = format!("{}-tolerance", self.scene);
+        let csv = dir.join(format!("{stem}.csv"));
+        let md = dir.join(format!("{stem}.md"));
+        write_file(&csv, &self.to_csv())?;
+        write_file(&md, &self.to_markdown())?;
+        let (e, c) = self.charts();
+        let (es, cs) = (
+            dir.join(format!("{stem}-error.svg")),
+            dir.join(format!("{stem}-cost.svg")),
+        );
+        for (chart, path) in [(e, &es), (c, &cs)] {
+            chart
+                .save_svg(path)
+                .map_err(|e| crate::error::GviError::Plot(e.to_string()))?;
+        }
+        Ok(vec![csv, md, es, cs])
+    }
+}

@@ -1,0 +1,563 @@
+//! `gvi work-precision`: max position error against CPU time for the Galerkin method (every
+//! basis, several h × n) and the classical peers (Störmer–Verlet, RK4, Gauss collocation,
+//! Yoshida-6, Kahan–Li-8, DOP853) on one scene and horizon.
+//!
+//! Protocol: every method is sampled at t_k = t₀ + kΔ, Δ = the scene's h (the coarsest common
+//! grid; fixed-step methods take Δ/m steps, DOP853 stops exactly at every t_k); the error is
+//! the max over the samples of the max-norm position error against the exact solution or
+//! [`Reference::for_system`]. The time is the median wall-clock time of `repeats` runs in this
+//! process (building the method included), run one after another (never in parallel, so that
+//! runs do not compete for cores). Timing is measured, never asserted.
+//!
+//! External peers (e.g. REBOUND's IAS15 and WHFast, `scripts/rebound/work_precision.py`) write
+//! rows in the same CSV schema; [`read_external_csv`] reads them (typed errors naming the file
+//! and line) and [`WorkPrecisionStudy::merge_external`] merges them into the table, the Pareto
+//! front, the fastest table and the chart, marked `external`. [`reference_csv`] writes the
+//! reference positions at the sample times for such scripts.
+//!
+//! A sweep whose predicted cost is absurd is refused up front ([`GviError::CostTooHigh`]):
+//! more than [`MAX_SAMPLES`] samples, or more than [`MAX_TOTAL_STEPS`] integration steps in
+//! total (samples × steps per sample interval, summed over the configurations, times the
+//! repeats, plus the reference run).
+//!
+//! ```
+//! use galerkin_vi_lab::scene::Scene;
+//! use galerkin_vi_lab::studies::work_precision::{work_precision, WorkPrecisionConfig};
+//! let mut scene = Scene::load("harmonic").unwrap();
+//! scene.method.h = 1.0;
+//! scene.method.steps = 10;
+//! let study = work_precision(&scene, &WorkPrecisionConfig::quick()).unwrap();
+//! assert!(study.points.iter().any(|p| p.method.starts_with("galerkin")));
+//! assert!(!study.pareto_front().is_empty());
+//! ```
+
+use super::peers::{Peer, run_peer};
+use super::{Reference, max_norm_diff, write_file};
+use crate::error::{GviError, Result};
+use crate::run::{SystemVisitor, visit_system};
+use crate::scene::Scene;
+use galerkin_vi::baselines::CompositionScheme;
+use galerkin_vi::basis::BasisKind;
+use galerkin_vi::systems::System;
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+mod external;
+mod report;
+
+pub use external::{EXTERNAL_COLUMNS, read_external_csv};
+
+/// What to sweep.
+#[derive(Debug, Clone, Serialize)]
+pub struct WorkPrecisionConfig {
+    /// Time span (default: the scene's h · steps).
+    pub horizon: Option<f64>,
+    /// Timed repetitions per configuration (the median is reported).
+    pub repeats: usize,
+    /// Galerkin bases to sweep.
+    pub bases: Vec<BasisKind>,
+    /// Galerkin steps per sample interval (h = Δ/m).
+    pub galerkin_divisors: Vec<usize>,
+    /// Galerkin numbers of basis functions.
+    pub ns: Vec<usize>,
+    /// Fixed-step baselines: steps per sample interval, tried in increasing order.
+    pub baseline_divisors: Vec<usize>,
+    /// Gauss collocation stage counts.
+    pub gauss_stages: Vec<usize>,
+    /// DOP853 tolerances (rtol = atol).
+    pub tolerances: Vec<f64>,
+    /// Skip fixed-step runs with more steps than this.
+    pub max_steps: usize,
+}
+
+impl WorkPrecisionConfig {
+    /// The full study: h ∈ Δ·{1, ½, ¼, ⅛}, n = 4 … 40, baselines at 1 … 2¹⁴ steps per
+    /// interval (at most 2·10⁶ steps), Gauss s = 2, 4, DOP853 at 10⁻⁴ … 10⁻¹⁴, 5 repeats.
+    pub fn full() -> Self {
+        WorkPrecisionConfig {
+            horizon: None,
+            repeats: 5,
+            bases: BasisKind::ALL.to_vec(),
+            galerkin_divisors: vec![1, 2, 4, 8],
+            ns: (4..=40).step_by(2).collect(),
+            baseline_divisors: (0..=14).map(|k| 1 << k).collect(),
+            gauss_stages: vec![2, 4],
+            tolerances: (4..=14).map(|k| 10f64.powi(-k)).collect(),
+            max_steps: 2_000_000,
+        }
+    }
+
+    /// A reduced study (seconds), for tests and smoke runs.
+    pub fn quick() -> Self {
+        WorkPrecisionConfig {
+            horizon: None,
+            repeats: 1,
+            bases: BasisKind::ALL.to_vec(),
+            galerkin_divisors: vec![1, 2],
+            ns: vec![4, 8, 12, 16],
+            baseline_divisors: vec![1, 4, 16, 64],
+            gauss_stages: vec![2],
+            tolerances: vec![1e-4, 1e-8, 1e-12],
+            max_steps: 20_000,
+        }
+    }
+
+    /// The long-run study (T = 20,000 unless a horizon is given; minutes on Kepler): the
+    /// accurate end of every family only — Legendre and Chebyshev–Lagrange at h ∈ Δ·{½, ¼},
+    /// n = 16 … 32, baselines at 16 … 128 steps per interval, Gauss s = 4, DOP853 at
+    /// 10⁻¹⁰ … 10⁻¹⁴ — one repeat each.
+    pub fn long() -> Self {
+        WorkPrecisionConfig {
+            horizon: Some(20_000.0),
+            repeats: 1,
+            bases: vec![BasisKind::Legendre, BasisKind::Chebyshev],
+            galerkin_divisors: vec![2, 4],
+            ns: vec![16, 20, 24, 28, 32],
+            baseline_divisors: vec![16, 32, 64, 128],
+            gauss_stages: vec![4],
+            tolerances: (10..=14).map(|k| 10f64.powi(-k)).collect(),
+            max_steps: 2_000_000,
+        }
+    }
+}
+
+/// One configuration's cost and error.
+#[derive(Debug, Clone, Serialize)]
+pub struct WorkPoint {
+    /// Method family (`galerkin-chebyshev`, `stormer-verlet`, `rk4`, `gauss-2`, `yoshida-6`,
+    /// `kahan-li-8`, `dop853`).
+    pub method: String,
+    /// Its parameters, e.g. `n = 16, h = 0.5` or `tol = 1e-9`.
+    pub parameters: String,
+    /// Step size (fixed-step methods).
+    pub h: Option<f64>,
+    /// Basis functions (Galerkin).
+    pub n: Option<usize>,
+    /// Tolerance (DOP853).
+    pub tolerance: Option<f64>,
+    /// Max position error over the samples (∞ on failure).
+    pub error: f64,
+    /// Median wall-clock seconds.
+    pub seconds: f64,
+    /// Force evaluations of one run.
+    pub force_evaluations: usize,
+    /// The failure, if the run did not complete.
+    pub failure: Option<String>,
+    /// On the Pareto front (no other point is both faster and more accurate).
+    pub pareto: bool,
+    /// Read from an external file (`--external`), not run by this study.
+    pub external: bool,
+}
+
+/// The fastest configuration of one method reaching one accuracy.
+#[derive(Debug, Clone, Serialize)]
+pub struct Fastest {
+    /// Method family.
+    pub method: String,
+    /// Target error.
+    pub target: f64,
+    /// The fastest point reaching it, if any: (parameters, seconds, error).
+    pub best: Option<(String, f64, f64)>,
+}
+
+/// The result of a work–precision study.
+#[derive(Debug, Clone, Serialize)]
+pub struct WorkPrecisionStudy {
+    /// Scene name.
+    pub scene: String,
+    /// Time span.
+    pub horizon: f64,
+    /// Sample interval Δ.
+    pub sample_interval: f64,
+    /// What errors are measured against.
+    pub reference: String,
+    /// Every configuration.
+    pub points: Vec<WorkPoint>,
+    /// Fastest configuration per method at 10⁻⁶, 10⁻⁹, 10⁻¹².
+    pub fastest: Vec<Fastest>,
+    /// The external files merged into `points` (see [`WorkPrecisionStudy::merge_external`]).
+    pub external_files: Vec<String>,
+}
+
+/// The targets of [`WorkPrecisionStudy::fastest`].
+pub const TARGETS: [f64; 3] = [1e-6, 1e-9, 1e-12];
+
+/// Run the study on a scene.
+pub fn work_precision(scene: &Scene, config: &WorkPrecisionConfig) -> Result<WorkPrecisionStudy> {
+    struct Visit<'a>(&'a Scene, &'a WorkPrecisionConfig);
+    impl SystemVisitor for Visit<'_> {
+        type Output = WorkPrecisionStudy;
+        fn visit<S: System + Sync>(self, system: &S) -> Result<WorkPrecisionStudy> {
+            study_system(system, self.0, self.1)
+        }
+    }
+    visit_system(&scene.system, Visit(scene, config))
+}
+
+/// The study's largest number of samples (the reference positions are held in memory).
+pub const MAX_SAMPLES: f64 = 1e8;
+/// The study's largest predicted number of integration steps (all configurations, repeats
+/// and the reference run together).
+pub const MAX_TOTAL_STEPS: f64 = 1e9;
+
+/// Validate the horizon and return (Δ, samples), refusing more than [`MAX_SAMPLES`] samples.
+fn sample_grid(scene: &Scene, config: &WorkPrecisionConfig) -> Result<(f64, usize)> {
+    let dt = scene.method.h;
+    let horizon = config
+        .horizon
+        .unwrap_or(scene.method.h * scene.method.steps as f64);
+    if !(horizon.is_finite() && horizon >= dt) {
+        return Err(GviError::InvalidArgument {
+            name: "--horizon".into(),
+            reason: format!("{horizon}: must be finite and at least the scene's h = {dt}"),
+        });
+    }
+    let samples = (horizon / dt).round().max(1.0);
+    if samples.is_nan() || samples > MAX_SAMPLES {
+        return Err(GviError::CostTooHigh {
+            what: format!("the number of samples (T = {horizon:e} every {dt})"),
+            estimate: samples,
+            limit: MAX_SAMPLES,
+        });
+    }
+    Ok((dt, samples as usize))
+}
+
+/// The reference positions at t_k = t₀ + kΔ, k = 0 … samples.
+fn reference_positions<S: System>(
+    system: &S,
+    scene: &Scene,
+    dt: f64,
+    samples: usize,
+) -> Result<(Reference, Vec<Vec<f64>>)> {
+    let reference = Reference::for_system(system, &scene.initial, dt, samples as f64 * dt)?;
+    let exact: Vec<Vec<f64>> = (0..=samples)
+        .map(|k| reference.position(scene.initial.t0 + k as f64 * dt))
+        .collect::<Result<_>>()?;
+    Ok((reference, exact))
+}
+
+/// The reference positions at the study's sample times, as written by
+/// `gvi work-precision SCENE --write-reference FILE` for external peers.
+#[derive(Debug, Clone, Serialize)]
+pub struct ReferenceSamples {
+    /// Scene name.
+    pub scene: String,
+    /// What the positions are (exact solution or a reference run).
+    pub reference: String,
+    /// Sample times t_k = t₀ + kΔ.
+    pub t: Vec<f64>,
+    /// Positions at t_k (the system's coordinates; barycentric for N-body scenes).
+    pub q: Vec<Vec<f64>>,
+}
+
+impl ReferenceSamples {
+    /// CSV: a header `k,t,q0,q1,…`, then one line per sample; numbers in Rust's shortest
+    /// round-trip form.
+    pub fn csv(&self) -> String {
+        let dim = self.q.first().map_or(0, Vec::len);
+        let mut out = String::from("k,t");
+        for i in 0..dim {
+            out.push_str(&format!(",q{i}"));
+        }
+        out.push('\n');
+        for (k, (t, q)) in self.t.iter().zip(&self.q).enumerate() {
+            out.push_str(&format!("{k},{t:e}"));
+            for x in q {
+                out.push_str(&format!(",{x:e}"));
+            }
+            out.push('\n');
+        }
+        out
+    }
+}
+
+/// The study's reference positions at its sample times (the same grid, horizon checks and
+/// reference as [`work_precision`]), for external peers to measure against.
+pub fn reference_csv(scene: &Scene, config: &WorkPrecisionConfig) -> Result<ReferenceSamples> {
+    struct Visit<'a>(&'a Scene, &'a WorkPrecisionConfig);
+    impl SystemVisitor for Visit<'_> {
+        type Output = ReferenceSamples;
+        fn visit<S: System + Sync>(self, system: &S) -> Result<ReferenceSamples> {
+            let (dt, samples) = sample_grid(self.0, self.1)?;
+            let cost = Reference::estimated_steps(system, &self.0.initial, dt, samples as f64 * dt);
+            refuse_steps(cost)?;
+            let (reference, q) = reference_positions(system, self.0, dt, samples)?;
+            Ok(ReferenceSamples {
+                scene: self.0.name.clone(),
+                reference: reference.describe().into(),
+                t: (0..=samples)
+                    .map(|k| self.0.initial.t0 + k as f64 * dt)
+                    .collect(),
+                q,
+            })
+        }
+    }
+    visit_system(&scene.system, Visit(scene, config))
+}
+
+fn refuse_steps(estimate: f64) -> Result<()> {
+    if estimate <= MAX_TOTAL_STEPS {
+        Ok(())
+    } else {
+        Err(GviError::CostTooHigh {
+            what: "the total number of integration steps (samples × steps per sample interval \
+                   over all configurations, times the repeats, plus the reference run)"
+                .into(),
+            estimate,
+            limit: MAX_TOTAL_STEPS,
+        })
+    }
+}
+
+fn study_system<S: System>(
+    system: &S,
+    scene: &Scene,
+    config: &WorkPrecisionConfig,
+) -> Result<WorkPrecisionStudy> {
+    let (dt, samples) = sample_grid(scene, config)?;
+    // (peer, divisor) in sweep order; fixed-step families stop refining once converged.
+    let mut plan: Vec<Vec<(Peer, usize)>> = Vec::new();
+    for &basis in &config.bases {
+        for &m in &config.galerkin_divisors {
+            plan.push(
+                config
+                    .ns
+                    .iter()
+                    .map(|&n| (Peer::Galerkin { basis, n }, m))
+                    .collect(),
+            );
+        }
+    }
+    let mut fixed = vec![Peer::StormerVerlet, Peer::Rk4];
+    fixed.extend(config.gauss_stages.iter().map(|&s| Peer::Gauss { s }));
+    fixed.extend(CompositionScheme::ALL.map(|scheme| Peer::Composition { scheme }));
+    // The classical peers need L = ½ vᵀ M v − V(q); a non-separable Lagrangian (expression
+    // scenes `magnetic`, `double-pendulum`) is swept with the Galerkin families only.
+    let mechanical = system.mass_matrix().is_some();
+    if !mechanical {
+        fixed.clear();
+    }
+    for peer in fixed {
+        plan.push(
+            config
+                .baseline_divisors
+                .iter()
+                .filter(|&&m| m.saturating_mul(samples) <= config.max_steps)
+                .map(|&m| (peer, m))
+                .collect(),
+        );
+    }
+    if cfg!(feature = "dop853") && mechanical {
+        plan.push(
+            config
+                .tolerances
+                .iter()
+                .map(|&tolerance| (Peer::Dop853 { tolerance }, 1))
+                .collect(),
+        );
+    }
+    // Predicted cost: every run takes samples · m steps (DOP853 at least one per sample).
+    let steps: f64 = plan
+        .iter()
+        .flatten()
+        .map(|&(_, m)| samples as f64 * m as f64)
+        .sum::<f64>()
+        * config.repeats.max(1) as f64
+        + Reference::estimated_steps(system, &scene.initial, dt, samples as f64 * dt);
+    refuse_steps(steps)?;
+    let (reference, exact) = reference_positions(system, scene, dt, samples)?;
+    let total: usize = plan.iter().map(Vec::len).sum();
+    let pb = crate::progress::bar(total, "work-precision");
+    let mut points = Vec::with_capacity(total);
+    for family in plan {
+        let mut best = f64::INFINITY;
+        let mut stalled = 0;
+        let len = family.len();
+        for (i, (peer, m)) in family.into_iter().enumerate() {
+            // A fixed-step family at its round-off floor gains nothing from smaller steps.
+            if stalled >= 2 && !matches!(peer, Peer::Galerkin { .. }) {
+                pb.inc((len - i) as u64);
+                break;
+            }
+            let p = time_point(system, scene, peer, dt, m, samples, &exact, config.repeats);
+            if p.error < 1e-10 && p.error > 0.5 * best {
+                stalled += 1;
+            }
+            best = best.min(p.error);
+            points.push(p);
+            pb.inc(1);
+        }
+    }
+    pb.finish_and_clear();
+    mark_pareto(&mut points);
+    let fastest = fastest_table(&points);
+    Ok(WorkPrecisionStudy {
+        scene: scene.name.clone(),
+        horizon: samples as f64 * dt,
+        sample_interval: dt,
+        reference: reference.describe().into(),
+        points,
+        fastest,
+        external_files: Vec::new(),
+    })
+}
+
+#[allow(clippy::too_many_arguments)]
+fn time_point<S: System>(
+    system: &S,
+    scene: &Scene,
+    peer: Peer,
+    dt: f64,
+    m: usize,
+    samples: usize,
+    exact: &[Vec<f64>],
+    repeats: usize,
+) -> WorkPoint {
+    let h = dt / m as f64;
+    let (parameters, hv, n, tolerance) = match peer {
+        Peer::Galerkin { n, .. } => (format!("n = {n}, h = {h}"), Some(h), Some(n), None),
+        Peer::Dop853 { tolerance } => (format!("tol = {tolerance:e}"), None, None, Some(tolerance)),
+        _ => (format!("h = {h}"), Some(h), None, None),
+    };
+    let mut point = WorkPoint {
+        method: peer.family(),
+        parameters,
+        h: hv,
+        n,
+        tolerance,
+        error: f64::INFINITY,
+        seconds: f64::NAN,
+        force_evaluations: 0,
+        failure: None,
+        pareto: false,
+        external: false,
+    };
+    let mut times = Vec::with_capacity(repeats.max(1));
+    for _ in 0..repeats.max(1) {
+        let start = Instant::now();
+        let run = run_peer(system, &scene.initial, peer, dt, m, samples);
+        times.push(start.elapsed().as_secs_f64());
+        match run {
+            Err(e) => {
+                point.failure = Some(e.to_string());
+                return point;
+            }
+            Ok(run) => {
+                point.force_evaluations = run.force_evaluations;
+                point.error = run
+                    .q
+                    .iter()
+                    .zip(exact)
+                    .map(|(q, e)| max_norm_diff(q, e))
+                    .fold(0.0, f64::max);
+                if let Some(f) = run.failure {
+                    point.failure = Some(f);
+                    point.error = f64::INFINITY;
+                    break;
+                }
+            }
+        }
+    }
+    times.sort_by(f64::total_cmp);
+    point.seconds = times[times.len() / 2];
+    point
+}
+
+/// Mark the points no other point beats in both time and error.
+pub fn mark_pareto(points: &mut [WorkPoint]) {
+    let mut order: Vec<usize> = (0..points.len())
+        .filter(|&i| points[i].failure.is_none() && points[i].error.is_finite())
+        .collect();
+    order.sort_by(|&a, &b| {
+        points[a]
+            .seconds
+            .total_cmp(&points[b].seconds)
+            .then(points[a].error.total_cmp(&points[b].error))
+    });
+    let mut best = f64::INFINITY;
+    for p in points.iter_mut() {
+        p.pareto = false;
+    }
+    for i in order {
+        if points[i].error < best {
+            best = points[i].error;
+            points[i].pareto = true;
+        }
+    }
+}
+
+fn fastest_table(points: &[WorkPoint]) -> Vec<Fastest> {
+    let mut families: Vec<String> = Vec::new();
+    for p in points {
+        if !families.contains(&p.method) {
+            families.push(p.method.clone());
+        }
+    }
+    let mut out = Vec::new();
+    for target in TARGETS {
+        for f in &families {
+            let best = points
+                .iter()
+                .filter(|p| &p.method == f && p.failure.is_none() && p.error <= target)
+                .min_by(|a, b| a.seconds.total_cmp(&b.seconds))
+                .map(|p| (p.parameters.clone(), p.seconds, p.error));
+            out.push(Fastest {
+                method: f.clone(),
+                target,
+                best,
+            });
+        }
+    }
+    out
+}
+
+impl WorkPrecisionStudy {
+    /// The Pareto-optimal points, fastest first.
+    pub fn pareto_front(&self) -> Vec<&WorkPoint> {
+        let mut front: Vec<&WorkPoint> = self.points.iter().filter(|p| p.pareto).collect();
+        front.sort_by(|a, b| a.seconds.total_cmp(&b.seconds));
+        front
+    }
+
+    /// Seconds of the fastest point of `method` (a family name, or a prefix such as
+    /// `galerkin`) with error ≤ `target`.
+    pub fn fastest_time(&self, method: &str, target: f64) -> Option<f64> {
+        self.points
+            .iter()
+            .filter(|p| p.method.starts_with(method) && p.failure.is_none() && p.error <= target)
+            .map(|p| p.seconds)
+            .min_by(f64::total_cmp)
+    }
+
+    /// Merge external rows (from [`read_external_csv`]) into the study: they are marked
+    /// `external`, and the Pareto front and the fastest table are recomputed over all points.
+    /// `source` (the file name) is recorded in [`WorkPrecisionStudy::external_files`].
+    pub fn merge_external(&mut self, source: &str, points: Vec<WorkPoint>) {
+        self.points.extend(points.into_iter().map(|mut p| {
+            p.external = true;
+            p
+        }));
+        self.external_files.push(source.to_string());
+        mark_pareto(&mut self.points);
+        self.fastest = fastest_table(&self.points);
+    }
+
+    /// Write `work_precision.{csv,json,svg}` and `work_precision.md` into `dir`.
+    pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>> {
+        let csv = dir.join("work_precision.csv");
+        write_file(&csv, &self.csv())?;
+        let json = dir.join("work_precision.json");
+        let text =
+            serde_json::to_string_pretty(self).map_err(|e| GviError::Serialize(e.to_string()))?;
+        write_file(&json, &text)?;
+        let md = dir.join("work_precision.md");
+        write_file(&md, &self.summary())?;
+        let svg = dir.join("work_precision.svg");
+        self.chart()
+            .save_svg(&svg)
+            .map_err(|e| GviError::Plot(e.to_string()))?;
+        Ok(vec![csv, json, md, svg])
+    }
+}

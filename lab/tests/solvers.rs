@@ -1,0 +1,414 @@
+//! The stage-solver layer: every solver gives the exact-Newton map to the round-off of the
+//! stage equations, across bases and systems; its maps are symplectic and conserve the
+//! Noether momenta; failures keep the step, residual and partial trajectory; and no solver
+//! allocates per step. Each geometric property has a negative control (RK4, or the same
+//! solver stopped at a loose tolerance), so the tests can fail.
+
+use galerkin_vi::baselines::{OneStepMethod, Rk4};
+use galerkin_vi::geometry::{MomentumMap, Rotation, Translation, relative_symplecticity_defect};
+use galerkin_vi::integrator::StageSolver;
+use galerkin_vi::prelude::*;
+use galerkin_vi_lab::scene::Scene;
+use nalgebra::DMatrix;
+
+#[path = "common/counting.rs"]
+mod counting;
+use counting::allocations;
+#[path = "common/distance.rs"]
+mod distance;
+use distance::final_state_distance;
+
+/// The structured solvers and `Auto`, each compared with `Exact`.
+const SOLVERS: [StageSolver; 4] = [
+    StageSolver::Kronecker,
+    StageSolver::NewtonKrylov,
+    StageSolver::FixedPoint,
+    StageSolver::Auto,
+];
+
+/// Coupled anharmonic 2-DOF system with a non-diagonal constant mass matrix (the Kronecker
+/// solver's M-eigenbasis is then not the coordinate basis).
+struct Coupled;
+impl Mechanical for Coupled {
+    fn degrees_of_freedom(&self) -> usize {
+        2
+    }
+    fn mass(&self) -> DMatrix<f64> {
+        DMatrix::from_row_slice(2, 2, &[2.0, 0.5, 0.5, 1.0])
+    }
+    fn potential<T: DualNum<Primitive = f64> + Copy>(&self, q: &[T]) -> T {
+        q[0] * q[0] * 0.5 + q[1] * q[1] * 0.5 + q[0].powi(4) * 0.1 + q[0] * q[1].powi(3) * 0.3
+    }
+}
+
+/// Charged particle in a magnetic field: not separable, so the structured solvers do not
+/// apply and every choice must run the exact solver (the same map bit for bit).
+struct Magnetic;
+impl Lagrangian for Magnetic {
+    fn dim(&self) -> usize {
+        2
+    }
+    fn lagrangian<T: DualNum<Primitive = f64> + Copy>(&self, q: &[T], v: &[T]) -> T {
+        (v[0] * v[0] + v[1] * v[1]) * 0.5 + (q[0] * v[1] - q[1] * v[0]) * 0.5
+            - (q[0] * q[0] + q[1] * q[1] * 2.0) * 0.5
+    }
+}
+
+fn with_solver(
+    basis: BasisKind,
+    n: usize,
+    h: f64,
+    solver: StageSolver,
+) -> GalerkinIntegrator<AnyBasis, QuadratureRule> {
+    let gvi = GalerkinIntegrator::from_kinds(basis, n, QuadratureKind::default(), None, h).unwrap();
+    let options = NewtonOptions {
+        solver,
+        ..*gvi.options()
+    };
+    gvi.with_options(options)
+}
+
+struct Case<'a, L: Lagrangian> {
+    name: &'a str,
+    lag: &'a L,
+    q0: &'a [f64],
+    p0: &'a [f64],
+    n: usize,
+    h: f64,
+    steps: usize,
+}
+
+/// Every solver against exact Newton on one system, for every basis; returns the largest
+/// relative distance of the final states.
+fn agreement<L: Lagrangian>(c: &Case<'_, L>, bases: &[BasisKind]) -> f64 {
+    let mut worst = 0.0f64;
+    for &basis in bases {
+        let exact = with_solver(basis, c.n, c.h, StageSolver::Exact)
+            .integrate(c.lag, 0.0, c.q0, c.p0, c.steps)
+            .unwrap();
+        for solver in SOLVERS {
+            let traj = with_solver(basis, c.n, c.h, solver)
+                .integrate(c.lag, 0.0, c.q0, c.p0, c.steps)
+                .unwrap();
+            let dist = final_state_distance(&exact, &traj);
+            let inner: usize = traj.stats.iter().map(|s| s.inner_iterations).sum();
+            if solver == StageSolver::NewtonKrylov {
+                assert!(
+                    inner > 0,
+                    "{}: Newton–Krylov ran no GMRES iteration",
+                    c.name
+                );
+            }
+            println!(
+                "{} {basis} {solver}: relative distance {dist:.2e}, {:.2} iterations/step, {} inner",
+                c.name,
+                traj.newton_iterations() as f64 / c.steps as f64,
+                inner
+            );
+            worst = worst.max(dist);
+        }
+    }
+    worst
+}
+
+/// The map is the same to the round-off of the stage equations. Measured (test profile):
+/// Kepler 50 steps ≤ 2e-13 relative, coupled ≤ 1e-14, outer solar system (20 steps of
+/// 1825 d) ≤ 4e-13. The bound 1e-10 is what the bases themselves are held to in
+/// `tests/bases.rs` (the stage solutions differ by the Newton tolerance, ~1e-16 relative
+/// per step, and the flow carries it along); the negative control shows a solver stopped
+/// at a loose tolerance breaks it.
+#[test]
+fn every_solver_gives_the_exact_newton_map_across_bases_and_systems() {
+    let kepler = Kepler::new(1.0).unwrap();
+    let (q0, p0) = Kepler::paper_initial_state();
+    let bound = 1e-10;
+    let k = Case {
+        name: "kepler",
+        lag: &kepler,
+        q0: &q0,
+        p0: &p0,
+        n: 16,
+        h: 1.0,
+        steps: 50,
+    };
+    let w = agreement(&k, &BasisKind::ALL);
+    assert!(w <= bound, "kepler: {w:e}");
+    let c = Case {
+        name: "coupled",
+        lag: &Coupled,
+        q0: &[0.5, -0.3],
+        p0: &[0.2, 0.4],
+        n: 12,
+        h: 0.5,
+        steps: 50,
+    };
+    let w = agreement(&c, &BasisKind::ALL);
+    assert!(w <= bound, "coupled: {w:e}");
+    let scene = Scene::load("outer-solar-system").unwrap();
+    let (nbody, _) = scene.system.nbody().unwrap().unwrap();
+    let o = Case {
+        name: "outer solar system",
+        lag: &nbody,
+        q0: &scene.initial.q,
+        p0: &scene.initial.p,
+        n: 12,
+        h: scene.method.h,
+        steps: 20,
+    };
+    let w = agreement(&o, &[BasisKind::Chebyshev, BasisKind::Legendre]);
+    assert!(w <= bound, "outer solar system: {w:e}");
+}
+
+/// Negative control for the agreement bound: the frozen-Hessian solver stopped at a loose
+/// tolerance (1e-6 of the increments) is measurably another map.
+#[test]
+fn agreement_bound_catches_a_loosely_solved_map() {
+    let kepler = Kepler::new(1.0).unwrap();
+    let (q0, p0) = Kepler::paper_initial_state();
+    let exact = with_solver(BasisKind::Chebyshev, 16, 1.0, StageSolver::Exact)
+        .integrate(&kepler, 0.0, &q0, &p0, 50)
+        .unwrap();
+    let base = with_solver(BasisKind::Chebyshev, 16, 1.0, StageSolver::Kronecker);
+    let loose = NewtonOptions {
+        tolerance: 1e-6,
+        floor_tolerance: 1e-6,
+        ..*base.options()
+    };
+    let traj = base
+        .with_options(loose)
+        .integrate(&kepler, 0.0, &q0, &p0, 50)
+        .unwrap();
+    let dist = final_state_distance(&exact, &traj);
+    println!("loose Kronecker: relative distance {dist:.2e}");
+    assert!(dist > 1e-9, "the loose solve should differ: {dist:e}");
+}
+
+/// A non-separable Lagrangian has no Kronecker structure: every solver choice runs the exact
+/// solver, bit for bit.
+#[test]
+fn non_separable_lagrangians_use_the_exact_solver() {
+    let runs: Vec<Trajectory> = StageSolver::ALL
+        .iter()
+        .map(|&s| {
+            with_solver(BasisKind::Chebyshev, 10, 0.3, s)
+                .integrate(&Magnetic, 0.0, &[0.5, 0.1], &[0.0, 0.4], 20)
+                .unwrap()
+        })
+        .collect();
+    for t in &runs[1..] {
+        assert_eq!(t.q, runs[0].q);
+        assert_eq!(t.p, runs[0].p);
+        assert_eq!(t.stats.iter().map(|s| s.inner_iterations).sum::<usize>(), 0);
+    }
+}
+
+/// Central-difference Jacobian of a one-step map (2D×2D).
+fn fd_jacobian(
+    step: impl Fn(&[f64], &[f64]) -> (Vec<f64>, Vec<f64>),
+    q: &[f64],
+    p: &[f64],
+) -> DMatrix<f64> {
+    let d = q.len();
+    let eps = 1e-5;
+    let mut j = DMatrix::zeros(2 * d, 2 * d);
+    for c in 0..2 * d {
+        let (mut qa, mut pa, mut qb, mut pb) = (q.to_vec(), p.to_vec(), q.to_vec(), p.to_vec());
+        if c < d {
+            qa[c] += eps;
+            qb[c] -= eps;
+        } else {
+            pa[c - d] += eps;
+            pb[c - d] -= eps;
+        }
+        let (ya, yb) = (step(&qa, &pa), step(&qb, &pb));
+        let fa: Vec<f64> = ya.0.iter().chain(&ya.1).copied().collect();
+        let fb: Vec<f64> = yb.0.iter().chain(&yb.1).copied().collect();
+        for r in 0..2 * d {
+            j[(r, c)] = (fa[r] - fb[r]) / (2.0 * eps);
+        }
+    }
+    j
+}
+
+/// The map each solver actually computes is symplectic: the relative defect of its
+/// finite-difference Jacobian (truncation ≈ ε²|f‴| ≈ 1e-10, solve noise / ε ≈ 1e-11) stays
+/// below 1e-8, for every solver, on Kepler and on the coupled system. Negative control: RK4
+/// at the same h (defect ≈ 1e-3) fails the same bound.
+#[test]
+fn every_solver_computes_a_symplectic_map() {
+    let kepler = Kepler::new(1.0).unwrap();
+    let (q0, p0) = Kepler::paper_initial_state();
+    for solver in StageSolver::ALL {
+        let gvi = with_solver(BasisKind::Chebyshev, 16, 1.0, solver);
+        let step = |q: &[f64], p: &[f64]| {
+            let t = gvi.integrate(&kepler, 0.0, q, p, 1).unwrap();
+            (t.q[1].clone(), t.p[1].clone())
+        };
+        let d = relative_symplecticity_defect(&fd_jacobian(step, &q0, &p0));
+        let gc = with_solver(BasisKind::Legendre, 12, 0.5, solver);
+        let step = |q: &[f64], p: &[f64]| {
+            let t = gc.integrate(&Coupled, 0.0, q, p, 1).unwrap();
+            (t.q[1].clone(), t.p[1].clone())
+        };
+        let dc = relative_symplecticity_defect(&fd_jacobian(step, &[0.5, -0.3], &[0.2, 0.4]));
+        println!("{solver}: Kepler defect {d:.2e}, coupled {dc:.2e}");
+        assert!(d <= 1e-8 && dc <= 1e-8, "{solver}: {d:e}, {dc:e}");
+    }
+    let step = |q: &[f64], p: &[f64]| {
+        let (mut qn, mut pn) = (vec![0.0; 2], vec![0.0; 2]);
+        let mut rk4 = Rk4::new(&kepler, 1.0).unwrap();
+        rk4.step(0.0, q, p, &mut qn, &mut pn).unwrap();
+        (qn, pn)
+    };
+    let d = relative_symplecticity_defect(&fd_jacobian(step, &q0, &p0));
+    println!("RK4: defect {d:.2e}");
+    assert!(d > 1e-8, "RK4 should fail: {d:e}");
+}
+
+/// Discrete Noether theorem with every solver: the outer solar system's total linear and
+/// angular momentum (translation and rotation invariance) over 100 steps of 1825 d stay
+/// within C·ε·√N·S with C = 1000 and S the momenta's round-off scale (the bound of `tests/geometry.rs`). Negative control:
+/// the same solver stopped at 1e-8 of the increments drifts past it. Measured: 2.5e-18 to
+/// 3.3e-18 for the four solvers against a bound of 1.2e-16; loosely solved, 4.4e-12.
+#[test]
+fn every_solver_conserves_the_noether_momenta() {
+    let scene = Scene::load("outer-solar-system").unwrap();
+    let (nbody, _) = scene.system.nbody().unwrap().unwrap();
+    let (q0, p0) = (&scene.initial.q, &scene.initial.p);
+    let steps = 100;
+    let maps: Vec<(&str, Box<dyn MomentumMap>)> = vec![
+        ("P_x", Box::new(Translation::axis(3, 6, 0).unwrap())),
+        ("P_z", Box::new(Translation::axis(3, 6, 2).unwrap())),
+        ("L_xy", Box::new(Rotation::planar(3, 6, 0, 1).unwrap())),
+        ("L_yz", Box::new(Rotation::planar(3, 6, 1, 2).unwrap())),
+    ];
+    // The round-off scale of the momenta: Σ|p| (linear) and Σ|q||p| (angular), since the
+    // totals themselves are near zero in the barycentric frame.
+    let scale = p0.iter().map(|x| x.abs()).sum::<f64>().max(
+        q0.iter()
+            .zip(p0.iter())
+            .map(|(q, p)| (q * p).abs())
+            .sum::<f64>(),
+    );
+    let bound = 1000.0 * f64::EPSILON * (steps as f64).sqrt() * scale;
+    let drift = |opts: Option<NewtonOptions>, solver| {
+        let mut gvi = with_solver(BasisKind::Chebyshev, 12, scene.method.h, solver);
+        if let Some(o) = opts {
+            gvi = gvi.with_options(NewtonOptions { solver, ..o });
+        }
+        let traj = gvi.integrate(&nbody, 0.0, q0, p0, steps).unwrap();
+        maps.iter()
+            .map(|(_, m)| {
+                let j0 = m.value(q0, p0);
+                (0..=steps)
+                    .map(|k| (m.value(&traj.q[k], &traj.p[k]) - j0).abs())
+                    .fold(0.0, f64::max)
+            })
+            .fold(0.0, f64::max)
+    };
+    for solver in StageSolver::ALL {
+        let d = drift(None, solver);
+        println!("{solver}: momentum drift {d:.2e} (bound {bound:.2e})");
+        assert!(d <= bound, "{solver}: {d:e} > {bound:e}");
+    }
+    let loose = NewtonOptions {
+        tolerance: 1e-8,
+        floor_tolerance: 1e-8,
+        ..NewtonOptions::default()
+    };
+    let d = drift(Some(loose), StageSolver::Kronecker);
+    println!("loose Kronecker: momentum drift {d:.2e}");
+    assert!(d > bound, "the loose solve should drift: {d:e}");
+}
+
+/// A particle pulled into a wall at q = 1 (V = 2√(1 − q), force 1/√(1 − q) towards it, and no
+/// real force beyond it): every curve that reaches the wall has non-finite forces, so the step
+/// that gets there fails whatever the solver and guess.
+struct Wall;
+impl Mechanical for Wall {
+    fn degrees_of_freedom(&self) -> usize {
+        1
+    }
+    fn mass(&self) -> DMatrix<f64> {
+        DMatrix::identity(1, 1)
+    }
+    fn potential<T: DualNum<Primitive = f64> + Copy>(&self, q: &[T]) -> T {
+        (T::from(1.0) - q[0]).sqrt() * 2.0
+    }
+}
+
+/// A failing step names the step and residual and keeps the trajectory, whatever the
+/// solver. (The pendulum case of `tests/errors.rs` is not used: at h = 10 the structured
+/// solvers find another root of its stage equations where exact Newton finds none.)
+#[test]
+fn every_solver_reports_failures_with_the_partial_trajectory() {
+    for solver in StageSolver::ALL {
+        let gvi = with_solver(BasisKind::Chebyshev, 6, 0.25, solver);
+        let failure = gvi.integrate(&Wall, 0.0, &[0.0], &[0.5], 40).unwrap_err();
+        match &failure.error {
+            GviError::NewtonFailure { step, .. } => {
+                assert!(*step >= 1, "{solver}: failed at step {step}");
+                let partial = failure.partial.as_ref().expect("partial trajectory");
+                assert_eq!(partial.steps(), *step, "{solver}");
+                assert!(partial.q.iter().all(|q| q[0] < 1.0), "{solver}");
+                println!("{solver}: failed at step {step}: {}", failure.error);
+            }
+            other => panic!("{solver}: expected a Newton failure, got {other:?}"),
+        }
+        let msg = failure.to_string();
+        assert!(msg.contains("step") && msg.contains("residual"), "{msg}");
+    }
+}
+
+/// No solver allocates inside the step loop (after the workspace is built).
+#[test]
+fn no_solver_allocates_per_step() {
+    let scene = Scene::load("outer-solar-system").unwrap();
+    let (nbody, _) = scene.system.nbody().unwrap().unwrap();
+    for solver in StageSolver::ALL {
+        let gvi = with_solver(BasisKind::Chebyshev, 12, scene.method.h, solver);
+        let mut ws = gvi.workspace(&nbody).unwrap();
+        let d = scene.initial.q.len();
+        let (mut q, mut p) = (scene.initial.q.clone(), scene.initial.p.clone());
+        let (mut qn, mut pn) = (vec![0.0; d], vec![0.0; d]);
+        gvi.step(&nbody, &mut ws, &q, &p, &mut qn, &mut pn).unwrap();
+        std::mem::swap(&mut q, &mut qn);
+        std::mem::swap(&mut p, &mut pn);
+        let before = allocations();
+        for _ in 0..10 {
+            gvi.step(&nbody, &mut ws, &q, &p, &mut qn, &mut pn).unwrap();
+            std::mem::swap(&mut q, &mut qn);
+            std::mem::swap(&mut p, &mut pn);
+        }
+        let n = allocations() - before;
+        assert_eq!(n, 0, "{solver}: {n} allocations in 10 steps");
+    }
+}
+
+/// Large N-body systems take pairwise force-Jacobian products (no 3N×3N node Jacobians) in
+/// Newton–Krylov: a 64-body ring (D = 192) does, the 10-body system does not, and the
+/// matrix-free map is the Kronecker solver's to round-off (measured 3.6e-15 relative at
+/// n = 8 over 3 steps; bound 1e-10, as above).
+#[test]
+fn matrix_free_products_give_the_same_map() {
+    use galerkin_vi_lab::ring::{RingConfig, planetesimal_ring};
+    let config = RingConfig::with_bodies(64);
+    let (ring, init) = planetesimal_ring(&config).unwrap();
+    let h = config.step();
+    let krylov = with_solver(BasisKind::Chebyshev, 8, h, StageSolver::NewtonKrylov);
+    assert!(krylov.workspace(&ring).unwrap().uses_matrix_free_products());
+    let scene = Scene::load("solar-system").unwrap();
+    let (ten, _) = scene.system.nbody().unwrap().unwrap();
+    assert!(!krylov.workspace(&ten).unwrap().uses_matrix_free_products());
+    let a = krylov.integrate(&ring, 0.0, &init.q, &init.p, 3).unwrap();
+    let b = with_solver(BasisKind::Chebyshev, 8, h, StageSolver::Kronecker)
+        .integrate(&ring, 0.0, &init.q, &init.p, 3)
+        .unwrap();
+    let inner: usize = a.stats.iter().map(|s| s.inner_iterations).sum();
+    let dist = final_state_distance(&a, &b);
+    println!(
+        "64-body ring: matrix-free Newton–Krylov vs Kronecker {dist:.2e}, {inner} GMRES iterations"
+    );
+    assert!(inner > 0);
+    assert!(dist < 1e-10, "{dist:e}");
+}

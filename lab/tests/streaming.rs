@@ -1,0 +1,149 @@
+//! `gvi run` without a chart, JSON or `--tol` streams its CSV: peak heap memory is flat in the
+//! number of steps. Measured with a counting global allocator (not a timer), against the
+//! in-memory run as the negative control, whose peak grows linearly with the steps.
+
+use galerkin_vi_lab::run::stream::stream_scene;
+use galerkin_vi_lab::run::{RunOptions, run_scene};
+use galerkin_vi_lab::scene::Scene;
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// Live and peak heap bytes.
+struct Counting;
+static LIVE: AtomicUsize = AtomicUsize::new(0);
+static PEAK: AtomicUsize = AtomicUsize::new(0);
+/// Tests in this binary run one at a time, so that each peak is its own.
+static SERIAL: Mutex<()> = Mutex::new(());
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        let p = unsafe { System.alloc(layout) };
+        if !p.is_null() {
+            let live = LIVE.fetch_add(layout.size(), Ordering::Relaxed) + layout.size();
+            PEAK.fetch_max(live, Ordering::Relaxed);
+        }
+        p
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) };
+        LIVE.fetch_sub(layout.size(), Ordering::Relaxed);
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        let p = unsafe { System.realloc(ptr, layout, new_size) };
+        if !p.is_null() {
+            if new_size > layout.size() {
+                let live = LIVE.fetch_add(new_size - layout.size(), Ordering::Relaxed) + new_size
+                    - layout.size();
+                PEAK.fetch_max(live, Ordering::Relaxed);
+            } else {
+                LIVE.fetch_sub(layout.size() - new_size, Ordering::Relaxed);
+            }
+        }
+        p
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+/// Peak heap growth (bytes above the level at the start) while `f` runs.
+fn peak_during(f: impl FnOnce()) -> usize {
+    let base = LIVE.load(Ordering::Relaxed);
+    PEAK.store(base, Ordering::Relaxed);
+    f();
+    PEAK.load(Ordering::Relaxed) - base
+}
+
+fn harmonic(steps: usize) -> Scene {
+    let mut scene = Scene::load("harmonic").unwrap();
+    scene.method.n = 4;
+    scene.method.h = 0.1;
+    scene.method.steps = steps;
+    scene
+}
+
+/// Streamed into a sink: peak memory for 10^4 and 10^6 steps.
+#[test]
+fn streamed_run_memory_is_flat_in_the_number_of_steps() {
+    let _guard = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let mut peaks = Vec::new();
+    for steps in [10_000, 1_000_000] {
+        let scene = harmonic(steps);
+        let mut rows = 0usize;
+        let peak = peak_during(|| {
+            let mut sink = CountingSink(&mut rows);
+            let outcome = stream_scene(&scene, 0, &mut sink).unwrap();
+            assert!(outcome.failure.is_none());
+            assert_eq!(outcome.summary.steps, steps);
+        });
+        assert_eq!(rows, steps + 2, "header and steps + 1 rows");
+        peaks.push(peak);
+    }
+    eprintln!(
+        "streamed peak heap: 1e4 steps {} B, 1e6 steps {} B",
+        peaks[0], peaks[1]
+    );
+    // Flat: 100 times the steps, at most a few kilobytes more (allocator noise), and far
+    // below the 100 MB bound for 10^6 steps.
+    assert!(peaks[1] < peaks[0] + 64 * 1024, "{peaks:?}");
+    assert!(peaks[1] < 100 << 20, "{peaks:?}");
+}
+
+/// Negative control: the in-memory run holds the whole trajectory.
+#[test]
+fn in_memory_run_memory_grows_with_the_steps() {
+    let _guard = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let mut peaks = Vec::new();
+    for steps in [1_000, 10_000] {
+        let scene = harmonic(steps);
+        peaks.push(peak_during(|| {
+            let r = run_scene(&scene, RunOptions::default()).unwrap();
+            assert_eq!(r.rows.len(), steps + 1);
+        }));
+    }
+    eprintln!(
+        "in-memory peak heap: 1e3 steps {} B, 1e4 steps {} B",
+        peaks[0], peaks[1]
+    );
+    let per_step = (peaks[1] - peaks[0]) as f64 / 9_000.0;
+    assert!(per_step > 200.0, "{peaks:?}: {per_step} B per step");
+}
+
+/// Counts lines written, keeps nothing.
+struct CountingSink<'a>(&'a mut usize);
+
+impl std::io::Write for CountingSink<'_> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        *self.0 += buf.iter().filter(|&&b| b == b'\n').count();
+        Ok(buf.len())
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+/// The streamed table and summary are the in-memory run's, byte for byte and figure for figure.
+#[test]
+fn streamed_and_in_memory_runs_agree() {
+    let _guard = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    for name in ["kepler", "harmonic", "two-body"] {
+        let mut scene = Scene::load(name).unwrap();
+        scene.method.steps = 20;
+        let mut out = Vec::new();
+        let streamed = stream_scene(&scene, 16, &mut out).unwrap();
+        let memory = run_scene(&scene, RunOptions::default()).unwrap();
+        assert_eq!(String::from_utf8(out).unwrap(), memory.to_csv(), "{name}");
+        let (a, b) = (&streamed.summary, &memory.summary);
+        assert_eq!(a.steps, b.steps);
+        assert_eq!(a.max_position_error, b.max_position_error, "{name}");
+        assert_eq!(a.invariant_errors, b.invariant_errors, "{name}");
+        assert_eq!(a.force_evaluations, b.force_evaluations, "{name}");
+        match (a.max_curve_error, b.max_curve_error) {
+            (Some(x), Some(y)) => {
+                assert!((x - y).abs() <= 1e-12 * y.max(1e-300), "{name}: {x} {y}")
+            }
+            (x, y) => assert_eq!(x, y, "{name}"),
+        }
+    }
+}
