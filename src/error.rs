@@ -2,11 +2,10 @@
 //!
 //! Every failure that user input can cause is one of these variants: invalid method parameters,
 //! mismatched dimensions, non-finite states, a quadrature too weak for the basis, a Newton solve
-//! that does not converge, or a malformed scene. None of them panics.
+//! that does not converge, or an invalid input. None of them panics. The `gvi` tool wraps them in its own error
+//! type, which adds scene, file, chart and command-line failures.
 
-use std::path::PathBuf;
-
-/// Errors returned by the library and reported by the `gvi` command-line tool.
+/// Errors returned by the library.
 #[derive(Debug, thiserror::Error)]
 pub enum GviError {
     /// The number of basis functions is too small (every basis needs both end functions, and
@@ -108,18 +107,10 @@ pub enum GviError {
         /// Why it stopped (diverged, non-finite, singular Jacobian, iteration limit).
         reason: String,
     },
-    /// A scene could not be found or parsed.
-    #[error("scene error ({source_name}): {reason}")]
-    Scene {
-        /// The scene's name or path.
-        source_name: String,
-        /// What is wrong.
-        reason: String,
-    },
-    /// A command-line argument is malformed.
-    #[error("invalid argument {name}: {reason}")]
-    InvalidArgument {
-        /// Argument name.
+    /// An input to a library function is invalid (named, with the reason).
+    #[error("invalid {name}: {reason}")]
+    InvalidInput {
+        /// The input's name.
         name: String,
         /// What is wrong.
         reason: String,
@@ -127,46 +118,6 @@ pub enum GviError {
     /// A requested feature is not available for this system (e.g. an exact solution).
     #[error("{0}")]
     Unsupported(String),
-    /// Reading or writing a file failed.
-    #[error("I/O error on {path}: {source}")]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// The underlying error.
-        source: std::io::Error,
-    },
-    /// An external work–precision file (`gvi work-precision --external`) could not be read.
-    #[error("cannot read external work-precision file {path}: {source}")]
-    ExternalFile {
-        /// The file.
-        path: PathBuf,
-        /// The underlying error.
-        source: std::io::Error,
-    },
-    /// An external work–precision file is malformed: a wrong or missing column, a malformed or
-    /// non-finite number, a row with the wrong number of fields.
-    #[error("{path}:{line}: {reason}")]
-    ExternalCsv {
-        /// The file.
-        path: PathBuf,
-        /// 1-based line number (1 is the header line).
-        line: usize,
-        /// What is wrong.
-        reason: String,
-    },
-    /// A study would take an absurd time or memory; refused before any work is done.
-    #[error(
-        "refusing the sweep: {what} is estimated at {estimate:.3e}, above the limit \
-         {limit:.0e} (shorten --horizon or the sweep)"
-    )]
-    CostTooHigh {
-        /// What was estimated (total integration steps, samples).
-        what: String,
-        /// The estimate.
-        estimate: f64,
-        /// The documented limit.
-        limit: f64,
-    },
     /// The Newton iteration for a periodic orbit (stationary point of the action over one
     /// period, [`crate::periodic`]) did not converge.
     #[error(
@@ -185,7 +136,7 @@ pub enum GviError {
     /// A periodic orbit was found but its Fourier series is not resolved by K modes.
     #[error(
         "too few modes: with K = {modes} the last modes are {tail:.3e} of the largest (limit \
-         {tolerance:.1e}); raise --modes"
+         {tolerance:.1e}); raise the number of modes K"
     )]
     PeriodicUnderResolved {
         /// Number of modes K.
@@ -194,15 +145,6 @@ pub enum GviError {
         tail: f64,
         /// The accepted limit.
         tolerance: f64,
-    },
-    /// An output path is unusable (a directory, a pseudo-filesystem, the same file as another
-    /// output or as an input); refused before any work is done.
-    #[error("cannot write {path}: {reason}")]
-    InvalidOutput {
-        /// The output path.
-        path: PathBuf,
-        /// Why it is refused.
-        reason: String,
     },
     /// The computed state or an invariant became NaN or infinite. The steps before `step` are
     /// kept (written, for `gvi run`).
@@ -220,58 +162,11 @@ pub enum GviError {
         /// Its time.
         t: f64,
     },
-    /// Two bodies coincide (or the force between them is not finite).
-    #[error("bodies {a} and {b} collide at step {step} (t = {t:e}): separation {separation:e}")]
-    Collision {
-        /// First body.
-        a: String,
-        /// Second body.
-        b: String,
-        /// Step end at which they met.
-        step: usize,
-        /// Its time.
-        t: f64,
-        /// Their separation there.
-        separation: f64,
-    },
-    /// With `--strict`: a run's error figures exceed the sanity threshold.
-    #[error("the run is not trustworthy (--strict): {0}")]
-    Untrustworthy(String),
-    /// Every run of a study failed: there is no result to report.
-    #[error("all {runs} runs of the study failed (first failure: {first})")]
-    AllRunsFailed {
-        /// Number of runs.
-        runs: usize,
-        /// The first failure's message.
-        first: String,
-    },
-    /// A run would hold an absurd amount of memory; refused before any work is done.
-    #[error(
-        "refusing the run: {steps} steps at about {bytes_per_step:.0} bytes each need an \
-         estimated {estimate:.3e} bytes, above the limit {limit:.0e} (a chart, JSON output and \
-         --tol keep the whole trajectory; a plain CSV run is streamed and needs no such memory)"
-    )]
-    MemoryTooHigh {
-        /// Steps requested.
-        steps: usize,
-        /// Estimated bytes per step.
-        bytes_per_step: f64,
-        /// Estimated total bytes.
-        estimate: f64,
-        /// The documented limit.
-        limit: f64,
-    },
     /// An expression Lagrangian (`type = "lagrangian"`) was rejected: a syntax error, an
     /// unknown symbol, a degenerate or non-regular Lagrangian (see
     /// [`ExpressionError`](crate::systems::expression::ExpressionError)).
     #[error("expression Lagrangian: {0}")]
     Expression(#[from] crate::systems::expression::ExpressionError),
-    /// Serialisation failed.
-    #[error("serialisation error: {0}")]
-    Serialize(String),
-    /// Chart rendering failed.
-    #[error("chart error: {0}")]
-    Plot(String),
 }
 
 /// A number for messages: plain when it reads well (1e-4 ≤ |x| < 1e6, or 0), scientific

@@ -152,7 +152,7 @@ impl Trajectory {
         let end = self.end_time();
         let tol = 1e-12 * self.h.max(end.abs());
         if steps == 0 || !t.is_finite() || t < self.t0 - tol || t > end + tol {
-            return Err(GviError::InvalidArgument {
+            return Err(GviError::InvalidInput {
                 name: "t".into(),
                 reason: format!(
                     "{t} is outside the trajectory's time span [{}, {end}]",

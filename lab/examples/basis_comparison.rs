@@ -7,7 +7,7 @@ use galerkin_vi::quadrature::QuadratureKind;
 use galerkin_vi_lab::scene::Scene;
 use galerkin_vi_lab::studies::compare_bases::compare_bases;
 
-fn main() -> Result<(), galerkin_vi::GviError> {
+fn main() -> Result<(), galerkin_vi_lab::error::LabError> {
     let scene = Scene::load("kepler")?;
     let ns: Vec<usize> = (8..=64).step_by(8).collect();
     let quads = [QuadratureKind::GaussLegendre, QuadratureKind::GaussLobatto];

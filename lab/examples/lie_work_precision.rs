@@ -14,6 +14,7 @@ use galerkin_vi::basis::BasisKind;
 use galerkin_vi::lie::so3::{self, Mat3};
 use galerkin_vi::lie::*;
 use galerkin_vi::quadrature::QuadratureKind;
+use galerkin_vi_lab::error::LabError;
 use galerkin_vi_lab::fit::fit_geometric_in;
 use galerkin_vi_lab::plot::{Chart, Series};
 use std::time::Instant;
@@ -38,7 +39,7 @@ fn timed<T>(mut run: impl FnMut() -> Result<T, GviError>) -> Result<(T, f64), Gv
     Ok((out.expect("five runs"), best))
 }
 
-fn main() -> Result<(), GviError> {
+fn main() -> Result<(), galerkin_vi_lab::error::LabError> {
     let out_dir = std::env::args()
         .nth(1)
         .unwrap_or_else(|| "target/lie".to_string());
@@ -182,13 +183,13 @@ fn main() -> Result<(), GviError> {
         "\nfitted rate in n (n = 4 … 12, h = T/4): {:.4} per n\n",
         fit.rate
     );
-    std::fs::create_dir_all(&out_dir).map_err(|source| GviError::Io {
+    std::fs::create_dir_all(&out_dir).map_err(|source| LabError::Io {
         path: out_dir.clone().into(),
         source,
     })?;
     let write = |name: &str, text: &str| {
         let path = std::path::Path::new(&out_dir).join(name);
-        std::fs::write(&path, text).map_err(|source| GviError::Io { path, source })
+        std::fs::write(&path, text).map_err(|source| LabError::Io { path, source })
     };
     write("work-precision.csv", &csv)?;
     let mut chart = Chart::new(
@@ -209,7 +210,7 @@ fn main() -> Result<(), GviError> {
                 .map(|p| (p.seconds, p.error.max(1e-16))),
         ));
     }
-    let plot_err = |e: galerkin_vi_lab::plot::PlotError| GviError::Plot(e.to_string());
+    let plot_err = |e: galerkin_vi_lab::plot::PlotError| LabError::Plot(e.to_string());
     write(
         "work-precision.svg",
         &chart.to_svg_string().map_err(plot_err)?,

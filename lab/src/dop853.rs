@@ -13,7 +13,6 @@
 //! every interval through the crate's low-level `solve_ode`, and an output handler that stores
 //! nothing (no per-step history: only the end state is read, from the method itself).
 
-use crate::error::{GviError, Result};
 use differential_equations::control::ControlFlag;
 use differential_equations::interpolate::Interpolation;
 use differential_equations::methods::{DormandPrince, ExplicitRungeKutta, Ordinary};
@@ -22,6 +21,7 @@ use differential_equations::solout::Solout;
 use differential_equations::solution::Solution;
 use differential_equations::traits::State;
 use galerkin_vi::baselines::{CanonicalParts, OneStepMethod};
+use galerkin_vi::error::{GviError, Result};
 use galerkin_vi::lagrangian::Lagrangian;
 
 /// The solver's state (q, p) as a flat buffer: `[f64; N]` (N = 2D) or `Vec<f64>`.

@@ -66,7 +66,8 @@ fn run_body<S: RigidBody>(body: &S, scene: &Scene) -> Result<RunResult> {
     if m.tol.is_some() || m.auto_h {
         return Err(GviError::Unsupported(
             "tolerance-driven runs are not available for rigid bodies; give n".into(),
-        ));
+        )
+        .into());
     }
     let gvi = LieGalerkin::from_kinds(m.basis, m.n, m.quadrature, m.quad_points, m.h)?
         .with_retraction(m.retraction.unwrap_or_default());
@@ -155,21 +156,24 @@ fn tabulate<S: RigidBody>(
     }
     // A non-finite entry is a failure at its step; the rows before it are kept (as for every
     // `gvi run`).
-    let mut failure = None;
+    let mut failure: Option<crate::error::LabError> = None;
     if let Some((k, c)) = rows
         .iter()
         .enumerate()
         .find_map(|(k, row)| row.iter().position(|x| !x.is_finite()).map(|c| (k, c)))
     {
-        failure = Some(GviError::NonFiniteResult {
-            what: columns
-                .get(c)
-                .cloned()
-                .unwrap_or_else(|| format!("column {c}")),
-            value: rows[k][c],
-            step: k,
-            t: rows[k][1],
-        });
+        failure = Some(
+            GviError::NonFiniteResult {
+                what: columns
+                    .get(c)
+                    .cloned()
+                    .unwrap_or_else(|| format!("column {c}")),
+                value: rows[k][c],
+                step: k,
+                t: rows[k][1],
+            }
+            .into(),
+        );
         rows.truncate(k);
     }
     let iters: usize = traj.iterations.iter().sum();

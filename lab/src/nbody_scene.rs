@@ -1,18 +1,19 @@
 //! Building an [`NBody`] system and its initial state from a scene's `[[system.bodies]]`.
 
-use crate::error::{GviError, Result};
+use crate::error::LabError;
+use crate::error::Result;
 use crate::scene::{Body, InitialState};
 use galerkin_vi::systems::NBody;
 
-fn scene_error(reason: String) -> GviError {
-    GviError::Scene {
+fn scene_error(reason: String) -> LabError {
+    LabError::Scene {
         source_name: "[system] nbody".into(),
         reason,
     }
 }
 
 /// Validate the bodies, aggregate, move to the barycentre if asked, and build the system and
-/// the initial state (p = m v). Every problem is a [`GviError::Scene`].
+/// the initial state (p = m v). Every problem is a [`LabError::Scene`].
 pub(crate) fn build(
     dim: usize,
     g: Option<f64>,
@@ -211,7 +212,7 @@ mod tests {
         ];
         for (dim, bodies, agg) in cases {
             let r = build(dim, None, agg.as_deref(), false, &bodies);
-            assert!(matches!(r, Err(GviError::Scene { .. })), "{r:?}");
+            assert!(matches!(r, Err(LabError::Scene { .. })), "{r:?}");
         }
     }
 }

@@ -7,22 +7,23 @@
 //! never a truncated one. [`check_output_path`] and [`ensure_distinct`] validate destinations
 //! before any computation, so a bad path costs nothing.
 
-use crate::error::{GviError, Result};
+use crate::error::LabError;
+use crate::error::Result;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// Pseudo-filesystems whose files are not outputs (writing there fails or does harm).
 const FORBIDDEN_ROOTS: [&str; 2] = ["/proc", "/sys"];
 
-fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> GviError + '_ {
-    move |source| GviError::Io {
+fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> LabError + '_ {
+    move |source| LabError::Io {
         path: path.to_path_buf(),
         source,
     }
 }
 
-fn bad_output(path: &Path, reason: impl Into<String>) -> GviError {
-    GviError::InvalidOutput {
+fn bad_output(path: &Path, reason: impl Into<String>) -> LabError {
+    LabError::InvalidOutput {
         path: path.to_path_buf(),
         reason: reason.into(),
     }
@@ -150,7 +151,7 @@ fn probe_dir(dir: &Path) -> Result<()> {
     }
     let probe = existing.join(format!(".gvi-probe-{}", std::process::id()));
     std::fs::File::create(&probe)
-        .map_err(|source| GviError::Io {
+        .map_err(|source| LabError::Io {
             path: existing.to_path_buf(),
             source,
         })
@@ -240,7 +241,7 @@ impl AtomicFile {
             let renamed = synced.and_then(|_| std::fs::rename(&temp, &self.dest));
             if let Err(source) = renamed {
                 let _ = std::fs::remove_file(&temp);
-                return Err(GviError::Io {
+                return Err(LabError::Io {
                     path: self.dest.clone(),
                     source,
                 });

@@ -11,7 +11,8 @@
 //! velocities are the two-body (star + planetesimal) Keplerian ones, heliocentric, and are then
 //! moved to the barycentric frame exactly as a scene with `barycentric = true` is.
 
-use crate::error::{GviError, Result};
+use crate::error::LabError;
+use crate::error::Result;
 use crate::scene::{Body, InitialState};
 use galerkin_vi::systems::NBody;
 use std::f64::consts::TAU;
@@ -66,7 +67,7 @@ impl RingConfig {
     }
 
     fn validate(&self) -> Result<()> {
-        let bad = |name: &str, reason: String| GviError::InvalidArgument {
+        let bad = |name: &str, reason: String| LabError::InvalidArgument {
             name: name.into(),
             reason,
         };
@@ -209,7 +210,7 @@ impl RingConfig {
 
 /// The ring of `config` as an N-body system (3-D, G = 1) with its barycentric initial state
 /// (p = m v). Invalid parameters (N < 2, non-finite or non-positive sizes) are
-/// [`GviError::InvalidArgument`].
+/// [`LabError::InvalidArgument`].
 ///
 /// ```
 /// use galerkin_vi_lab::ring::{RingConfig, planetesimal_ring};

@@ -1,6 +1,7 @@
 //! Running a scene: build the system and the integrator, integrate, and tabulate the states,
 //! invariants and (where an exact solution exists) errors. This is what `gvi run` does.
 
+use crate::error::LabError;
 use crate::error::{GviError, Result};
 use crate::plot::{Chart, Series};
 use crate::scene::{Scene, SystemSpec};
@@ -31,7 +32,7 @@ pub struct RunResult {
     pub trajectory: Option<Trajectory>,
     /// The solver error, if the run stopped early.
     #[serde(serialize_with = "serialize_error")]
-    pub failure: Option<GviError>,
+    pub failure: Option<LabError>,
     /// Chart of the run (orbit for 2-D systems, q(t) otherwise; for N-body systems one orbit
     /// per body, xy projection), when requested.
     #[serde(skip)]
@@ -46,7 +47,7 @@ pub struct RunResult {
     pub n_chart: Option<Chart>,
 }
 
-fn serialize_error<S: serde::Serializer>(e: &Option<GviError>, s: S) -> Result<S::Ok, S::Error> {
+fn serialize_error<S: serde::Serializer>(e: &Option<LabError>, s: S) -> Result<S::Ok, S::Error> {
     match e {
         Some(e) => s.serialize_some(&e.to_string()),
         None => s.serialize_none(),
@@ -182,11 +183,12 @@ pub fn visit_system<V: SystemVisitor>(spec: &SystemSpec, visitor: V) -> Result<V
         } => visitor.visit(&Pendulum::new(*length, *gravity, *mass)?),
         SystemSpec::RigidBody { .. } | SystemSpec::HeavyTop { .. } => Err(GviError::Unsupported(
             "rigid bodies live on SO(3): only `gvi run` supports them (galerkin_vi::lie)".into(),
-        )),
+        )
+        .into()),
         SystemSpec::Lagrangian(spec) => visitor.visit(&spec.build()?),
         SystemSpec::NBody { .. } => match spec.nbody()? {
             Some((system, _)) => visitor.visit(&system),
-            None => Err(GviError::Scene {
+            None => Err(LabError::Scene {
                 source_name: "[system]".into(),
                 reason: "not an N-body system".into(),
             }),
@@ -231,7 +233,7 @@ pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> 
     let mut adaptive: Option<AdaptiveColumns> = None;
     let mut step_choice = None;
     if m.auto_h && m.tol.is_none() {
-        return Err(crate::error::GviError::InvalidArgument {
+        return Err(crate::error::LabError::InvalidArgument {
             name: "auto_h".into(),
             reason: "choosing h needs a tolerance (tol)".into(),
         });
@@ -278,8 +280,8 @@ pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> 
     let (mut trajectory, failure) = match outcome {
         Ok(t) => (t, None),
         Err(f) => match f.partial {
-            Some(partial) => (*partial, Some(f.error)),
-            None => return Err(f.error),
+            Some(partial) => (*partial, Some(f.error.into())),
+            None => return Err(f.error.into()),
         },
     };
     let seconds = start.elapsed().as_secs_f64();
@@ -525,6 +527,6 @@ impl RunResult {
 
     /// The whole result as JSON (scene, columns, rows, summary, trajectory with coefficients).
     pub fn to_json(&self) -> Result<String> {
-        serde_json::to_string_pretty(self).map_err(|e| GviError::Serialize(e.to_string()))
+        serde_json::to_string_pretty(self).map_err(|e| LabError::Serialize(e.to_string()))
     }
 }

@@ -26,7 +26,8 @@
 //! assert_eq!(custom.method.n, 12);
 //! ```
 
-use crate::error::{GviError, Result};
+use crate::error::LabError;
+use crate::error::Result;
 pub use galerkin_vi::method::MethodSpec;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -259,7 +260,7 @@ fn locate_unknown_field(text: &str, message: String) -> String {
 impl Scene {
     /// Parse a scene from TOML text; `origin` names it in errors.
     pub fn from_toml_str(origin: &str, text: &str) -> Result<Scene> {
-        let mut scene: Scene = toml::from_str(text).map_err(|e| GviError::Scene {
+        let mut scene: Scene = toml::from_str(text).map_err(|e| LabError::Scene {
             source_name: origin.to_string(),
             reason: locate_unknown_field(text, e.to_string()),
         })?;
@@ -274,14 +275,14 @@ impl Scene {
             }
             Ok(Some(_)) => {}
             Ok(None) if scene.initial.q.is_empty() || scene.initial.p.is_empty() => {
-                return Err(GviError::Scene {
+                return Err(LabError::Scene {
                     source_name: origin.to_string(),
                     reason: "missing [initial] q and p".into(),
                 });
             }
             Ok(None) => {}
-            Err(GviError::Scene { reason, .. }) => {
-                return Err(GviError::Scene {
+            Err(LabError::Scene { reason, .. }) => {
+                return Err(LabError::Scene {
                     source_name: origin.to_string(),
                     reason,
                 });
@@ -310,7 +311,7 @@ impl Scene {
         }
         let path = Path::new(name_or_path);
         if path.is_file() {
-            let text = std::fs::read_to_string(path).map_err(|source| GviError::Io {
+            let text = std::fs::read_to_string(path).map_err(|source| LabError::Io {
                 path: path.to_path_buf(),
                 source,
             })?;
@@ -322,12 +323,12 @@ impl Scene {
             Err(_) => None,
         };
         if let Some(what) = what {
-            return Err(GviError::Scene {
+            return Err(LabError::Scene {
                 source_name: name_or_path.to_string(),
                 reason: format!("{what}; a scene is a built-in name or a TOML file"),
             });
         }
-        Err(GviError::Scene {
+        Err(LabError::Scene {
             source_name: name_or_path.to_string(),
             reason: format!(
                 "not a built-in scene ({}) and no such file",
@@ -345,7 +346,7 @@ impl Scene {
 impl SystemSpec {
     /// For an N-body spec: the system (with body names) and the initial state built from the
     /// bodies (aggregated, then moved to the barycentre if asked; p = m v). `Ok(None)` for
-    /// other systems; malformed bodies are [`GviError::Scene`].
+    /// other systems; malformed bodies are [`LabError::Scene`].
     pub fn nbody(&self) -> Result<Option<(galerkin_vi::systems::NBody, InitialState)>> {
         match self {
             SystemSpec::NBody {
@@ -386,13 +387,13 @@ mod tests {
         ];
         for text in bad {
             match Scene::from_toml_str("t", text) {
-                Err(GviError::Scene { .. }) => {}
+                Err(LabError::Scene { .. }) => {}
                 other => panic!("expected a scene error for {text:?}, got {other:?}"),
             }
         }
         assert!(matches!(
             Scene::load("/no/such/scene.toml"),
-            Err(GviError::Scene { .. })
+            Err(LabError::Scene { .. })
         ));
     }
 
@@ -438,7 +439,7 @@ mod tests {
         ];
         for text in bad {
             match Scene::from_toml_str("t", &text) {
-                Err(GviError::Scene { .. }) => {}
+                Err(LabError::Scene { .. }) => {}
                 other => panic!("expected a scene error for {text:?}, got {other:?}"),
             }
         }

@@ -6,6 +6,7 @@ use galerkin_vi::adaptive::{AdaptiveOptions, DEFAULT_LADDER, ErrorControl, integ
 use galerkin_vi::geometry::relative_symplecticity_defect;
 use galerkin_vi::prelude::*;
 use galerkin_vi::systems::ExactSolution;
+use galerkin_vi_lab::error::LabError;
 
 fn max_norm(a: &[f64], b: &[f64]) -> f64 {
     a.iter()
@@ -237,7 +238,7 @@ fn unreachable_and_invalid_tolerances() {
             2.0,
         );
         let e = integrate_adaptive(&kepler, &opts, 0.0, &q0, &p0, 3).unwrap_err();
-        assert!(matches!(e.error, GviError::InvalidArgument { .. }));
+        assert!(matches!(e.error, GviError::InvalidInput { .. }));
     }
 }
 
@@ -610,7 +611,7 @@ fn step_size_is_chosen_from_the_tolerance_and_time_scale() {
     let (q0, p0) = kepler_state(0.6);
     let opts = AdaptiveOptions::new(tol, BasisKind::Legendre, QuadratureKind::GaussLegendre, 1.0);
     let err = choose_step(&kepler, &opts, 0.0, &q0, &p0, 0.0).unwrap_err();
-    assert!(matches!(err, GviError::InvalidArgument { .. }));
+    assert!(matches!(err, GviError::InvalidInput { .. }));
 }
 
 #[test]
@@ -636,7 +637,7 @@ fn scene_files_choose_h_from_tol() {
     let scene = Scene::from_toml_str("inline", &text("auto_h = true")).unwrap();
     assert!(matches!(
         run_scene(&scene, RunOptions::default()),
-        Err(GviError::InvalidArgument { .. })
+        Err(LabError::InvalidArgument { .. })
     ));
 }
 

@@ -132,11 +132,11 @@ fn dense_output_outside_the_time_span_is_an_error() {
     assert!(traj.position_at(1.3).is_ok());
     assert!(matches!(
         traj.position_at(2.5),
-        Err(GviError::InvalidArgument { .. })
+        Err(GviError::InvalidInput { .. })
     ));
     assert!(matches!(
         traj.position_at(f64::NAN),
-        Err(GviError::InvalidArgument { .. })
+        Err(GviError::InvalidInput { .. })
     ));
 }
 

@@ -3,7 +3,7 @@
 //! the fastest table and the chart; typed errors naming the file and line, with nothing
 //! written; and the up-front refusal of absurd horizons.
 
-use galerkin_vi::GviError;
+use galerkin_vi_lab::error::LabError;
 use galerkin_vi_lab::scene::Scene;
 use galerkin_vi_lab::studies::work_precision::{
     MAX_SAMPLES, MAX_TOTAL_STEPS, WorkPrecisionConfig, read_external_csv, reference_csv,
@@ -102,9 +102,9 @@ fn expect_csv_error(text: &str, line: usize, needle: &str) {
     let path = dir.join("bad.csv");
     std::fs::write(&path, text).unwrap();
     match read_external_csv(&path) {
-        Err(e @ GviError::ExternalCsv { .. }) => {
+        Err(e @ LabError::ExternalCsv { .. }) => {
             let msg = e.to_string();
-            if let GviError::ExternalCsv {
+            if let LabError::ExternalCsv {
                 path: p, line: l, ..
             } = &e
             {
@@ -128,7 +128,7 @@ const HEADER: &str =
 fn malformed_files_are_typed_errors_naming_file_and_line() {
     let missing = Path::new("/nonexistent/dir/rebound.csv");
     match read_external_csv(missing) {
-        Err(e @ GviError::ExternalFile { .. }) => assert!(e.to_string().contains("rebound.csv")),
+        Err(e @ LabError::ExternalFile { .. }) => assert!(e.to_string().contains("rebound.csv")),
         other => panic!("expected ExternalFile, got {other:?}"),
     }
     let row = "rebound-whfast,\"dt = 2, safe\",2.0,,,3.5e-11,6.7e-4,100,false,";
@@ -262,7 +262,7 @@ fn absurd_horizons_are_refused_up_front_with_the_estimate() {
     let start = std::time::Instant::now();
     match work_precision(&scene, &config) {
         Err(
-            e @ GviError::CostTooHigh {
+            e @ LabError::CostTooHigh {
                 estimate, limit, ..
             },
         ) => {
@@ -274,13 +274,13 @@ fn absurd_horizons_are_refused_up_front_with_the_estimate() {
     }
     assert!(matches!(
         reference_csv(&scene, &config),
-        Err(GviError::CostTooHigh { .. })
+        Err(LabError::CostTooHigh { .. })
     ));
     // Few enough samples, too many steps: 10⁶ samples × (4 bases × 19 n × (1+2+4+8)) × 5
     // repeats of Galerkin steps alone.
     config.horizon = Some(2e6);
     match work_precision(&scene, &config) {
-        Err(GviError::CostTooHigh {
+        Err(LabError::CostTooHigh {
             estimate, limit, ..
         }) => {
             assert_eq!(limit, MAX_TOTAL_STEPS);

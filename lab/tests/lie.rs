@@ -7,6 +7,7 @@ use galerkin_vi::basis::BasisKind;
 use galerkin_vi::lie::so3::{self, Mat3};
 use galerkin_vi::lie::*;
 use galerkin_vi::quadrature::QuadratureKind;
+use galerkin_vi_lab::error::LabError;
 use galerkin_vi_lab::fit::{fit_algebraic_in, fit_geometric_in};
 
 const INERTIA: [f64; 3] = [1.0, 2.0, 3.0];
@@ -288,7 +289,7 @@ fn bad_input_is_a_typed_error() {
     skewed[0][0] += 1e-6;
     assert!(matches!(
         gvi.integrate(&body, 0.0, &skewed, &mu0, 5),
-        Err(GviError::InvalidArgument { .. })
+        Err(GviError::InvalidInput { .. })
     ));
     assert!(
         gvi.integrate(&body, 0.0, &r0, &[f64::NAN, 0.0, 0.0], 5)
@@ -325,7 +326,7 @@ fn bad_input_is_a_typed_error() {
     let scene = Scene::from_toml_str("t", bad).unwrap();
     assert!(matches!(
         galerkin_vi_lab::run::run_scene(&scene, Default::default()),
-        Err(GviError::DimensionMismatch { .. })
+        Err(LabError::Core(GviError::DimensionMismatch { .. }))
     ));
 }
 

@@ -3,6 +3,7 @@
 
 use galerkin_vi::GviError;
 use galerkin_vi::systems::{NBody, Pendulum};
+use galerkin_vi_lab::error::LabError;
 use galerkin_vi_lab::periodic::{
     self, FourierCurve, Layout, PeriodCondition, PeriodicOptions, PeriodicRequest, Symmetry,
 };
@@ -268,7 +269,7 @@ fn negative_controls_and_bad_input_are_typed_errors() {
         ..Default::default()
     };
     match periodic::analyse_scene(&scene, &few) {
-        Err(e @ GviError::PeriodicUnderResolved { modes: 6, .. }) => {
+        Err(e @ LabError::Core(GviError::PeriodicUnderResolved { modes: 6, .. })) => {
             assert!(e.to_string().contains("too few modes"), "{e}");
         }
         other => panic!("expected PeriodicUnderResolved, got {other:?}"),
@@ -280,7 +281,7 @@ fn negative_controls_and_bad_input_are_typed_errors() {
     };
     assert!(matches!(
         periodic::analyse_scene(&scene, &two),
-        Err(GviError::InvalidArgument { .. })
+        Err(LabError::InvalidArgument { .. })
     ));
     // K < 1.
     let zero = PeriodicRequest {
@@ -289,13 +290,13 @@ fn negative_controls_and_bad_input_are_typed_errors() {
     };
     assert!(matches!(
         periodic::analyse_scene(&scene, &zero),
-        Err(GviError::InvalidArgument { .. })
+        Err(LabError::InvalidArgument { .. })
     ));
     assert!(FourierCurve::zeros(0, layout.clone(), 1.0).is_err());
     // A scene without periodic data.
     assert!(matches!(
         periodic::analyse_scene(&Scene::load("kepler").unwrap(), &few),
-        Err(GviError::Scene { .. })
+        Err(LabError::Scene { .. })
     ));
     // No convergence within the iteration limit.
     let spec = periodic::spec_of(&scene).unwrap();

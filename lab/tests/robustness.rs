@@ -333,14 +333,21 @@ fn coincident_bodies_are_a_collision_error() {
 #[test]
 fn a_huge_t0_is_rejected() {
     let dir = scratch("t0");
-    let text = std::fs::read_to_string("scenes/kepler.toml").unwrap();
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../scenes/kepler.toml"
+    ))
+    .unwrap();
     let text = text.replace("t0 = 0.0", "t0 = 1.7e308");
     let scene = write_scene(&dir, "t0.toml", &text);
     let o = gvi(&["run", s(&scene), "--steps", "3"]);
     fails_with(&o, "invalid parameter t0 = 1.7e308");
-    let text = std::fs::read_to_string("scenes/kepler.toml")
-        .unwrap()
-        .replace("t0 = 0.0", "t0 = nan");
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../scenes/kepler.toml"
+    ))
+    .unwrap()
+    .replace("t0 = 0.0", "t0 = nan");
     let scene = write_scene(&dir, "nan.toml", &text);
     fails_with(
         &gvi(&["run", s(&scene), "--steps", "3"]),
@@ -479,7 +486,11 @@ fn commands_refuse_flags_they_would_ignore() {
 fn messages_name_the_field_and_the_value() {
     let dir = scratch("messages");
     fails_with(&gvi(&["run", "kepler", "--q0", "inf,0"]), "q0");
-    let kepler = std::fs::read_to_string("scenes/kepler.toml").unwrap();
+    let kepler = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../scenes/kepler.toml"
+    ))
+    .unwrap();
     let mu = kepler.replace("mu = 1.0", "mu = 1e308");
     let scene = write_scene(&dir, "mu.toml", &mu);
     fails_with(&gvi(&["run", s(&scene), "--steps", "2"]), "mu = 1e308");

@@ -2,6 +2,7 @@
 
 use galerkin_vi::GviError;
 use galerkin_vi::systems::System;
+use galerkin_vi_lab::error::LabError;
 use galerkin_vi_lab::ring::{RingConfig, planetesimal_ring};
 use galerkin_vi_lab::scene::Scene;
 use galerkin_vi_lab::studies::scaling::{SOLVERS, ScalingConfig, solver_scaling};
@@ -131,7 +132,7 @@ fn bad_input_is_a_typed_error() {
     for bodies in [0, 1] {
         assert!(matches!(
             planetesimal_ring(&RingConfig::with_bodies(bodies)),
-            Err(GviError::InvalidArgument { .. })
+            Err(LabError::InvalidArgument { .. })
         ));
     }
     for bad in [
@@ -151,7 +152,7 @@ fn bad_input_is_a_typed_error() {
     ] {
         assert!(matches!(
             planetesimal_ring(&bad),
-            Err(GviError::InvalidArgument { .. })
+            Err(LabError::InvalidArgument { .. })
         ));
     }
     let quick = ScalingConfig::quick;
@@ -184,7 +185,7 @@ fn bad_input_is_a_typed_error() {
     for c in cases {
         assert!(matches!(
             solver_scaling(&c, false),
-            Err(GviError::InvalidArgument { .. })
+            Err(LabError::InvalidArgument { .. })
         ));
     }
     assert!(matches!(
@@ -195,6 +196,6 @@ fn bad_input_is_a_typed_error() {
             },
             false
         ),
-        Err(GviError::InvalidStepSize { .. })
+        Err(LabError::Core(GviError::InvalidStepSize { .. }))
     ));
 }

@@ -260,7 +260,7 @@ impl std::str::FromStr for ErrorControl {
             "indicator" => Ok(ErrorControl::Indicator),
             "embedded" => Ok(ErrorControl::Embedded),
             "calibrated" => Ok(ErrorControl::Calibrated),
-            _ => Err(GviError::InvalidArgument {
+            _ => Err(GviError::InvalidInput {
                 name: "control".into(),
                 reason: format!("'{s}' is not one of indicator, embedded, calibrated"),
             }),
@@ -294,19 +294,19 @@ impl AdaptiveOptions {
 
     fn validate(&self) -> Result<()> {
         if !(self.tol.is_finite() && self.tol > 0.0) {
-            return Err(GviError::InvalidArgument {
+            return Err(GviError::InvalidInput {
                 name: "tol".into(),
                 reason: format!("{} must be finite and positive", self.tol),
             });
         }
         if self.ladder.is_empty() || self.ladder.windows(2).any(|w| w[0] >= w[1]) {
-            return Err(GviError::InvalidArgument {
+            return Err(GviError::InvalidInput {
                 name: "ladder".into(),
                 reason: "the ladder of n must be non-empty and increasing".into(),
             });
         }
         if self.check_every == 0 {
-            return Err(GviError::InvalidArgument {
+            return Err(GviError::InvalidInput {
                 name: "check_every".into(),
                 reason: "must be at least 1".into(),
             });

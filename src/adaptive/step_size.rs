@@ -73,7 +73,7 @@ pub fn choose_step<S: System>(
     horizon: f64,
 ) -> Result<StepChoice> {
     if !(horizon.is_finite() && horizon > 0.0) {
-        return Err(GviError::InvalidArgument {
+        return Err(GviError::InvalidInput {
             name: "horizon".into(),
             reason: format!("{horizon} must be finite and positive"),
         });
@@ -129,7 +129,7 @@ pub fn choose_step<S: System>(
             _ => {}
         }
     }
-    let best = best.ok_or_else(|| GviError::InvalidArgument {
+    let best = best.ok_or_else(|| GviError::InvalidInput {
         name: "tol".into(),
         reason: format!(
             "no step size from τ/2 to τ/{} (τ = {tau:e}) met the per-step budget in its \

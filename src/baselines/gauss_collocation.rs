@@ -73,7 +73,7 @@ impl<'a, L: Lagrangian> GaussCollocationBaseline<'a, L> {
     /// Gauss collocation with `s` stages (1 ≤ s ≤ 8) and step h for a mechanical Lagrangian.
     pub fn new(lagrangian: &'a L, s: usize, h: f64) -> Result<Self> {
         if !(1..=MAX_GAUSS_STAGES).contains(&s) {
-            return Err(GviError::InvalidArgument {
+            return Err(GviError::InvalidInput {
                 name: "Gauss collocation stages".into(),
                 reason: format!("s = {s}; need 1 ≤ s ≤ {MAX_GAUSS_STAGES}"),
             });

@@ -155,7 +155,7 @@ impl std::str::FromStr for BasisKind {
         BasisKind::ALL
             .into_iter()
             .find(|k| k.as_str().eq_ignore_ascii_case(s.trim()))
-            .ok_or_else(|| GviError::InvalidArgument {
+            .ok_or_else(|| GviError::InvalidInput {
                 name: "basis".into(),
                 reason: format!(
                     "unknown basis '{s}' (expected one of: {})",

@@ -52,7 +52,7 @@ impl Rotation {
     /// dimensions (configuration q = (x_1, …, x_bodies), D = dim_per_body · bodies).
     pub fn planar(dim_per_body: usize, bodies: usize, i: usize, j: usize) -> Result<Self> {
         if i == j || i >= dim_per_body || j >= dim_per_body || bodies == 0 {
-            return Err(GviError::InvalidArgument {
+            return Err(GviError::InvalidInput {
                 name: "rotation plane".into(),
                 reason: format!(
                     "need distinct axes i = {i}, j = {j} below the body dimension \
@@ -105,7 +105,7 @@ impl Translation {
     /// axis `axis`: J is the total linear momentum along that axis.
     pub fn axis(dim_per_body: usize, bodies: usize, axis: usize) -> Result<Self> {
         if axis >= dim_per_body || bodies == 0 {
-            return Err(GviError::InvalidArgument {
+            return Err(GviError::InvalidInput {
                 name: "translation axis".into(),
                 reason: format!(
                     "axis {axis} is not below the body dimension {dim_per_body}, or no bodies"

@@ -90,7 +90,7 @@ impl std::str::FromStr for StageSolver {
         StageSolver::ALL
             .into_iter()
             .find(|k| k.as_str().eq_ignore_ascii_case(s.trim()))
-            .ok_or_else(|| GviError::InvalidArgument {
+            .ok_or_else(|| GviError::InvalidInput {
                 name: "solver".into(),
                 reason: format!(
                     "unknown stage solver '{s}' (expected one of: {})",

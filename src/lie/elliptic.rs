@@ -216,7 +216,7 @@ impl FreeBodyExact {
         let mut out = Vec::with_capacity(times.len());
         for &target in times {
             if target.is_nan() || target < t {
-                return Err(GviError::InvalidArgument {
+                return Err(GviError::InvalidInput {
                     name: "times".into(),
                     reason: "the reference needs increasing times from 0".into(),
                 });

@@ -38,7 +38,7 @@ pub fn symplecticity_defect(
     delta: f64,
 ) -> Result<f64> {
     if !(delta.is_finite() && delta > 0.0) {
-        return Err(GviError::InvalidArgument {
+        return Err(GviError::InvalidInput {
             name: "delta".into(),
             reason: format!("finite-difference step {delta} must be finite and positive"),
         });

@@ -156,7 +156,7 @@ pub(crate) fn check_initial(r: &Mat3<f64>, mu: &[f64; 3], steps: usize) -> Resul
     let d = so3::orthogonality_defect(r);
     let det = so3::dot(&a_col(r, 0), &so3::cross(&a_col(r, 1), &a_col(r, 2)));
     if d > 1e-10 || det < 0.0 {
-        return Err(GviError::InvalidArgument {
+        return Err(GviError::InvalidInput {
             name: "initial orientation".into(),
             reason: format!("not a rotation matrix (‖RᵀR − I‖ = {d:.3e}, det = {det:.6})"),
         });

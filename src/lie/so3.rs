@@ -302,7 +302,7 @@ impl std::str::FromStr for Retraction {
         match s.trim().to_ascii_lowercase().as_str() {
             "exp" => Ok(Retraction::Exp),
             "cayley" => Ok(Retraction::Cayley),
-            other => Err(crate::GviError::InvalidArgument {
+            other => Err(crate::GviError::InvalidInput {
                 name: "retraction".into(),
                 reason: format!("unknown retraction '{other}' (expected exp or cayley)"),
             }),

@@ -114,7 +114,7 @@ impl FourierCurve {
     /// The zero curve with K ≥ 1 modes and period T > 0.
     pub fn zeros(modes: usize, layout: Layout, period: f64) -> Result<Self> {
         if modes < 1 {
-            return Err(GviError::InvalidArgument {
+            return Err(GviError::InvalidInput {
                 name: "modes".into(),
                 reason: format!(
                     "a periodic curve needs at least one mode (K >= 1), got K = {modes}"
@@ -142,7 +142,7 @@ impl FourierCurve {
     pub fn set_mode(&mut self, k: usize, a: &[f64], b: &[f64]) -> Result<()> {
         let nc = self.layout.components();
         if k > self.modes {
-            return Err(GviError::InvalidArgument {
+            return Err(GviError::InvalidInput {
                 name: "modes".into(),
                 reason: format!(
                     "too few modes: the guess sets mode {k} but the curve has only K = {} modes",
@@ -155,7 +155,7 @@ impl FourierCurve {
         crate::error::ensure_finite("guess coefficients", b)?;
         if k == 0 {
             if !b.is_empty() {
-                return Err(GviError::InvalidArgument {
+                return Err(GviError::InvalidInput {
                     name: "guess".into(),
                     reason: "mode 0 (the mean) has no sine coefficients b".into(),
                 });

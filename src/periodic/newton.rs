@@ -230,7 +230,7 @@ pub fn solve<L: Lagrangian>(
         .nodes
         .unwrap_or_else(|| default_nodes(&curve.layout, curve.modes));
     if nodes < 2 * curve.modes + 1 {
-        return Err(GviError::InvalidArgument {
+        return Err(GviError::InvalidInput {
             name: "nodes".into(),
             reason: format!(
                 "{nodes} trapezoid nodes cannot resolve K = {} modes (need at least 2K + 1)",

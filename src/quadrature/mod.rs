@@ -192,7 +192,7 @@ impl std::str::FromStr for QuadratureKind {
         QuadratureKind::ALL
             .into_iter()
             .find(|k| k.as_str().eq_ignore_ascii_case(s.trim()))
-            .ok_or_else(|| GviError::InvalidArgument {
+            .ok_or_else(|| GviError::InvalidInput {
                 name: "quadrature".into(),
                 reason: format!(
                     "unknown quadrature '{s}' (expected one of: {})",

@@ -52,13 +52,13 @@ impl NBody {
     /// in `dim` ∈ {2, 3} dimensions. At least one body.
     pub fn new(masses: Vec<f64>, g: f64, dim: usize) -> Result<Self> {
         if dim != 2 && dim != 3 {
-            return Err(GviError::InvalidArgument {
+            return Err(GviError::InvalidInput {
                 name: "dim".into(),
                 reason: format!("the N-body problem is modelled in 2 or 3 dimensions, got {dim}"),
             });
         }
         if masses.is_empty() {
-            return Err(GviError::InvalidArgument {
+            return Err(GviError::InvalidInput {
                 name: "masses".into(),
                 reason: "need at least one body".into(),
             });

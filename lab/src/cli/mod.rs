@@ -9,8 +9,8 @@ mod study;
 mod study2;
 mod tolerance;
 
+use crate::error::LabError;
 use clap::{Parser, Subcommand};
-use galerkin_vi::GviError;
 
 /// Galerkin and spectral variational integrators (Hall & Leok).
 #[derive(Debug, Parser)]
@@ -62,7 +62,7 @@ enum Command {
 }
 
 /// Parse and run; errors are reported by the caller.
-pub fn main_with(cli: Cli) -> Result<(), GviError> {
+pub fn main_with(cli: Cli) -> Result<(), LabError> {
     match cli.command {
         Command::Run(args) => run::run(*args),
         Command::Check(args) => check::run_check(*args),
@@ -88,9 +88,9 @@ pub fn main_with(cli: Cli) -> Result<(), GviError> {
 
 /// Refuse the flags a command would ignore because it sweeps or sets those values itself;
 /// `flags` pairs each flag with whether it was given.
-pub fn refuse_ignored(command: &str, flags: &[(&str, bool)], why: &str) -> Result<(), GviError> {
+pub fn refuse_ignored(command: &str, flags: &[(&str, bool)], why: &str) -> Result<(), LabError> {
     match flags.iter().find(|(_, given)| *given) {
-        Some((name, _)) => Err(GviError::InvalidArgument {
+        Some((name, _)) => Err(LabError::InvalidArgument {
             name: (*name).to_string(),
             reason: format!("`gvi {command}` does not use {name}: {why}"),
         }),
@@ -99,11 +99,11 @@ pub fn refuse_ignored(command: &str, flags: &[(&str, bool)], why: &str) -> Resul
 }
 
 /// Parse a comma-separated list of numbers, e.g. `--q0 0.4,0`.
-pub fn parse_vector(name: &str, text: &str) -> Result<Vec<f64>, GviError> {
+pub fn parse_vector(name: &str, text: &str) -> Result<Vec<f64>, LabError> {
     text.split(',')
         .map(|s| {
             let s = s.trim();
-            s.parse::<f64>().map_err(|_| GviError::InvalidArgument {
+            s.parse::<f64>().map_err(|_| LabError::InvalidArgument {
                 name: name.to_string(),
                 reason: format!("'{s}' is not a number (expected a comma-separated list)"),
             })

@@ -1,9 +1,9 @@
 //! `gvi nbody-report SCENE`: accuracy of an N-body run against a Gauss-collocation reference.
 
+use crate::error::LabError;
 use crate::nbody_report::{ReportOptions, nbody_report};
 use crate::scene::Scene;
 use clap::Args;
-use galerkin_vi::GviError;
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -33,15 +33,15 @@ pub struct NBodyReportArgs {
     pub no_cross_check: bool,
 }
 
-pub fn run_nbody_report(args: NBodyReportArgs) -> Result<(), GviError> {
+pub fn run_nbody_report(args: NBodyReportArgs) -> Result<(), LabError> {
     if args.substeps == Some(0) {
-        return Err(GviError::InvalidArgument {
+        return Err(LabError::InvalidArgument {
             name: "--substeps".into(),
             reason: "the reference needs at least 1 step per Galerkin step".into(),
         });
     }
     if args.stages == 0 {
-        return Err(GviError::InvalidArgument {
+        return Err(LabError::InvalidArgument {
             name: "--stages".into(),
             reason: "Gauss collocation needs at least 1 stage".into(),
         });

@@ -2,10 +2,10 @@
 
 use super::run::Format;
 use super::{parse_vector, write_output};
+use crate::error::LabError;
 use crate::periodic::{PeriodicRequest, analyse_scene};
 use crate::scene::Scene;
 use clap::Args;
-use galerkin_vi::GviError;
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -33,7 +33,7 @@ pub struct PeriodicArgs {
     pub periods: usize,
 }
 
-pub fn run_periodic(args: PeriodicArgs) -> Result<(), GviError> {
+pub fn run_periodic(args: PeriodicArgs) -> Result<(), LabError> {
     let scene = Scene::load(&args.scene)?;
     let mut request = PeriodicRequest {
         periods: args.periods,
@@ -43,7 +43,7 @@ pub fn run_periodic(args: PeriodicArgs) -> Result<(), GviError> {
         let values = parse_vector("--modes", text)?;
         for v in values {
             if !(v.is_finite() && v >= 1.0 && v.fract() == 0.0 && v <= 4096.0) {
-                return Err(GviError::InvalidArgument {
+                return Err(LabError::InvalidArgument {
                     name: "--modes".into(),
                     reason: format!("K must be an integer in 1..=4096, got {v}"),
                 });
@@ -67,11 +67,11 @@ pub fn run_periodic(args: PeriodicArgs) -> Result<(), GviError> {
         report
             .orbit_chart()
             .save_svg(path)
-            .map_err(|e| GviError::Plot(e.to_string()))?;
+            .map_err(|e| LabError::Plot(e.to_string()))?;
     }
     if let Some(path) = &args.refine_plot {
         if report.refinement.len() < 2 {
-            return Err(GviError::InvalidArgument {
+            return Err(LabError::InvalidArgument {
                 name: "--refine-plot".into(),
                 reason: "needs a list of modes, e.g. --modes 10,20,30,40".into(),
             });
@@ -79,7 +79,7 @@ pub fn run_periodic(args: PeriodicArgs) -> Result<(), GviError> {
         report
             .refinement_chart()
             .save_svg(path)
-            .map_err(|e| GviError::Plot(e.to_string()))?;
+            .map_err(|e| LabError::Plot(e.to_string()))?;
     }
     Ok(())
 }

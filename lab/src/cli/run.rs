@@ -1,6 +1,7 @@
 //! `gvi run SCENE`.
 
 use super::{parse_vector, write_output};
+use crate::error::LabError;
 use crate::output::{AtomicFile, check_output_path, ensure_distinct};
 use crate::run::stream::{bytes_per_step, stream_scene};
 use crate::run::{RunOptions, RunSummary, run_scene};
@@ -96,7 +97,7 @@ pub struct RunArgs {
 }
 
 /// Load the scene named on the command line and apply the flag overrides.
-pub fn load_scene(a: &SceneArgs) -> Result<Scene, GviError> {
+pub fn load_scene(a: &SceneArgs) -> Result<Scene, LabError> {
     let mut scene = Scene::load(&a.scene)?;
     apply_overrides(&mut scene, a)?;
     let init = &scene.initial;
@@ -110,14 +111,15 @@ pub fn load_scene(a: &SceneArgs) -> Result<Scene, GviError> {
             return Err(GviError::NonFinite {
                 what: what.into(),
                 value,
-            });
+            }
+            .into());
         }
     }
     Ok(scene)
 }
 
 /// Apply command-line overrides to a scene.
-pub fn apply_overrides(scene: &mut Scene, a: &SceneArgs) -> Result<(), GviError> {
+pub fn apply_overrides(scene: &mut Scene, a: &SceneArgs) -> Result<(), LabError> {
     if let Some(b) = &a.basis {
         scene.method.basis = b.parse()?;
     }
@@ -158,7 +160,7 @@ pub fn apply_overrides(scene: &mut Scene, a: &SceneArgs) -> Result<(), GviError>
 }
 
 /// Apply the tolerance flags of `gvi run` to a scene.
-fn apply_tolerance(scene: &mut Scene, a: &RunArgs) -> Result<(), GviError> {
+fn apply_tolerance(scene: &mut Scene, a: &RunArgs) -> Result<(), LabError> {
     if a.tol.is_some() {
         scene.method.tol = a.tol;
     }
@@ -173,7 +175,7 @@ fn apply_tolerance(scene: &mut Scene, a: &RunArgs) -> Result<(), GviError> {
         let mut ladder = Vec::with_capacity(values.len());
         for v in values {
             if !(v.is_finite() && v >= 2.0 && v.fract() == 0.0) {
-                return Err(GviError::InvalidArgument {
+                return Err(LabError::InvalidArgument {
                     name: "--ladder".into(),
                     reason: format!("{v} is not a whole number of basis functions ≥ 2"),
                 });
@@ -198,7 +200,7 @@ fn sibling(path: &Path, suffix: &str, fallback: &str) -> PathBuf {
     path.with_file_name(format!("{stem}{suffix}.svg"))
 }
 
-pub fn run(args: RunArgs) -> Result<(), GviError> {
+pub fn run(args: RunArgs) -> Result<(), LabError> {
     let mut scene = load_scene(&args.scene)?;
     apply_tolerance(&mut scene, &args)?;
     // Every output is checked before any work: usable, distinct, and not the scene file.
@@ -259,13 +261,13 @@ pub fn run(args: RunArgs) -> Result<(), GviError> {
         return Err(e);
     }
     if args.strict && !summary.warnings.is_empty() {
-        return Err(GviError::Untrustworthy(summary.warnings.join("; ")));
+        return Err(LabError::Untrustworthy(summary.warnings.join("; ")));
     }
     Ok(())
 }
 
 /// Refuse an in-memory run (chart, JSON or --tol) whose estimated memory is absurd.
-fn refuse_if_too_big(scene: &Scene, args: &RunArgs) -> Result<(), GviError> {
+fn refuse_if_too_big(scene: &Scene, args: &RunArgs) -> Result<(), LabError> {
     let d = scene.initial.q.len();
     let n = match scene.method.tol {
         // A tolerance-driven run may use the largest n of its ladder.
@@ -281,7 +283,7 @@ fn refuse_if_too_big(scene: &Scene, args: &RunArgs) -> Result<(), GviError> {
     let per_step = bytes_per_step(columns, n, d, args.format == Format::Json);
     let estimate = per_step * scene.method.steps as f64;
     if estimate > MEMORY_LIMIT_BYTES {
-        return Err(GviError::MemoryTooHigh {
+        return Err(LabError::MemoryTooHigh {
             steps: scene.method.steps,
             bytes_per_step: per_step,
             estimate,
@@ -294,7 +296,7 @@ fn refuse_if_too_big(scene: &Scene, args: &RunArgs) -> Result<(), GviError> {
 fn run_in_memory(
     scene: &Scene,
     args: &RunArgs,
-) -> Result<(RunSummary, Option<GviError>), GviError> {
+) -> Result<(RunSummary, Option<LabError>), LabError> {
     let options = RunOptions {
         chart: args.plot.is_some(),
         ..RunOptions::default()
@@ -308,7 +310,7 @@ fn run_in_memory(
     let plot = |chart: &crate::plot::Chart, path: &Path, what: &str| {
         chart
             .save_svg(path)
-            .map_err(|e| GviError::Plot(e.to_string()))
+            .map_err(|e| LabError::Plot(e.to_string()))
             .map(|_| eprintln!("{what} written to {}", path.display()))
     };
     if let (Some(path), Some(chart)) = (&args.plot, &result.chart) {

@@ -1,8 +1,8 @@
 //! `gvi solver-scaling`.
 
+use crate::error::LabError;
 use crate::studies::scaling::{ScalingConfig, solver_scaling};
 use clap::Args;
-use galerkin_vi::GviError;
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -18,7 +18,7 @@ pub struct ScalingArgs {
     pub out: Option<PathBuf>,
 }
 
-pub fn run_solver_scaling(args: ScalingArgs) -> Result<(), GviError> {
+pub fn run_solver_scaling(args: ScalingArgs) -> Result<(), LabError> {
     if let Some(dir) = &args.out {
         crate::output::check_output_dir(dir)?;
     }

@@ -1,10 +1,10 @@
 //! `gvi refine` and `gvi reproduce`.
 
 use super::run::{SceneArgs, load_scene};
+use crate::error::LabError;
 use crate::studies::refine::{Vary, parse_range, refine};
 use crate::studies::reproduce::{Size, reproduce};
 use clap::{Args, ValueEnum};
-use galerkin_vi::GviError;
 use std::path::PathBuf;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -32,7 +32,7 @@ pub struct RefineArgs {
     pub run: SceneArgs,
 }
 
-pub fn run_refine(args: RefineArgs) -> Result<(), GviError> {
+pub fn run_refine(args: RefineArgs) -> Result<(), LabError> {
     let dir = args.out.unwrap_or_else(|| PathBuf::from("out/refine"));
     let r = &args.run;
     match args.vary {
@@ -83,7 +83,7 @@ pub struct ReproduceArgs {
     pub quick: bool,
 }
 
-pub fn run_reproduce(args: ReproduceArgs) -> Result<(), GviError> {
+pub fn run_reproduce(args: ReproduceArgs) -> Result<(), LabError> {
     let dir = args.out.unwrap_or_else(|| PathBuf::from("out/reproduce"));
     crate::output::check_output_dir(&dir)?;
     let size = if args.quick { Size::Quick } else { Size::Full };
@@ -108,7 +108,7 @@ pub struct CompareBasesArgs {
     pub run: SceneArgs,
 }
 
-pub fn run_compare_bases(args: CompareBasesArgs) -> Result<(), GviError> {
+pub fn run_compare_bases(args: CompareBasesArgs) -> Result<(), LabError> {
     let dir = args
         .out
         .unwrap_or_else(|| PathBuf::from("out/compare-bases"));

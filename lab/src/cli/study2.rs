@@ -1,6 +1,7 @@
 //! `gvi work-precision`, `gvi stability` and `gvi compare-refinement`.
 
 use super::run::{SceneArgs, load_scene};
+use crate::error::LabError;
 use crate::studies::compare_refinement::{CompareConfig, compare_refinement};
 use crate::studies::stability::{Class, StabilityConfig, stability};
 use crate::studies::work_precision::{
@@ -8,7 +9,6 @@ use crate::studies::work_precision::{
 };
 use crate::studies::write_file;
 use clap::Args;
-use galerkin_vi::GviError;
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -56,14 +56,14 @@ pub struct WorkPrecisionArgs {
 }
 
 /// A comma-separated list of whole numbers ≥ 1.
-fn parse_counts(name: &str, text: &str) -> Result<Vec<usize>, GviError> {
+fn parse_counts(name: &str, text: &str) -> Result<Vec<usize>, LabError> {
     text.split(',')
         .map(|s| {
             let s = s.trim();
             s.parse::<usize>()
                 .ok()
                 .filter(|&v| v >= 1)
-                .ok_or_else(|| GviError::InvalidArgument {
+                .ok_or_else(|| LabError::InvalidArgument {
                     name: name.to_string(),
                     reason: format!(
                         "'{s}' is not a whole number ≥ 1 (expected a comma-separated list)"
@@ -73,7 +73,7 @@ fn parse_counts(name: &str, text: &str) -> Result<Vec<usize>, GviError> {
         .collect()
 }
 
-pub fn run_work_precision(args: WorkPrecisionArgs) -> Result<(), GviError> {
+pub fn run_work_precision(args: WorkPrecisionArgs) -> Result<(), LabError> {
     let r = &args.run;
     super::refuse_ignored(
         "work-precision",
@@ -170,7 +170,7 @@ pub struct StabilityArgs {
     pub run: SceneArgs,
 }
 
-pub fn run_stability(args: StabilityArgs) -> Result<(), GviError> {
+pub fn run_stability(args: StabilityArgs) -> Result<(), LabError> {
     let dir = args.out.unwrap_or_else(|| PathBuf::from("out/stability"));
     crate::output::check_output_dir(&dir)?;
     // The map sweeps h and n itself and takes its steps from --cell-steps.
@@ -182,7 +182,7 @@ pub fn run_stability(args: StabilityArgs) -> Result<(), GviError> {
         ("--economical", args.run.economical),
     ] {
         if given {
-            return Err(GviError::InvalidArgument {
+            return Err(LabError::InvalidArgument {
                 name: flag.into(),
                 reason: "stability sweeps h and n over its own grid and takes the steps per \
                          cell from --cell-steps; this flag would be ignored"
@@ -191,7 +191,7 @@ pub fn run_stability(args: StabilityArgs) -> Result<(), GviError> {
         }
     }
     if args.cell_steps == 0 {
-        return Err(GviError::InvalidArgument {
+        return Err(LabError::InvalidArgument {
             name: "--cell-steps".into(),
             reason: "need at least one step per cell".into(),
         });
@@ -205,7 +205,7 @@ pub fn run_stability(args: StabilityArgs) -> Result<(), GviError> {
     config.steps = args.cell_steps;
     let study = stability(&scene, &config)?;
     if study.cells.iter().all(|c| c.class == Class::SolverFailure) {
-        return Err(GviError::AllRunsFailed {
+        return Err(LabError::AllRunsFailed {
             runs: study.cells.len(),
             first: study
                 .cells
@@ -256,7 +256,7 @@ pub struct CompareRefinementArgs {
     pub run: SceneArgs,
 }
 
-pub fn run_compare_refinement(args: CompareRefinementArgs) -> Result<(), GviError> {
+pub fn run_compare_refinement(args: CompareRefinementArgs) -> Result<(), LabError> {
     let dir = args
         .out
         .unwrap_or_else(|| PathBuf::from("out/compare-refinement"));

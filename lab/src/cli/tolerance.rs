@@ -1,10 +1,10 @@
 //! `gvi tolerance-study SCENE`.
 
 use super::parse_vector;
+use crate::error::LabError;
 use crate::scene::Scene;
 use crate::studies::tolerance::{ToleranceConfig, tolerance_study};
 use clap::Args;
-use galerkin_vi::GviError;
 use galerkin_vi::adaptive::ErrorControl;
 use std::path::PathBuf;
 
@@ -39,8 +39,8 @@ pub struct ToleranceArgs {
     pub out: Option<PathBuf>,
 }
 
-fn parse_tols(text: &str) -> Result<Vec<f64>, GviError> {
-    let bad = |reason: String| GviError::InvalidArgument {
+fn parse_tols(text: &str) -> Result<Vec<f64>, LabError> {
+    let bad = |reason: String| LabError::InvalidArgument {
         name: "--tols".into(),
         reason,
     };
@@ -67,7 +67,7 @@ fn parse_tols(text: &str) -> Result<Vec<f64>, GviError> {
     Ok(tols)
 }
 
-pub fn run_tolerance_study(args: ToleranceArgs) -> Result<(), GviError> {
+pub fn run_tolerance_study(args: ToleranceArgs) -> Result<(), LabError> {
     if let Some(dir) = &args.out {
         crate::output::check_output_dir(dir)?;
     }
@@ -83,7 +83,7 @@ pub fn run_tolerance_study(args: ToleranceArgs) -> Result<(), GviError> {
     }
     if let Some(e) = args.eccentricity {
         if !(0.0..1.0).contains(&e) || scene.initial.q.len() != 2 {
-            return Err(GviError::InvalidArgument {
+            return Err(LabError::InvalidArgument {
                 name: "--eccentricity".into(),
                 reason: "needs 0 ≤ e < 1 and a planar two-dimensional (Kepler) scene".into(),
             });
@@ -105,7 +105,7 @@ pub fn run_tolerance_study(args: ToleranceArgs) -> Result<(), GviError> {
         let mut ladder = Vec::new();
         for v in parse_vector("--ladder", l)? {
             if !(v.is_finite() && v >= 2.0 && v.fract() == 0.0) {
-                return Err(GviError::InvalidArgument {
+                return Err(LabError::InvalidArgument {
                     name: "--ladder".into(),
                     reason: format!("{v} is not a whole number of basis functions ≥ 2"),
                 });

@@ -33,7 +33,8 @@ mod elements;
 pub use charts::{ORBIT_SAMPLES_PER_STEP, orbit_charts};
 pub use elements::{longitude_of_perihelion, wrap};
 
-use crate::error::{GviError, Result};
+use crate::error::LabError;
+use crate::error::Result;
 use crate::plot::{Chart, Series};
 use crate::scene::Scene;
 use galerkin_vi::baselines::{GaussCollocationBaseline, OneStepMethod};
@@ -117,7 +118,7 @@ pub struct NBodyReport {
 /// Run an N-body scene with its Galerkin method and compare it with a Gauss-collocation
 /// reference of the same model (module docs). A Galerkin solver failure is an error.
 pub fn nbody_report(scene: &Scene, options: ReportOptions) -> Result<NBodyReport> {
-    let (system, _) = scene.system.nbody()?.ok_or_else(|| GviError::Scene {
+    let (system, _) = scene.system.nbody()?.ok_or_else(|| LabError::Scene {
         source_name: scene.name.clone(),
         reason: "the N-body report needs an N-body scene (type = \"nbody\")".into(),
     })?;
@@ -389,7 +390,7 @@ impl NBodyReport {
         for (name, chart) in charts {
             chart
                 .save_svg(dir.join(&name))
-                .map_err(|e| GviError::Plot(e.to_string()))?;
+                .map_err(|e| LabError::Plot(e.to_string()))?;
             files.push(name);
         }
         Ok(files)

@@ -4,6 +4,7 @@
 
 mod report;
 
+use crate::error::LabError;
 use crate::error::{GviError, Result};
 use crate::run::{SystemVisitor, visit_system};
 use crate::scene::Scene;
@@ -169,7 +170,7 @@ pub fn problem_of(
             let layout = if kind == CurveKind::Choreography {
                 let m0 = nb.masses()[0];
                 if nb.masses().iter().any(|&m| m != m0) {
-                    return Err(GviError::InvalidArgument {
+                    return Err(LabError::InvalidArgument {
                         name: "[periodic] kind".into(),
                         reason: "a choreography needs equal masses".into(),
                     });
@@ -186,7 +187,7 @@ pub fn problem_of(
             (layout, Symmetry::nbody(nb.body_dim()), Some(nb.body_dim()))
         }
         (None, CurveKind::Choreography) => {
-            return Err(GviError::InvalidArgument {
+            return Err(LabError::InvalidArgument {
                 name: "[periodic] kind".into(),
                 reason: "choreographies need an N-body system".into(),
             });
@@ -204,7 +205,7 @@ pub fn problem_of(
 
 /// The scene's `[periodic]` table, or a typed error naming the scene.
 pub fn spec_of(scene: &Scene) -> Result<&PeriodicSpec> {
-    scene.periodic.as_ref().ok_or_else(|| GviError::Scene {
+    scene.periodic.as_ref().ok_or_else(|| LabError::Scene {
         source_name: scene.name.clone(),
         reason: "no [periodic] table (periodic data and initial guess); see \
                  docs/guide/periodic-orbits.md"
@@ -229,7 +230,7 @@ pub fn analyse<S: System>(
         modes_list.push(spec.modes);
     }
     if let Some(&k) = modes_list.iter().find(|&&k| k < 1) {
-        return Err(GviError::InvalidArgument {
+        return Err(LabError::InvalidArgument {
             name: "--modes".into(),
             reason: format!("K must be at least 1, got {k}"),
         });

@@ -1,7 +1,8 @@
 //! Text, CSV and chart output of a [`PeriodicReport`].
 
 use super::PeriodicReport;
-use crate::error::{GviError, Result};
+use crate::error::LabError;
+use crate::error::Result;
 use crate::plot::{Chart, Series};
 use std::fmt::Write;
 
@@ -141,7 +142,7 @@ impl PeriodicReport {
 
     /// The report as pretty JSON.
     pub fn to_json(&self) -> Result<String> {
-        serde_json::to_string_pretty(self).map_err(|e| GviError::Serialize(e.to_string()))
+        serde_json::to_string_pretty(self).map_err(|e| LabError::Serialize(e.to_string()))
     }
 
     /// The orbit: one curve per body in the plane of the first two axes (N bodies), or the

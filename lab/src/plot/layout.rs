@@ -90,7 +90,7 @@ pub(super) fn frame<'b, 'a>(
 /// Write the SVG through the crate's one atomic writer ([`crate::output::write_atomic`]).
 pub(super) fn write_file(path: &Path, svg: &str) -> Result<(), PlotError> {
     crate::output::write_atomic(path, svg.as_bytes()).map_err(|e| match e {
-        galerkin_vi::GviError::Io { source, .. } => PlotError::Io(source),
+        crate::error::LabError::Io { source, .. } => PlotError::Io(source),
         other => PlotError::Io(std::io::Error::other(other.to_string())),
     })
 }

@@ -5,6 +5,7 @@
 //! The same monitor serves the in-memory table ([`super::run_system`]) and the streamed one
 //! ([`super::stream`]), so both report the same figures.
 
+use crate::error::LabError;
 use crate::error::{GviError, Result};
 use galerkin_vi::systems::{ExactSolution, System};
 
@@ -92,7 +93,8 @@ impl Monitor {
                 return Err(GviError::NonFinite {
                     what: format!("initial {name} (check the initial state and parameters)"),
                     value: v,
-                });
+                }
+                .into());
             }
         }
         Ok(m)
@@ -111,11 +113,14 @@ impl Monitor {
         p: &[f64],
         row: &mut Vec<f64>,
     ) -> Result<()> {
-        let nonfinite = |what: String, value: f64| GviError::NonFiniteResult {
-            what,
-            value,
-            step: k,
-            t,
+        let nonfinite = |what: String, value: f64| -> LabError {
+            GviError::NonFiniteResult {
+                what,
+                value,
+                step: k,
+                t,
+            }
+            .into()
         };
         if !t.is_finite() {
             return Err(nonfinite("time".into(), t));
@@ -185,7 +190,7 @@ impl Monitor {
                     self.initial_separation[pair] = sep;
                 }
                 if sep == 0.0 {
-                    return Err(GviError::Collision {
+                    return Err(LabError::Collision {
                         a: bodies[a].clone(),
                         b: bodies[b].clone(),
                         step: k,
@@ -282,7 +287,8 @@ pub(crate) fn check_time_span(t0: f64, h: f64, steps: usize) -> Result<()> {
         return Err(GviError::NonFinite {
             what: "initial time t0".into(),
             value: t0,
-        });
+        }
+        .into());
     }
     let end = t0 + steps as f64 * h;
     let top = t0.abs().max(end.abs());
@@ -297,7 +303,8 @@ pub(crate) fn check_time_span(t0: f64, h: f64, steps: usize) -> Result<()> {
                  thousandth of the step h = {h:e}, so the times of the steps cannot be \
                  represented (use a t0 closer to 0)"
             ),
-        });
+        }
+        .into());
     }
     Ok(())
 }

@@ -7,6 +7,7 @@
 //! coefficients while they are in the workspace.
 
 use super::{Monitor, RunSummary};
+use crate::error::LabError;
 use crate::error::{GviError, Result};
 use crate::scene::Scene;
 use galerkin_vi::basis::Basis;
@@ -32,7 +33,7 @@ pub struct StreamOutcome {
     /// Totals and maxima, as for an in-memory run.
     pub summary: RunSummary,
     /// The failure that stopped the run early (the rows before it are written).
-    pub failure: Option<GviError>,
+    pub failure: Option<LabError>,
 }
 
 /// Integrate a scene (without `tol`) and write its CSV table to `out` step by step.
@@ -77,7 +78,8 @@ fn stream_system<S: System>(
     if m.tol.is_some() {
         return Err(GviError::Unsupported(
             "a tolerance-driven run is not streamed (it keeps the whole trajectory)".into(),
-        ));
+        )
+        .into());
     }
     let gvi = m.integrator()?;
     let d = system.dim();
@@ -90,12 +92,13 @@ fn stream_system<S: System>(
         return Err(GviError::InvalidStepCount {
             steps,
             reason: format!("need 1 ≤ steps ≤ {}", galerkin_vi::integrator::MAX_STEPS),
-        });
+        }
+        .into());
     }
     super::monitor::check_time_span(init.t0, m.h, steps)?;
     let exact = system.exact_solution(init.t0, &init.q, &init.p)?;
     let mut monitor = Monitor::new(system, &init.q, &init.p, init.t0)?;
-    let io = |source| GviError::Io {
+    let io = |source| LabError::Io {
         path: "<output>".into(),
         source,
     };
@@ -121,7 +124,7 @@ fn stream_system<S: System>(
     let mut row = Vec::with_capacity(header.len());
     let (mut iterations, mut evaluations, mut done) = (0usize, 0usize, 0usize);
     let mut curve_error: Option<f64> = (exact.is_some() && samples > 0).then_some(0.0);
-    let mut failure = None;
+    let mut failure: Option<LabError> = None;
     let mut emit = |row: &mut Vec<f64>, k: usize, q: &[f64], p: &[f64], mon: &mut Monitor| {
         let t = init.t0 + k as f64 * h;
         row.clear();
@@ -146,19 +149,22 @@ fn stream_system<S: System>(
         let stats = match result {
             Ok(stats) => stats,
             Err(f) => {
-                failure = Some(GviError::NewtonFailure {
-                    step: k,
-                    t: init.t0 + k as f64 * h,
-                    residual: f.residual,
-                    iterations: f.iterations,
-                    reason: f.reason,
-                });
+                failure = Some(
+                    GviError::NewtonFailure {
+                        step: k,
+                        t: init.t0 + k as f64 * h,
+                        residual: f.residual,
+                        iterations: f.iterations,
+                        reason: f.reason,
+                    }
+                    .into(),
+                );
                 break;
             }
         };
         match emit(&mut row, k + 1, &q, &p, &mut monitor) {
             Ok(()) => {}
-            Err(e @ GviError::Io { .. }) => return Err(e),
+            Err(e @ LabError::Io { .. }) => return Err(e),
             Err(e) => {
                 failure = Some(e);
                 break;

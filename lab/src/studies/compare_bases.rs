@@ -8,7 +8,8 @@
 //! `QuadratureTooWeak` error), not silently skipped.
 
 use super::{Measurement, Reference, measure, measurements_csv, write_file};
-use crate::error::{GviError, Result};
+use crate::error::LabError;
+use crate::error::Result;
 use crate::plot::{Chart, Series};
 use crate::run::{SystemVisitor, visit_system};
 use crate::scene::Scene;
@@ -49,7 +50,7 @@ pub fn compare_bases(
     quadratures: &[QuadratureKind],
 ) -> Result<BasisComparison> {
     if ns.is_empty() {
-        return Err(GviError::InvalidArgument {
+        return Err(LabError::InvalidArgument {
             name: "--range".into(),
             reason: "no values of n".into(),
         });
@@ -65,7 +66,7 @@ pub fn compare_bases(
                 + Reference::estimated_steps(system, &scene.initial, m.h, horizon);
             let limit = super::work_precision::MAX_TOTAL_STEPS;
             if total > limit {
-                return Err(GviError::CostTooHigh {
+                return Err(LabError::CostTooHigh {
                     what: "the total number of integration steps (bases × quadratures × values \
                            of n × steps, plus the reference; lower --steps or the range)"
                         .into(),
@@ -208,14 +209,14 @@ impl BasisComparison {
         ];
         write_file(&files[0], &csv)?;
         let json =
-            serde_json::to_string_pretty(self).map_err(|e| GviError::Serialize(e.to_string()))?;
+            serde_json::to_string_pretty(self).map_err(|e| LabError::Serialize(e.to_string()))?;
         write_file(&files[1], &json)?;
         self.error_chart()
             .save_svg(&files[2])
-            .map_err(|e| GviError::Plot(e.to_string()))?;
+            .map_err(|e| LabError::Plot(e.to_string()))?;
         self.condition_chart()
             .save_svg(&files[3])
-            .map_err(|e| GviError::Plot(e.to_string()))?;
+            .map_err(|e| LabError::Plot(e.to_string()))?;
         Ok(files.to_vec())
     }
 }

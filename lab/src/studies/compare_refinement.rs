@@ -17,7 +17,8 @@
 
 use super::refine::Vary;
 use super::{Measurement, Reference, measure, write_file};
-use crate::error::{GviError, Result};
+use crate::error::LabError;
+use crate::error::Result;
 use crate::plot::{Chart, Series};
 use crate::run::{SystemVisitor, visit_system};
 use crate::scene::Scene;
@@ -138,7 +139,7 @@ fn study_system<S: System>(
         .unwrap_or(1)
         .max(1);
     if config.h_divisors.contains(&0) || config.fixed_h_divisors.contains(&0) {
-        return Err(GviError::InvalidArgument {
+        return Err(LabError::InvalidArgument {
             name: "divisors".into(),
             reason: "h divisors must be positive".into(),
         });
@@ -314,7 +315,7 @@ impl CompareStudy {
         write_file(&csv, &self.csv())?;
         let json = dir.join("compare_refinement.json");
         let text =
-            serde_json::to_string_pretty(self).map_err(|e| GviError::Serialize(e.to_string()))?;
+            serde_json::to_string_pretty(self).map_err(|e| LabError::Serialize(e.to_string()))?;
         write_file(&json, &text)?;
         let mut files = vec![csv, json];
         for (by_seconds, name) in [
@@ -324,7 +325,7 @@ impl CompareStudy {
             let svg = dir.join(name);
             self.chart(by_seconds)
                 .save_svg(&svg)
-                .map_err(|e| GviError::Plot(e.to_string()))?;
+                .map_err(|e| LabError::Plot(e.to_string()))?;
             files.push(svg);
         }
         Ok(files)

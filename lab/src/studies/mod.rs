@@ -17,7 +17,7 @@ pub mod stability;
 pub mod tolerance;
 pub mod work_precision;
 
-use crate::error::{GviError, Result};
+use crate::error::{GviError, LabError, Result};
 use crate::scene::{InitialState, MethodSpec};
 use galerkin_vi::baselines::GaussCollocationBaseline;
 use galerkin_vi::integrator::GalerkinIntegrator;
@@ -49,14 +49,15 @@ impl Reference {
     pub fn position(&self, t: f64) -> Result<Vec<f64>> {
         match self {
             Reference::Exact(e) => Ok(e.position(t)),
-            Reference::Numerical(tr) => tr.position_at(t),
+            Reference::Numerical(tr) => Ok(tr.position_at(t)?),
             Reference::Sampled { t0, dt, q } => {
                 let x = (t - t0) / dt;
                 let k = x.round();
                 if (x - k).abs() > 1e-6 || k < 0.0 || k as usize >= q.len() {
                     return Err(GviError::Unsupported(format!(
                         "the reference is sampled every {dt} from {t0}; no value at t = {t}"
-                    )));
+                    ))
+                    .into());
                 }
                 Ok(q[k as usize].clone())
             }
@@ -250,7 +251,8 @@ fn fill_errors<S: System>(
         return Err(GviError::NonFinite {
             what: "position error at a step end".into(),
             value: map,
-        });
+        }
+        .into());
     }
     let mut curve = map;
     if traj.steps() > 0 && curve_samples > 0 {
@@ -266,7 +268,8 @@ fn fill_errors<S: System>(
         return Err(GviError::NonFinite {
             what: "position error along the Galerkin curves".into(),
             value: curve,
-        });
+        }
+        .into());
     }
     let k = system.invariant_names().len();
     if k > 0 {
@@ -283,7 +286,8 @@ fn fill_errors<S: System>(
             return Err(GviError::NonFinite {
                 what: "invariant error".into(),
                 value: w,
-            });
+            }
+            .into());
         }
         m.energy_error = worst[0];
         m.momentum_error = worst.get(1).copied();
@@ -320,7 +324,7 @@ pub fn refuse_memory(steps_per_run: f64, n: usize, d: usize) -> Result<()> {
     let parallel = rayon::current_num_threads().max(1) as f64;
     let estimate = steps_per_run * per_step * parallel;
     if estimate.is_nan() || estimate > MAX_STUDY_BYTES {
-        return Err(GviError::CostTooHigh {
+        return Err(LabError::CostTooHigh {
             what: format!(
                 "the memory in bytes ({steps_per_run:.3e} steps per run at about {per_step:.0} \
                  bytes each, {parallel} runs at once; lower --steps or the range)"
@@ -335,7 +339,7 @@ pub fn refuse_memory(steps_per_run: f64, n: usize, d: usize) -> Result<()> {
 /// Refuse a study whose every run failed: there is nothing to report.
 pub fn ensure_some_succeeded(ms: &[Measurement]) -> Result<()> {
     if !ms.is_empty() && ms.iter().all(|m| m.failure.is_some()) {
-        return Err(GviError::AllRunsFailed {
+        return Err(LabError::AllRunsFailed {
             runs: ms.len(),
             first: ms[0].failure.clone().unwrap_or_default(),
         });

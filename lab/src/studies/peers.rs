@@ -1,7 +1,8 @@
 //! Running the Galerkin method and the classical baselines the same way, sampled on a common
 //! grid t_k = t₀ + k·Δ (the work–precision and stability studies).
 
-use crate::error::{GviError, Result};
+use crate::error::LabError;
+use crate::error::Result;
 use crate::scene::InitialState;
 use galerkin_vi::baselines::{
     Composition, CompositionScheme, GalerkinMethod, GaussCollocationBaseline, OneStepMethod, Rk4,
@@ -88,7 +89,7 @@ pub fn run_peer<S: System>(
     samples: usize,
 ) -> Result<SampledRun> {
     if divisor == 0 || !(interval.is_finite() && interval > 0.0) {
-        return Err(GviError::InvalidArgument {
+        return Err(LabError::InvalidArgument {
             name: "sampling".into(),
             reason: format!("interval {interval} with {divisor} steps per interval"),
         });
@@ -141,9 +142,7 @@ fn dop853<S: System>(
     _tolerance: f64,
     _samples: usize,
 ) -> Result<SampledRun> {
-    Err(GviError::Unsupported(
-        "DOP853 needs the cargo feature `dop853`".into(),
-    ))
+    Err(GviError::Unsupported("DOP853 needs the cargo feature `dop853`".into()).into())
 }
 
 /// The generic loop (monomorphised per method, so timings compare like with like).

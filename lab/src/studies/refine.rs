@@ -13,7 +13,8 @@
 //! ```
 
 use super::{Measurement, Reference, measure, measurements_csv, write_file};
-use crate::error::{GviError, Result};
+use crate::error::LabError;
+use crate::error::Result;
 use crate::fit::{AlgebraicFit, GeometricFit, fit_algebraic, fit_geometric};
 use crate::plot::{Chart, Series};
 use crate::run::{SystemVisitor, visit_system};
@@ -80,7 +81,7 @@ impl std::fmt::Display for RateFit {
 
 /// Parse `A:B:STEP` (arithmetic) or `A:B:xF` (geometric, factor F) into the sweep values.
 pub fn parse_range(text: &str) -> Result<Vec<f64>> {
-    let bad = |reason: &str| GviError::InvalidArgument {
+    let bad = |reason: &str| LabError::InvalidArgument {
         name: "--range".into(),
         reason: format!("'{text}': {reason} (expected A:B:STEP or A:B:xFACTOR)"),
     };
@@ -145,7 +146,7 @@ pub struct RefineStudy {
 /// unless `fixed_steps`.
 pub fn refine(scene: &Scene, vary: Vary, values: &[f64], fixed_steps: bool) -> Result<RefineStudy> {
     if values.is_empty() {
-        return Err(GviError::InvalidArgument {
+        return Err(LabError::InvalidArgument {
             name: "--range".into(),
             reason: "no values to sweep".into(),
         });
@@ -188,7 +189,7 @@ fn refine_system<S: System + Sync>(
         + Reference::estimated_steps(system, &scene.initial, hmin, ref_horizon);
     let limit = crate::studies::work_precision::MAX_TOTAL_STEPS;
     if total.is_nan() || total > limit {
-        return Err(GviError::CostTooHigh {
+        return Err(LabError::CostTooHigh {
             what: "the total number of integration steps (every run plus the reference)".into(),
             estimate: total,
             limit,
@@ -256,7 +257,7 @@ fn check_values(
     base: &crate::scene::MethodSpec,
     fixed_steps: bool,
 ) -> Result<()> {
-    let bad = |reason: String| GviError::InvalidArgument {
+    let bad = |reason: String| LabError::InvalidArgument {
         name: "--range".into(),
         reason,
     };
@@ -371,12 +372,12 @@ impl RefineStudy {
         write_file(&csv, &measurements_csv(&self.points))?;
         let json = dir.join("refine.json");
         let text =
-            serde_json::to_string_pretty(self).map_err(|e| GviError::Serialize(e.to_string()))?;
+            serde_json::to_string_pretty(self).map_err(|e| LabError::Serialize(e.to_string()))?;
         write_file(&json, &text)?;
         let svg = dir.join("refine.svg");
         self.chart()
             .save_svg(&svg)
-            .map_err(|e| GviError::Plot(e.to_string()))?;
+            .map_err(|e| LabError::Plot(e.to_string()))?;
         Ok(vec![csv, json, svg])
     }
 }

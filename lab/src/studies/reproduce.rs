@@ -3,6 +3,7 @@
 //! `summary.md`, a table of the paper's stated rates beside the measured ones.
 
 use super::{max_norm_diff, write_file};
+use crate::error::LabError;
 use crate::error::{GviError, Result};
 use crate::fit::{fit_algebraic, fit_geometric, fit_geometric_in};
 use crate::plot::{Chart, Series};
@@ -105,7 +106,7 @@ fn run_errors<S: System>(
 fn save(chart: &Chart, dir: &Path, name: &str, files: &mut Vec<String>) -> Result<()> {
     chart
         .save_svg(dir.join(name))
-        .map_err(|e| GviError::Plot(e.to_string()))?;
+        .map_err(|e| LabError::Plot(e.to_string()))?;
     files.push(name.to_string());
     Ok(())
 }
@@ -439,7 +440,7 @@ pub fn reproduce(dir: &Path, size: Size) -> Result<Reproduction> {
     let rep = Reproduction { rows, files };
     write_file(&dir.join("summary.md"), &rep.markdown())?;
     let json =
-        serde_json::to_string_pretty(&rep).map_err(|e| GviError::Serialize(e.to_string()))?;
+        serde_json::to_string_pretty(&rep).map_err(|e| LabError::Serialize(e.to_string()))?;
     write_file(&dir.join("summary.json"), &json)?;
     Ok(rep)
 }

@@ -27,7 +27,8 @@
 
 use super::peers::{Peer, run_peer};
 use super::write_file;
-use crate::error::{GviError, Result};
+use crate::error::LabError;
+use crate::error::Result;
 use crate::plot::HeatMap;
 use crate::run::{SystemVisitor, visit_system};
 use crate::scene::Scene;
@@ -162,7 +163,7 @@ pub struct StabilityStudy {
 /// Run the stability study.
 pub fn stability(scene: &Scene, config: &StabilityConfig) -> Result<StabilityStudy> {
     if config.hs.is_empty() || config.ns.is_empty() || config.steps == 0 {
-        return Err(GviError::InvalidArgument {
+        return Err(LabError::InvalidArgument {
             name: "stability grid".into(),
             reason: "needs at least one h, one n and one step".into(),
         });
@@ -170,7 +171,7 @@ pub fn stability(scene: &Scene, config: &StabilityConfig) -> Result<StabilityStu
     let total = (config.hs.len() * config.ns.len()) as f64 * config.steps as f64;
     let limit = super::work_precision::MAX_TOTAL_STEPS;
     if total > limit {
-        return Err(GviError::CostTooHigh {
+        return Err(LabError::CostTooHigh {
             what: format!(
                 "the total number of integration steps ({} cells × {} steps per cell; lower \
                  --cell-steps)",
@@ -457,12 +458,12 @@ impl StabilityStudy {
         write_file(&base, &self.baselines_csv())?;
         let json = dir.join("stability.json");
         let text =
-            serde_json::to_string_pretty(self).map_err(|e| GviError::Serialize(e.to_string()))?;
+            serde_json::to_string_pretty(self).map_err(|e| LabError::Serialize(e.to_string()))?;
         write_file(&json, &text)?;
         let svg = dir.join("stability.svg");
         self.heat_map()
             .save_svg(&svg)
-            .map_err(|e| GviError::Plot(e.to_string()))?;
+            .map_err(|e| LabError::Plot(e.to_string()))?;
         Ok(vec![csv, base, json, svg])
     }
 }

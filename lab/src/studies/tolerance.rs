@@ -463,7 +463,7 @@ impl ToleranceStudy {
         for (chart, path) in [(e, &es), (c, &cs)] {
             chart
                 .save_svg(path)
-                .map_err(|e| crate::error::GviError::Plot(e.to_string()))?;
+                .map_err(|e| crate::error::LabError::Plot(e.to_string()))?;
         }
         Ok(vec![csv, md, es, cs])
     }

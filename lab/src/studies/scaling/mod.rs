@@ -12,6 +12,7 @@
 //! position difference of the final state from the `exact` solver's is recorded, relative to
 //! the largest |q| of that state.
 
+use crate::error::LabError;
 use crate::error::{GviError, Result};
 use crate::fit::log_linear_fit;
 use galerkin_vi::integrator::{GalerkinIntegrator, NewtonOptions, StageSolver};
@@ -84,7 +85,7 @@ impl ScalingConfig {
     }
 
     fn validate(&self) -> Result<()> {
-        let bad = |name: &str, reason: String| GviError::InvalidArgument {
+        let bad = |name: &str, reason: String| LabError::InvalidArgument {
             name: name.into(),
             reason,
         };
@@ -95,7 +96,7 @@ impl ScalingConfig {
             return Err(bad("bodies", "every N must be at least 2".into()));
         }
         if !(self.kepler_h.is_finite() && self.kepler_h > 0.0) {
-            return Err(GviError::InvalidStepSize { h: self.kepler_h });
+            return Err(GviError::InvalidStepSize { h: self.kepler_h }.into());
         }
         if self.steps.contains(&0) || self.repeats == 0 {
             return Err(bad("steps", "steps and repeats must be positive".into()));

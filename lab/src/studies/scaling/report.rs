@@ -1,7 +1,8 @@
 //! The study's tables, Markdown summary and charts.
 
 use super::{SOLVERS, ScalingStudy, ran};
-use crate::error::{GviError, Result};
+use crate::error::LabError;
+use crate::error::Result;
 use crate::plot::{Chart, Series};
 use crate::studies::write_file;
 use galerkin_vi::integrator::StageSolver;
@@ -195,14 +196,14 @@ impl ScalingStudy {
         let paths: Vec<PathBuf> = names.iter().map(|n| dir.join(n)).collect();
         write_file(&paths[0], &self.csv())?;
         let json =
-            serde_json::to_string_pretty(self).map_err(|e| GviError::Serialize(e.to_string()))?;
+            serde_json::to_string_pretty(self).map_err(|e| LabError::Serialize(e.to_string()))?;
         write_file(&paths[1], &json)?;
         write_file(&paths[2], &self.summary())?;
         let (a, b) = self.charts();
         for (chart, path) in [(a, &paths[3]), (b, &paths[4])] {
             chart
                 .save_svg(path)
-                .map_err(|e| GviError::Plot(e.to_string()))?;
+                .map_err(|e| LabError::Plot(e.to_string()))?;
         }
         Ok(paths)
     }

@@ -2,7 +2,8 @@
 //! [`WorkPrecisionStudy::merge_external`](super::WorkPrecisionStudy::merge_external).
 
 use super::WorkPoint;
-use crate::error::{GviError, Result};
+use crate::error::LabError;
+use crate::error::Result;
 use std::path::Path;
 
 /// The columns of the study's CSV that an external file must have (any order); an
@@ -68,18 +69,18 @@ fn split_csv_line(line: &str) -> std::result::Result<Vec<String>, String> {
 /// (provenance comments) are skipped. Every row is marked `external`; its `pareto` value is
 /// parsed but recomputed on merging.
 ///
-/// Errors: [`GviError::ExternalFile`] if the file cannot be read; [`GviError::ExternalCsv`]
+/// Errors: [`LabError::ExternalFile`] if the file cannot be read; [`LabError::ExternalCsv`]
 /// naming the file and the 1-based line for a missing, unknown or duplicate column, a row with
 /// the wrong number of fields, an empty method, or a malformed number (`h`, `tolerance`,
 /// `seconds` must be finite, `seconds` ≥ 0; `error` must be finite and ≥ 0 unless the row has
 /// a failure; `n` and `force_evaluations` are non-negative integers; `pareto` is `true` or
 /// `false`).
 pub fn read_external_csv(path: &Path) -> Result<Vec<WorkPoint>> {
-    let text = std::fs::read_to_string(path).map_err(|source| GviError::ExternalFile {
+    let text = std::fs::read_to_string(path).map_err(|source| LabError::ExternalFile {
         path: path.to_path_buf(),
         source,
     })?;
-    let bad = |line: usize, reason: String| GviError::ExternalCsv {
+    let bad = |line: usize, reason: String| LabError::ExternalCsv {
         path: path.to_path_buf(),
         line,
         reason,

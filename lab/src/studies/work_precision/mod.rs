@@ -15,7 +15,7 @@
 //! front, the fastest table and the chart, marked `external`. [`reference_csv`] writes the
 //! reference positions at the sample times for such scripts.
 //!
-//! A sweep whose predicted cost is absurd is refused up front ([`GviError::CostTooHigh`]):
+//! A sweep whose predicted cost is absurd is refused up front ([`LabError::CostTooHigh`]):
 //! more than [`MAX_SAMPLES`] samples, or more than [`MAX_TOTAL_STEPS`] integration steps in
 //! total (samples × steps per sample interval, summed over the configurations, times the
 //! repeats, plus the reference run).
@@ -33,7 +33,8 @@
 
 use super::peers::{Peer, run_peer};
 use super::{Reference, max_norm_diff, write_file};
-use crate::error::{GviError, Result};
+use crate::error::LabError;
+use crate::error::Result;
 use crate::run::{SystemVisitor, visit_system};
 use crate::scene::Scene;
 use galerkin_vi::baselines::CompositionScheme;
@@ -208,14 +209,14 @@ fn sample_grid(scene: &Scene, config: &WorkPrecisionConfig) -> Result<(f64, usiz
         .horizon
         .unwrap_or(scene.method.h * scene.method.steps as f64);
     if !(horizon.is_finite() && horizon >= dt) {
-        return Err(GviError::InvalidArgument {
+        return Err(LabError::InvalidArgument {
             name: "--horizon".into(),
             reason: format!("{horizon}: must be finite and at least the scene's h = {dt}"),
         });
     }
     let samples = (horizon / dt).round().max(1.0);
     if samples.is_nan() || samples > MAX_SAMPLES {
-        return Err(GviError::CostTooHigh {
+        return Err(LabError::CostTooHigh {
             what: format!("the number of samples (T = {horizon:e} every {dt})"),
             estimate: samples,
             limit: MAX_SAMPLES,
@@ -301,7 +302,7 @@ fn refuse_steps(estimate: f64) -> Result<()> {
     if estimate <= MAX_TOTAL_STEPS {
         Ok(())
     } else {
-        Err(GviError::CostTooHigh {
+        Err(LabError::CostTooHigh {
             what: "the total number of integration steps (samples × steps per sample interval \
                    over all configurations, times the repeats, plus the reference run)"
                 .into(),
@@ -550,14 +551,14 @@ impl WorkPrecisionStudy {
         write_file(&csv, &self.csv())?;
         let json = dir.join("work_precision.json");
         let text =
-            serde_json::to_string_pretty(self).map_err(|e| GviError::Serialize(e.to_string()))?;
+            serde_json::to_string_pretty(self).map_err(|e| LabError::Serialize(e.to_string()))?;
         write_file(&json, &text)?;
         let md = dir.join("work_precision.md");
         write_file(&md, &self.summary())?;
         let svg = dir.join("work_precision.svg");
         self.chart()
             .save_svg(&svg)
-            .map_err(|e| GviError::Plot(e.to_string()))?;
+            .map_err(|e| LabError::Plot(e.to_string()))?;
         Ok(vec![csv, json, md, svg])
     }
 }
