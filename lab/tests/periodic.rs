@@ -281,7 +281,7 @@ fn negative_controls_and_bad_input_are_typed_errors() {
     };
     assert!(matches!(
         periodic::analyse_scene(&scene, &two),
-        Err(LabError::InvalidArgument { .. })
+        Err(LabError::Core(GviError::InvalidInput { .. }))
     ));
     // K < 1.
     let zero = PeriodicRequest {
