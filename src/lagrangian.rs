@@ -6,6 +6,16 @@
 //! L = ½ vᵀ M v − V(q) with a constant mass matrix; every `Mechanical` is a `Lagrangian` through
 //! a blanket implementation, and the integrator exploits the constant kinetic part of the
 //! Jacobian (docs/DESIGN.md §2) for it.
+//!
+//! The integrator needs L_q and L_v at every quadrature node (the stage residual, paper eqs.
+//! (3.1)–(3.2)) and, for Newton's method, the second derivatives L_qq, L_qv, L_vv. A system may
+//! also supply batched kernels (forces and force Jacobians at all nodes at once, and for large
+//! N-body systems pairwise Jacobian–vector products, so that no 3N×3N matrix is formed); each has
+//! a default built from the per-point derivatives, so a user writes only
+//! [`Lagrangian::lagrangian`] and [`Lagrangian::dim`].
+//!
+//! The README's quickstart writes a double-well Lagrangian in eight lines; the guide's page on
+//! expression Lagrangians shows the same without Rust, from text in a scene file.
 
 use crate::ad;
 use nalgebra::DMatrix;

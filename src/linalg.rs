@@ -3,6 +3,13 @@
 //! The Newton solve of every step factorises an ((n−1)D)² matrix. nalgebra's LU allocates its
 //! result; this LU with partial pivoting works in buffers owned by the integrator's workspace,
 //! so the step loop stays allocation-free (docs/DESIGN.md §4).
+//!
+//! Contents: [`Lu`] (in-place LU with partial pivoting and its solve), [`gemm`] on strided
+//! row-major blocks ([`Strided`]) for the Gram products Φᵀ diag(g) Φ of the Newton matrix,
+//! [`reciprocal_condition`] for the conditioning checks of kinetic matrices, and
+//! [`symmetric_eigen`] (cyclic Jacobi) for the generalised eigendecomposition of the
+//! Kronecker stage solver (docs/solvers.md in the repository). Each routine works on slices in
+//! the integrator's buffers; a singular factorisation is a [`Singular`] value, never a panic.
 
 /// The matrix was singular to working precision (a zero or negligible pivot).
 #[derive(Debug, Clone, Copy, PartialEq)]

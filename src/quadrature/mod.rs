@@ -4,6 +4,16 @@
 //! nodes c_j ∈ [0, 1] and weights b_j summing to 1. A [`Quadrature`] produces a
 //! [`QuadratureRule`] (nodes, weights and the degree of polynomial exactness);
 //! [`QuadratureKind`] names the rules for scene files and the command line.
+//!
+//! Rules: [`GaussLegendre`] (the default, 2n points for n basis functions, exact to degree
+//! 4n − 1, so the kinetic term of a polynomial curve is integrated exactly), [`GaussLobatto`]
+//! (includes the end points), [`ClenshawCurtis`] (Chebyshev extrema, nested) and [`Trapezoid`]
+//! (spectrally accurate for periodic integrands, used by periodic Galerkin). A rule too weak
+//! for the basis, one that cannot integrate the kinetic matrix exactly, is refused with
+//! `GviError::QuadratureTooWeak` when the integrator is built.
+//!
+//! The guide's page on bases and quadratures (docs/guide/bases-and-quadratures.md) compares
+//! every basis × quadrature pair on Kepler.
 
 mod clenshaw_curtis;
 mod gauss_legendre;

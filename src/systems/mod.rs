@@ -5,6 +5,12 @@
 //! Each implements [`Mechanical`](crate::Mechanical) with hand-written gradient and Hessian
 //! (the AD defaults are checked against them in tests) and [`System`], which adds the
 //! invariants reported in output and, where known, the exact solution.
+//!
+//! Also here: [`ExpressionLagrangian`] (a Lagrangian parsed from text and compiled to a tape,
+//! differentiated by AD), and [`kepler_orbit`] (Kepler's equation solved to round-off, the
+//! reference for every Kepler study). The scene files of the `gvi` tool name these systems by
+//! their `type`; the N-body page of the guide (docs/guide/nbody.md) describes the solar-system
+//! scenes and their sources.
 
 pub mod expression;
 mod harmonic;
