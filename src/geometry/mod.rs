@@ -5,8 +5,8 @@
 //! Ω = [[0, I], [−I, 0]].
 //!
 //! The properties checked are the ones a variational integrator guarantees (Marsden and
-//! West, recalled in the paper's §2, and its discrete Noether theorem in the section on
-//! Noether quantities): the one-step map Φ is symplectic, ΦᵀΩΦ = Ω, measured by
+//! West, recalled in the paper's §1.1, and the discrete Noether theorem of its §3.4): the
+//! one-step map Φ is symplectic, ΦᵀΩΦ = Ω, measured by
 //! [`symplecticity_defect`] on the exact step Jacobian ([`crate::StepJacobian`]); a symmetry
 //! generator ξ with an invariant Lagrangian gives a momentum map J(q, p) = p · ξ(q)
 //! ([`MomentumMap`], [`Rotation`], [`Translation`]) conserved to round-off; energy is not
