@@ -42,6 +42,7 @@ pub mod linalg;
 pub mod method;
 pub mod periodic;
 pub mod quadrature;
+pub mod symmetries;
 pub mod systems;
 pub mod trajectory;
 

@@ -94,9 +94,9 @@ pub struct Scene {
     pub initial: InitialState,
     /// Integration method.
     pub method: MethodSpec,
-    /// Periodic-orbit data and initial guess for `gvi periodic` (see [`crate::periodic`]).
+    /// Periodic-orbit data and initial guess for `gvi periodic` (see [`crate::periodic`] (the analysis) and [`galerkin_vi::periodic`] (the solver)).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub periodic: Option<crate::periodic::PeriodicSpec>,
+    pub periodic: Option<galerkin_vi::periodic::PeriodicSpec>,
 }
 
 /// A built-in system and its parameters.

@@ -18,17 +18,16 @@
 //! geometric guarantees (docs/guide/geometric-guarantees.md in the repository).
 
 mod invariants;
-mod momentum;
 mod report;
 
+pub use crate::symmetries::{Generator, MomentumMap, NamedMomentumMap, Rotation, Translation};
 pub use invariants::{
     Series, Trend, energy_along_curves, energy_at_step_ends, linear_trend, momentum_along_curves,
     momentum_at_step_ends,
 };
-pub use momentum::{Generator, MomentumMap, Rotation, Translation};
 pub use report::{
-    CURVE_SAMPLES_PER_STEP, CheckReport, MomentumDrift, NamedMomentumMap, check_report,
-    check_report_with, known_symmetries,
+    CURVE_SAMPLES_PER_STEP, CheckReport, MomentumDrift, check_report, check_report_with,
+    known_symmetries,
 };
 
 use nalgebra::DMatrix;

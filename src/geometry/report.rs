@@ -1,7 +1,7 @@
 //! The geometric health check of a run (`gvi check SCENE`).
 
 use super::{
-    MomentumMap, energy_along_curves, energy_at_step_ends, momentum_along_curves,
+    NamedMomentumMap, energy_along_curves, energy_at_step_ends, momentum_along_curves,
     momentum_at_step_ends, relative_symplecticity_defect, symplecticity_defect,
 };
 use crate::basis::Basis;
@@ -13,20 +13,6 @@ use std::fmt;
 
 /// Sample points per step used for errors along the Galerkin curves.
 pub const CURVE_SAMPLES_PER_STEP: usize = 8;
-
-/// A momentum map with a display name.
-pub struct NamedMomentumMap {
-    /// Name, e.g. `angular_momentum`.
-    pub name: String,
-    /// The map.
-    pub map: Box<dyn MomentumMap + Send + Sync>,
-}
-
-impl fmt::Debug for NamedMomentumMap {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "NamedMomentumMap({})", self.name)
-    }
-}
 
 /// The continuous symmetries of a built-in system, by its [`System::name`]: the planar Kepler
 /// problem is rotation invariant (angular momentum); the harmonic oscillator and the pendulum

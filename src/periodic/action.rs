@@ -15,7 +15,6 @@
 //! ∂²F/∂c∂T = (1/M) Σ_j (Aᵀ L_q − Aᵀ L_qv q̇ − Bᵀ L_vv q̇), ∂²F/∂T² = (1/(MT)) Σ_j q̇ᵀ L_vv q̇.
 
 use super::curve::{FourierCurve, Layout, basis_at, basis_len};
-use super::newton::PeriodCondition;
 use crate::lagrangian::Lagrangian;
 use nalgebra::DMatrix;
 
@@ -59,6 +58,16 @@ pub(crate) struct Evaluation {
     pub energy_spread: f64,
     pub gradient: Vec<f64>,
     pub hessian: Option<DMatrix<f64>>,
+}
+
+/// Fixed period, or unknown period with a prescribed energy.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PeriodCondition {
+    /// The period is the curve's `period` and stays fixed.
+    Fixed,
+    /// The period is unknown (the curve's `period` is the guess); the mean energy over the
+    /// orbit must equal this value.
+    Energy(f64),
 }
 
 /// Default number of trapezoid nodes for K modes.

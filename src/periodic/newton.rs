@@ -10,21 +10,12 @@
 //! also absorbs degeneracies no symmetry explains, such as the family of elliptic homographic
 //! orbits through Lagrange's circular one).
 
+pub use super::action::PeriodCondition;
 use super::action::{Tables, default_nodes, evaluate};
 use super::curve::{FourierCurve, basis_len};
 use crate::error::{GviError, Result, ensure_finite};
 use crate::lagrangian::Lagrangian;
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
-
-/// Fixed period, or unknown period with a prescribed energy.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum PeriodCondition {
-    /// The period is the curve's `period` and stays fixed.
-    Fixed,
-    /// The period is unknown (the curve's `period` is the guess); the mean energy over the
-    /// orbit must equal this value.
-    Energy(f64),
-}
 
 /// A continuous symmetry of the action, whose generator is removed from every Newton step.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -102,11 +102,11 @@ impl System for Kepler {
         out[0] = 0.5 * (p[0] * p[0] + p[1] * p[1]) - self.mu / r;
         out[1] = q[0] * p[1] - q[1] * p[0];
     }
-    fn symmetries(&self) -> Vec<crate::geometry::NamedMomentumMap> {
+    fn symmetries(&self) -> Vec<crate::symmetries::NamedMomentumMap> {
         // L is invariant under rotations of the plane: angular momentum q × p.
-        crate::geometry::Rotation::planar(2, 1, 0, 1)
+        crate::symmetries::Rotation::planar(2, 1, 0, 1)
             .map(|rot| {
-                vec![crate::geometry::NamedMomentumMap {
+                vec![crate::symmetries::NamedMomentumMap {
                     name: "angular_momentum".into(),
                     map: Box::new(rot),
                 }]

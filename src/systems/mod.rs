@@ -43,7 +43,7 @@ pub trait System: Lagrangian {
 
     /// The continuous symmetries of the Lagrangian as momentum maps (discrete Noether: the
     /// integrator conserves them at step ends). Default: none.
-    fn symmetries(&self) -> Vec<crate::geometry::NamedMomentumMap> {
+    fn symmetries(&self) -> Vec<crate::symmetries::NamedMomentumMap> {
         Vec::new()
     }
 

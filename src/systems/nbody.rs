@@ -2,8 +2,8 @@
 
 use super::{System, positive};
 use crate::error::{GviError, Result, ensure_len};
-use crate::geometry::{NamedMomentumMap, Rotation, Translation};
 use crate::lagrangian::Mechanical;
+use crate::symmetries::{NamedMomentumMap, Rotation, Translation};
 use nalgebra::DMatrix;
 use num_dual::DualNum;
 
@@ -487,7 +487,7 @@ impl System for NBody {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::MomentumMap;
+    use crate::symmetries::MomentumMap;
 
     #[test]
     fn pairwise_products_and_blocks_match_the_hessian() {

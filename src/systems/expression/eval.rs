@@ -8,8 +8,8 @@
 //! operations on equal operands share one slot, so `cos(x - y)` written twice is computed once.
 //! Evaluation is one pass over the tape into a stack buffer (no allocation up to 384 slots).
 
-use super::error::{ExpressionError, Position};
 use super::parse::{BinOp, Expr, Func};
+use crate::error::{ExpressionError, Position};
 use num_dual::DualNum;
 use std::collections::HashMap;
 

@@ -29,14 +29,13 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-mod error;
 mod eval;
 mod parse;
 mod separable;
 mod spec;
 mod vectorised;
 
-pub use error::{ExpressionError, Position};
+pub use crate::error::{ExpressionError, Position};
 pub use eval::Tape;
 pub use parse::{BinOp, Expr, Func, MAX_DEPTH, parse};
 pub use spec::{ExpressionInvariants, LagrangianSpec};

@@ -12,7 +12,7 @@
 //! atom    = number | name | name "(" sum ("," sum)* ")" | "(" sum ")"
 //! ```
 
-use super::error::{ExpressionError, Position};
+use crate::error::{ExpressionError, Position};
 use std::fmt;
 
 /// The deepest tree accepted (a sum of k terms is k levels deep): deeper trees are a syntax

@@ -1,6 +1,16 @@
-//! Noether momentum maps J(q, p) = p · ξ(q) for symmetry generators ξ.
+//! Continuous symmetries and their Noether momentum maps J(q, p) = p · ξ(q).
+//!
+//! A one-parameter group of transformations that leaves the Lagrangian invariant has an
+//! infinitesimal generator ξ(q); Noether's theorem makes J(q, p) = p · ξ(q) a constant of the
+//! exact flow, and the discrete Noether theorem (paper §3.4) makes it a constant of the
+//! discrete flow of a variational integrator, to round-off and solver tolerance. Generators:
+//! [`Rotation`] (in a coordinate plane, for every body of an N-body system at once) and
+//! [`Translation`] (along an axis). Systems list theirs with
+//! [`System::symmetries`](crate::systems::System::symmetries); [`crate::geometry`] measures
+//! the drift of each over a run.
 
 use crate::error::{GviError, Result};
+use std::fmt;
 
 /// A momentum map of a symmetry: its infinitesimal generator ξ(q) on configuration space
 /// and the value J(q, p) = p · ξ(q) (by Noether's theorem conserved by the exact flow, and
@@ -178,5 +188,19 @@ impl<M: MomentumMap + ?Sized> MomentumMap for Box<M> {
     }
     fn value(&self, q: &[f64], p: &[f64]) -> f64 {
         (**self).value(q, p)
+    }
+}
+
+/// A momentum map with a display name.
+pub struct NamedMomentumMap {
+    /// Name, e.g. `angular_momentum`.
+    pub name: String,
+    /// The map.
+    pub map: Box<dyn MomentumMap + Send + Sync>,
+}
+
+impl fmt::Debug for NamedMomentumMap {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "NamedMomentumMap({})", self.name)
     }
 }

@@ -5,6 +5,10 @@
 //! that does not converge, or an invalid input. None of them panics. The `gvi` tool wraps them in its own error
 //! type, which adds scene, file, chart and command-line failures.
 
+mod expression;
+
+pub use expression::{ExpressionError, Position};
+
 /// Errors returned by the library.
 #[derive(Debug, thiserror::Error)]
 pub enum GviError {
@@ -164,9 +168,9 @@ pub enum GviError {
     },
     /// An expression Lagrangian (`type = "lagrangian"`) was rejected: a syntax error, an
     /// unknown symbol, a degenerate or non-regular Lagrangian (see
-    /// [`ExpressionError`](crate::systems::expression::ExpressionError)).
+    /// [`ExpressionError`]).
     #[error("expression Lagrangian: {0}")]
-    Expression(#[from] crate::systems::expression::ExpressionError),
+    Expression(#[from] ExpressionError),
 }
 
 /// A number for messages: plain when it reads well (1e-4 ≤ |x| < 1e6, or 0), scientific
