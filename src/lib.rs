@@ -48,6 +48,7 @@ pub mod progress;
 pub mod quadrature;
 pub mod run;
 pub mod scene;
+pub mod stats;
 pub mod studies;
 pub mod systems;
 pub mod trajectory;

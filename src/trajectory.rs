@@ -2,9 +2,9 @@
 
 use crate::basis::{AnyBasis, Basis, BasisKind};
 use crate::error::{GviError, Result};
-use crate::integrator::StepStats;
 use crate::lagrangian::Lagrangian;
 use crate::quadrature::QuadratureKind;
+use crate::stats::StepStats;
 use serde::{Deserialize, Serialize};
 use std::sync::OnceLock;
 

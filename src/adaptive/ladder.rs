@@ -3,7 +3,7 @@
 //! continuation, the integrator's own guesses), the transfer matrices between rungs, and the
 //! bookkeeping the error controls share (costs per start, streaks, the round-off floor).
 
-use super::embedded::rungs_down;
+use super::descent::rungs_down;
 use crate::basis::{AnyBasis, Basis};
 use crate::integrator::{GalerkinIntegrator, StepFailure, StepStats, Workspace};
 use crate::lagrangian::Lagrangian;

@@ -25,7 +25,7 @@
 //! integrator re-evaluates the residual at the iterate a solver returns, so the step's
 //! momentum and statistics always describe the final iterate.
 
-use super::newton::max_abs;
+use super::dd::max_abs;
 use super::stage::Mode;
 use super::{GalerkinIntegrator, NewtonOptions, StageSolver, StepFailure, StepStats, Workspace};
 use crate::basis::Basis;

@@ -2,12 +2,13 @@
 //! RK4-predictor curves, and the residual competition that picks among them
 //! ([`InitialGuess`]).
 
-use super::newton::{InitialGuess, max_abs};
+use super::dd::max_abs;
 use super::stage::Mode;
 use super::{GalerkinIntegrator, Workspace};
 use crate::basis::Basis;
 use crate::lagrangian::Lagrangian;
 use crate::quadrature::Quadrature;
+use crate::stats::InitialGuess;
 
 /// Steps between full competitions of the initial guesses.
 const GUESS_RECHECK: usize = 16;

@@ -2,7 +2,7 @@
 //! the step (plain and compensated) and the discrete Lagrangian. The stage equations and
 //! their Jacobian are in `stage`, the initial guesses in `guess`.
 
-use super::dd::{dd_add, two_sum};
+use super::dd::{dd_add, max_abs, two_sum};
 pub use super::options::{InitialGuess, NewtonOptions, StepFailure, StepStats};
 use super::solver::StageSolver;
 use super::stage::Mode;
@@ -44,10 +44,6 @@ const AUTO_HOLDOFF: usize = 32;
 /// Contraction per iteration above which the Kronecker solver's frozen Hessian is refrozen
 /// (once) and then abandoned for exact Newton within the step.
 const KRONECKER_STALL: f64 = 0.5;
-
-pub(super) fn max_abs(x: &[f64]) -> f64 {
-    x.iter().fold(0.0f64, |m, v| m.max(v.abs()))
-}
 
 impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
     /// Newton's method on the stage equations of `mode`, from the coefficients in
@@ -565,8 +561,6 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         })
     }
 }
-
-impl std::error::Error for StepFailure {}
 
 /// The discrete Lagrangian and its discrete Legendre transforms at one pair of end points.
 #[derive(Debug, Clone, PartialEq)]
