@@ -33,6 +33,7 @@ pub mod ad;
 pub mod adaptive;
 pub mod baselines;
 pub mod basis;
+pub mod curve;
 pub mod error;
 pub mod fit;
 pub mod geometry;

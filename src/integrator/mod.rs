@@ -218,6 +218,19 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         &self.tables
     }
 
+    /// Interpolation of curve values at the basis's interpolation nodes (values to
+    /// coefficients): how a curve known by its values, e.g. another rung's curve or a
+    /// predictor, becomes coefficients in this integrator's basis.
+    pub fn curve_fit(&self) -> &CurveFit {
+        &self.tables.fit
+    }
+
+    /// The n×n matrix C of the Chebyshev coefficients of a curve from its basis coefficients,
+    /// a = C·Q with q(τ) ≈ Σ_j a_j T_j(2τ − 1) (exact for polynomial bases); row j is mode j.
+    pub fn chebyshev_transform(&self) -> &[f64] {
+        &self.tables.chebyshev
+    }
+
     /// The kinetic matrix K_ab = Σ_j b_j φ_a'(c_j) φ_b'(c_j) (n×n, row-major, τ-units): the
     /// Jacobian of a free particle's stage equations is K ⊗ M / h.
     pub fn kinetic_matrix(&self) -> &[f64] {
@@ -361,7 +374,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             };
             match result {
                 Ok(stats) => {
-                    traj.push_step(ws.coefficients(), &q, &p, stats);
+                    traj.push_step(ws.curve().starting_at(t), &q, &p, stats);
                 }
                 Err(failure) => {
                     return Err(IntegrationFailure {

@@ -3,6 +3,7 @@
 
 use super::GalerkinIntegrator;
 use crate::basis::Basis;
+use crate::curve::GalerkinCurveRef;
 use crate::error::{GviError, Result};
 use crate::lagrangian::Lagrangian;
 use crate::linalg::Lu;
@@ -15,6 +16,8 @@ use crate::quadrature::Quadrature;
 pub struct Workspace {
     pub(crate) d: usize,
     pub(crate) n: usize,
+    /// The step size h of the integrator that made the workspace.
+    pub(crate) h: f64,
     /// Present for separable Lagrangians L = ½vᵀMv − V(q).
     pub(crate) separable: Option<Separable>,
     /// The Newton unknowns: increments ΔQ_i = Q_i − u_i q_k, row i (n×D; ΔQ_0 = 0).
@@ -274,6 +277,7 @@ impl Workspace {
             hblocks,
             d,
             n,
+            h: gvi.step_size(),
             separable,
             coeffs: vec![0.0; n * d],
             base: vec![0.0; d],
@@ -353,6 +357,13 @@ impl Workspace {
     /// The Galerkin coefficients of the last completed step (n×D, row i = Q_i).
     pub fn coefficients(&self) -> &[f64] {
         &self.abs
+    }
+
+    /// The Galerkin curve of the last completed step, starting at time 0 (a workspace does not
+    /// know the time of its step: set it with [`GalerkinCurveRef::starting_at`]). All zeros
+    /// before the first step.
+    pub fn curve(&self) -> GalerkinCurveRef<'_> {
+        GalerkinCurveRef::from_parts(&self.abs, self.n, self.d, self.h, 0.0)
     }
 
     /// Forget the previous step's curve (the next guess will not extrapolate) and any pending
