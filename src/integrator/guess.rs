@@ -2,7 +2,6 @@
 //! RK4-predictor curves, and the residual competition that picks among them
 //! ([`InitialGuess`]).
 
-use super::dd::max_abs;
 use super::stage::Mode;
 use super::{GalerkinIntegrator, Workspace};
 use crate::basis::Basis;
@@ -17,43 +16,6 @@ const GUESS_RECHECK: usize = 16;
 const GUESS_SLACK: f64 = 4.0;
 
 impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
-    /// Velocity v with ∂L/∂v(q, v) = p into `ws.vel` (inverse Legendre transform), starting
-    /// from the value already in `ws.vel`.
-    fn inverse_legendre<L: Lagrangian>(&self, lag: &L, ws: &mut Workspace, q: &[f64], p: &[f64]) {
-        let d = ws.d;
-        if let Some(sep) = &ws.separable {
-            ws.vel.copy_from_slice(p);
-            sep.solve_mass(&mut ws.vel, &mut ws.small_scratch);
-            return;
-        }
-        // Newton on L_v(q, v) = p with Jacobian L_vv.
-        for _ in 0..20 {
-            let (lq, lv) = (&mut ws.lq[..d], &mut ws.lv[..d]);
-            lag.gradient(q, &ws.vel, lq, lv);
-            let mut err = 0.0f64;
-            for r in 0..d {
-                ws.small_rhs[r] = p[r] - lv[r];
-                err = err.max(ws.small_rhs[r].abs());
-            }
-            if err <= 1e-15 * (1.0 + max_abs(p)) {
-                return;
-            }
-            lag.hessian(q, &ws.vel, &mut ws.hqq, &mut ws.hqv, &mut ws.hvv);
-            if ws.small.refactor(&ws.hvv).is_err() {
-                return;
-            }
-            ws.small
-                .solve_in_place(&mut ws.small_rhs, &mut ws.small_scratch);
-            for r in 0..d {
-                ws.vel[r] += ws.small_rhs[r];
-            }
-            if !ws.vel.iter().all(|x| x.is_finite()) {
-                ws.vel.copy_from_slice(p);
-                return;
-            }
-        }
-    }
-
     /// The RK4 predictor into `ws.cand`; false when unavailable (non-separable Lagrangian) or
     /// not finite.
     fn predict<L: Lagrangian>(&self, lag: &L, ws: &mut Workspace, q: &[f64], p: &[f64]) -> bool {

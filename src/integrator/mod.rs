@@ -26,11 +26,13 @@
 //! ([`Workspace::coefficients`], `Trajectory::coefficients`) stay absolute Q.
 
 mod dd;
+mod discrete_action;
 mod equations;
 mod frozen;
 mod guess;
 mod kronecker;
 mod krylov;
+mod legendre_transform;
 mod modal;
 mod newton;
 mod options;
@@ -39,8 +41,9 @@ mod stage;
 mod tangent;
 mod workspace;
 
+pub use discrete_action::DiscreteLagrangian;
 pub use equations::{Correction, StageEquations, StageSolve};
-pub use newton::{DiscreteLagrangian, InitialGuess, NewtonOptions, StepFailure, StepStats};
+pub use newton::{InitialGuess, NewtonOptions, StepFailure, StepStats};
 pub use solver::StageSolver;
 pub use tangent::StepJacobian;
 pub use workspace::{MATRIX_FREE_MIN_DIM, Workspace};

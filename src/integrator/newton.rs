@@ -8,7 +8,6 @@ use super::solver::StageSolver;
 use super::stage::Mode;
 use super::{GalerkinIntegrator, Workspace};
 use crate::basis::Basis;
-use crate::error::{GviError, Result, ensure_finite, ensure_len};
 use crate::lagrangian::Lagrangian;
 use crate::quadrature::Quadrature;
 
@@ -403,7 +402,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
 
     /// Absolute coefficients for [`Workspace::coefficients`] (Q_i = u_i q_k + ΔQ_i, with the
     /// ends exactly q_k and the returned q_{k+1}), and the increments kept for the next guess.
-    fn finish_step(&self, ws: &mut Workspace, q_next: &[f64]) {
+    pub(super) fn finish_step(&self, ws: &mut Workspace, q_next: &[f64]) {
         let t = self.tables();
         let (n, d) = (t.n, ws.d);
         for i in 1..n - 1 {
@@ -498,79 +497,4 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         }
         Ok(())
     }
-
-    /// The discrete Lagrangian L_d(q0, q1) = ext h Σ_j b_j L(q(c_j), q̇(c_j)) over Galerkin
-    /// curves with q(0) = q0 and q(h) = q1 (paper eq. (1.1)), together with the discrete
-    /// Legendre transforms p0 = −D₁L_d(q0, q1) and p1 = D₂L_d(q0, q1).
-    pub fn discrete_lagrangian<L: Lagrangian>(
-        &self,
-        lag: &L,
-        q0: &[f64],
-        q1: &[f64],
-    ) -> Result<DiscreteLagrangian> {
-        let d = lag.dim();
-        ensure_len("q0", d, q0.len())?;
-        ensure_len("q1", d, q1.len())?;
-        ensure_finite("q0", q0)?;
-        ensure_finite("q1", q1)?;
-        let mut ws = self.workspace(lag)?;
-        ws.need_velocities = true;
-        let t = self.tables();
-        let n = t.n;
-        // Start from the straight line between the ends, as increments from q0.
-        ws.base.copy_from_slice(q0);
-        for i in 0..n {
-            for r in 0..d {
-                ws.coeffs[i * d + r] = t.ramp[i] * (q1[r] - q0[r]);
-            }
-        }
-        ws.coeffs[..d].iter_mut().for_each(|x| *x = 0.0);
-        for r in 0..d {
-            ws.coeffs[(n - 1) * d + r] = q1[r] - q0[r];
-        }
-        let mut stats = StepStats::default();
-        self.newton(
-            lag,
-            &mut ws,
-            Mode::BoundaryValue,
-            &[],
-            &mut stats,
-            self.options().solver,
-        )
-        .map_err(|f| GviError::NewtonFailure {
-            step: 0,
-            t: 0.0,
-            residual: f.residual,
-            iterations: f.iterations,
-            reason: format!("discrete Lagrangian: {}", f.reason),
-        })?;
-        let h = self.step_size();
-        let mut value = 0.0;
-        for j in 0..t.m {
-            value +=
-                t.weights[j] * lag.value(&ws.qj[j * d..(j + 1) * d], &ws.vj[j * d..(j + 1) * d]);
-        }
-        Ok(DiscreteLagrangian {
-            value: h * value,
-            p0: ws.grad[..d].iter().map(|x| -x).collect(),
-            p1: ws.grad[(n - 1) * d..n * d].to_vec(),
-            coefficients: {
-                self.finish_step(&mut ws, q1);
-                ws.abs.clone()
-            },
-        })
-    }
-}
-
-/// The discrete Lagrangian and its discrete Legendre transforms at one pair of end points.
-#[derive(Debug, Clone, PartialEq)]
-pub struct DiscreteLagrangian {
-    /// L_d(q0, q1).
-    pub value: f64,
-    /// p0 = −D₁L_d(q0, q1) (the discrete Legendre transform F⁻L_d).
-    pub p0: Vec<f64>,
-    /// p1 = D₂L_d(q0, q1) (F⁺L_d).
-    pub p1: Vec<f64>,
-    /// The extremal Galerkin curve's coefficients (n×D).
-    pub coefficients: Vec<f64>,
 }

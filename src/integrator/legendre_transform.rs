@@ -1,0 +1,184 @@
+//! The discrete Legendre transforms of one step (docs/DESIGN.md §2; paper §1.1 and eq. (4)).
+//!
+//! The discrete Lagrangian L_d(q_k, q_{k+1}) defines the momenta at the ends of a step,
+//!
+//!   p_k = −D₁L_d(q_k, q_{k+1}) = −∂S_d/∂Q_0,   p_{k+1} = D₂L_d(q_k, q_{k+1}) = ∂S_d/∂Q_{n−1}
+//!
+//! (the maps F⁻L_d and F⁺L_d of paper §1.1; the end components of the action gradient of
+//! [`super::discrete_action`] at a curve that solves the internal stage equations). A step
+//! inverts the first: given (q_k, p_k) it solves p_k + ∂S_d/∂Q_0 = 0 with the internal stage
+//! equations (the system of paper eq. (4)), then evaluates the second.
+//!
+//! Here, in one place:
+//! - [`GalerkinIntegrator::discrete_legendre_transforms`]: both transforms at any curve;
+//! - `legendre_transform_rows`: the first transform as the step's residual rows, summed in
+//!   double-double together with the step's total impulse h Σ_j b_j L_q(c_j), from which
+//!   p_{k+1} = p_k + impulse (docs/DESIGN.md §4: the rounding of these rows made the energy
+//!   drift);
+//! - `inverse_legendre`: the continuous inverse transform v = (∂L/∂v)⁻¹(q, p), for the first
+//!   step's linear initial guess.
+//!
+//! Guide: docs/guide/paper-objects.md.
+
+use super::dd::{dd_acc, dd_acc_columns, max_abs, two_sum};
+use super::{GalerkinIntegrator, Workspace};
+use crate::basis::Basis;
+use crate::curve::GalerkinCurveRef;
+use crate::error::Result;
+use crate::lagrangian::Lagrangian;
+use crate::quadrature::Quadrature;
+
+/// (p_k, p_{k+1}) = (−∂S/∂Q_0, ∂S/∂Q_{n−1}) from the gradient in the workspace.
+pub(super) fn legendre_transforms_of_gradient(ws: &Workspace) -> (Vec<f64>, Vec<f64>) {
+    let (n, d) = (ws.n, ws.d);
+    (
+        ws.grad[..d].iter().map(|x| -x).collect(),
+        ws.grad[(n - 1) * d..n * d].to_vec(),
+    )
+}
+
+impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
+    /// The discrete Legendre transforms of a Galerkin curve in this integrator's basis:
+    /// p_k = −∂S_d/∂Q_0 and p_{k+1} = ∂S_d/∂Q_{n−1} (paper §1.1, F⁻L_d and F⁺L_d, and eq. (4)).
+    /// For the curve of a solved step (e.g. [`Workspace::curve`] after
+    /// [`step`](Self::step)) they are the step's p_k and p_{k+1} to round-off; for any other
+    /// curve they are the end momenta its action assigns.
+    ///
+    /// Errors: a curve whose n, h or dimension is not this integrator's and the Lagrangian's.
+    pub fn discrete_legendre_transforms<L: Lagrangian>(
+        &self,
+        lag: &L,
+        curve: GalerkinCurveRef<'_>,
+    ) -> Result<(Vec<f64>, Vec<f64>)> {
+        let mut ws = self.workspace_at_curve(lag, curve)?;
+        self.action_gradient(lag, &mut ws, false);
+        Ok(legendre_transforms_of_gradient(&ws))
+    }
+
+    /// The Legendre-transform rows of the initial-value residual into `ws.rhs[..D]`, and the
+    /// step's total impulse h Σ_j b_j L_q(c_j) into `ws.impulse` + `ws.impulse_lo`.
+    ///
+    /// The rows are p_k + impulse − ∂S/∂ΔQ_{n−1} = 0, the form that makes
+    /// p_{k+1} = p_k + impulse exactly D₂L_d of the discrete Lagrangian the tables define (q_k
+    /// enters every node with coefficient exactly 1 and the velocities not at all); in exact
+    /// arithmetic it is p_k + Σ_{a<n−1} u_a ∂S/∂Q_a = 0, the paper's momentum condition,
+    /// eq. (4), plus
+    /// u-weighted stage equations
+    /// (paper eq. (3)).
+    ///
+    /// Round-off (docs/DESIGN.md §4): the terms p_k, the impulse, and both parts of ∂S/∂ΔQ_{n−1}
+    /// are O(|p|) each (near periapsis of an eccentric orbit the impulse of a large step is as
+    /// large as p) and cancel to O(ε). Rounding them in working precision leaves an error
+    /// ε|p| in the row, i.e. in q_{k+1}, every step — and, measured, not a random one: it
+    /// made the energy drift linearly (Kepler e = 0.6, Legendre n = 24, h = 0.5:
+    /// ΔE = −4e-14 at T = 2000 and −7e-14 at T = 4000, every realisation the same sign; the
+    /// harmonic oscillator likewise). So for separable Lagrangians the whole row is summed in
+    /// double-double: products exact by FMA, sums by TwoSum, including the low parts of the
+    /// state (p_err) and of ΔQ_{n−1}. The drift fell below the random walk (`tests/roundoff.rs`).
+    pub(super) fn legendre_transform_rows(&self, ws: &mut Workspace, p_k: &[f64]) {
+        let (t, h) = (self.tables(), self.step_size());
+        let (d, n) = (ws.d, ws.n);
+        let last = (n - 1) * d;
+        ws.dd_hi.iter_mut().for_each(|x| *x = 0.0);
+        ws.dd_lo.iter_mut().for_each(|x| *x = 0.0);
+        let weights = &t.weights;
+        dd_acc_columns(
+            t.m,
+            |j| h * weights[j],
+            &ws.lq,
+            d,
+            &mut ws.dd_hi,
+            &mut ws.dd_lo,
+        );
+        for r in 0..d {
+            (ws.impulse[r], ws.impulse_lo[r]) = two_sum(ws.dd_hi[r], ws.dd_lo[r]);
+            ws.rhs[r] = (p_k[r] - ws.grad[last + r]) + (ws.impulse[r] + ws.p_err[r]);
+        }
+        let Some(sep) = &ws.separable else {
+            return;
+        };
+        let x = if ws.curve_from_cand {
+            &ws.cand
+        } else {
+            &ws.coeffs
+        };
+        // p_k + impulse …
+        for r in 0..d {
+            let (s, e) = two_sum(p_k[r], ws.impulse[r]);
+            ws.dd_hi[r] = s;
+            ws.dd_lo[r] = e + (ws.p_err[r] + ws.impulse_lo[r]);
+        }
+        // … − Σ_j φ_{n−1}(c_j) h b_j L_q(c_j) (side by side over r, each sum in the order
+        // of j) …
+        for j in 0..t.m {
+            let w = h * t.weights[j];
+            let phi = t.phi[j * n + n - 1];
+            let lq = &ws.lq[j * d..(j + 1) * d];
+            for ((s, e), &f) in ws.dd_hi.iter_mut().zip(ws.dd_lo.iter_mut()).zip(lq) {
+                let g = w * f;
+                dd_acc(s, e, -phi, g);
+                *e -= phi * w.mul_add(f, -g);
+            }
+        }
+        for r in 0..d {
+            let (mut s, mut e) = (ws.dd_hi[r], ws.dd_lo[r]);
+            // … − (1/h) Σ_b K_{n−1,b} M ΔQ_b.
+            let row = sep.kinetic_last_start[r]..sep.kinetic_last_start[r + 1];
+            let (kinetic, index) = (&sep.kinetic_last[row.clone()], &sep.kinetic_last_index[row]);
+            for (c, &i) in kinetic.iter().zip(index) {
+                dd_acc(&mut s, &mut e, -c, x[i]);
+            }
+            if !ws.curve_from_cand {
+                for (c, &i) in kinetic.iter().zip(index) {
+                    if i >= last {
+                        e -= c * ws.last_lo[i - last];
+                    }
+                }
+            }
+            ws.rhs[r] = s + e;
+        }
+    }
+
+    /// Velocity v with ∂L/∂v(q, v) = p into `ws.vel` (inverse Legendre transform), starting
+    /// from the value already in `ws.vel`.
+    pub(super) fn inverse_legendre<L: Lagrangian>(
+        &self,
+        lag: &L,
+        ws: &mut Workspace,
+        q: &[f64],
+        p: &[f64],
+    ) {
+        let d = ws.d;
+        if let Some(sep) = &ws.separable {
+            ws.vel.copy_from_slice(p);
+            sep.solve_mass(&mut ws.vel, &mut ws.small_scratch);
+            return;
+        }
+        // Newton on L_v(q, v) = p with Jacobian L_vv.
+        for _ in 0..20 {
+            let (lq, lv) = (&mut ws.lq[..d], &mut ws.lv[..d]);
+            lag.gradient(q, &ws.vel, lq, lv);
+            let mut err = 0.0f64;
+            for r in 0..d {
+                ws.small_rhs[r] = p[r] - lv[r];
+                err = err.max(ws.small_rhs[r].abs());
+            }
+            if err <= 1e-15 * (1.0 + max_abs(p)) {
+                return;
+            }
+            lag.hessian(q, &ws.vel, &mut ws.hqq, &mut ws.hqv, &mut ws.hvv);
+            if ws.small.refactor(&ws.hvv).is_err() {
+                return;
+            }
+            ws.small
+                .solve_in_place(&mut ws.small_rhs, &mut ws.small_scratch);
+            for r in 0..d {
+                ws.vel[r] += ws.small_rhs[r];
+            }
+            if !ws.vel.iter().all(|x| x.is_finite()) {
+                ws.vel.copy_from_slice(p);
+                return;
+            }
+        }
+    }
+}
