@@ -61,7 +61,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
     ) -> Result<Vec<f64>> {
         let mut ws = self.workspace_at_curve(lag, curve)?;
         self.action_gradient(lag, &mut ws, false);
-        Ok(ws.grad.clone())
+        Ok(ws.stage.grad.clone())
     }
 
     /// A fresh workspace whose iterate is `curve`: q_k = Q_0 and the increments
@@ -85,8 +85,9 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let mut ws = self.workspace(lag)?;
         ws.need_velocities = true;
         let q0 = curve.start();
-        ws.base.copy_from_slice(q0);
+        ws.newton.base.copy_from_slice(q0);
         for (i, (row, q)) in ws
+            .newton
             .coeffs
             .chunks_exact_mut(d)
             .zip(curve.coefficients().chunks_exact(d))
@@ -105,8 +106,11 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let (t, d) = (self.tables(), ws.d);
         let mut value = 0.0;
         for j in 0..t.m {
-            value +=
-                t.weights[j] * lag.value(&ws.qj[j * d..(j + 1) * d], &ws.vj[j * d..(j + 1) * d]);
+            value += t.weights[j]
+                * lag.value(
+                    &ws.stage.qj[j * d..(j + 1) * d],
+                    &ws.stage.vj[j * d..(j + 1) * d],
+                );
         }
         self.step_size() * value
     }
@@ -118,25 +122,37 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let t = self.tables();
         let (n, m, d, h) = (t.n, t.m, ws.d, self.step_size());
         let coeffs = if coeffs_from_cand {
-            &ws.cand
+            &ws.guess.cand
         } else {
-            &ws.coeffs
+            &ws.newton.coeffs
         };
-        ws.curve_from_cand = coeffs_from_cand;
+        ws.stage.curve_from_cand = coeffs_from_cand;
         let (rn, rd) = (Strided::rows(0, n), Strided::rows(0, d));
         // q_k + (Φ ΔQ + δq_k): the small parts first, then the large one.
-        for (j, row) in ws.qj.chunks_exact_mut(d).enumerate() {
-            row.copy_from_slice(&ws.base_err);
+        for (j, row) in ws.stage.qj.chunks_exact_mut(d).enumerate() {
+            row.copy_from_slice(&ws.newton.base_err);
             if !coeffs_from_cand {
                 let phi_last = t.phi[j * n + n - 1];
-                for (x, lo) in row.iter_mut().zip(&ws.last_lo) {
+                for (x, lo) in row.iter_mut().zip(&ws.newton.last_lo) {
                     *x += phi_last * lo;
                 }
             }
         }
-        gemm(m, n, d, 1.0, &t.phi, rn, coeffs, rd, 1.0, &mut ws.qj, rd);
-        for row in ws.qj.chunks_exact_mut(d) {
-            for (x, b) in row.iter_mut().zip(&ws.base) {
+        gemm(
+            m,
+            n,
+            d,
+            1.0,
+            &t.phi,
+            rn,
+            coeffs,
+            rd,
+            1.0,
+            &mut ws.stage.qj,
+            rd,
+        );
+        for row in ws.stage.qj.chunks_exact_mut(d) {
+            for (x, b) in row.iter_mut().zip(&ws.newton.base) {
                 *x += b;
             }
         }
@@ -153,14 +169,14 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 coeffs,
                 rd,
                 0.0,
-                &mut ws.vj,
+                &mut ws.stage.vj,
                 rd,
             );
         }
     }
 
-    /// ∂S/∂Q_a for every a into `ws.grad`, from the coefficients in `ws.coeffs` (or
-    /// `ws.cand`). Returns the number of first-derivative evaluations.
+    /// ∂S/∂Q_a for every a into `ws.stage.grad`, from the coefficients in `ws.newton.coeffs` (or
+    /// `ws.guess.cand`). Returns the number of first-derivative evaluations.
     pub(super) fn action_gradient<L: Lagrangian>(
         &self,
         lag: &L,
@@ -170,15 +186,19 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         self.evaluate_curve(ws, cand);
         let t = self.tables();
         let (n, m, d, h) = (t.n, t.m, ws.d, self.step_size());
-        ws.grad.iter_mut().for_each(|x| *x = 0.0);
+        ws.stage.grad.iter_mut().for_each(|x| *x = 0.0);
         if let Some(sep) = &ws.separable {
             // Kinetic part (1/h) Σ_b K_ab M ΔQ_b with ΔQ_b = Q_b − u_b q_k: constants applied to
             // the increments, never to Q (docs/DESIGN.md §4).
-            let coeffs = if cand { &ws.cand } else { &ws.coeffs };
+            let coeffs = if cand {
+                &ws.guess.cand
+            } else {
+                &ws.newton.coeffs
+            };
             match &sep.mass_diagonal {
                 // M diagonal (N-body): the same products without the D − 1 zero terms.
                 Some(diag) => {
-                    for (mq, x) in ws.mq.chunks_exact_mut(d).zip(coeffs.chunks_exact(d)) {
+                    for (mq, x) in ws.stage.mq.chunks_exact_mut(d).zip(coeffs.chunks_exact(d)) {
                         for ((y, &m), &x) in mq.iter_mut().zip(diag).zip(x) {
                             *y = m * x;
                         }
@@ -191,7 +211,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                             for c in 0..d {
                                 s += sep.mass[r * d + c] * coeffs[b * d + c];
                             }
-                            ws.mq[b * d + r] = s;
+                            ws.stage.mq[b * d + r] = s;
                         }
                     }
                 }
@@ -200,13 +220,20 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             if self.options().exact_kinetic && !cand {
                 for a in 0..n {
                     let row = &t.kinetic[a * n..(a + 1) * n];
-                    ws.dd_hi.iter_mut().for_each(|x| *x = 0.0);
-                    ws.dd_lo.iter_mut().for_each(|x| *x = 0.0);
-                    dd_acc_columns(n, |b| row[b], &ws.mq, d, &mut ws.dd_hi, &mut ws.dd_lo);
-                    for ((g, hi), lo) in ws.grad[a * d..(a + 1) * d]
+                    ws.stage.dd_hi.iter_mut().for_each(|x| *x = 0.0);
+                    ws.stage.dd_lo.iter_mut().for_each(|x| *x = 0.0);
+                    dd_acc_columns(
+                        n,
+                        |b| row[b],
+                        &ws.stage.mq,
+                        d,
+                        &mut ws.stage.dd_hi,
+                        &mut ws.stage.dd_lo,
+                    );
+                    for ((g, hi), lo) in ws.stage.grad[a * d..(a + 1) * d]
                         .iter_mut()
-                        .zip(&ws.dd_hi)
-                        .zip(&ws.dd_lo)
+                        .zip(&ws.stage.dd_hi)
+                        .zip(&ws.stage.dd_lo)
                     {
                         *g = (hi + lo) / h;
                     }
@@ -219,10 +246,10 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                     1.0 / h,
                     &t.kinetic,
                     Strided::rows(0, n),
-                    &ws.mq,
+                    &ws.stage.mq,
                     rd,
                     0.0,
-                    &mut ws.grad,
+                    &mut ws.stage.grad,
                     rd,
                 );
             }
@@ -232,22 +259,22 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 for r in 0..d {
                     let mut s = 0.0;
                     for c in 0..d {
-                        s += sep.mass[r * d + c] * ws.last_lo[c];
+                        s += sep.mass[r * d + c] * ws.newton.last_lo[c];
                     }
-                    ws.small_rhs[r] = s / h;
+                    ws.stage.small_rhs[r] = s / h;
                 }
                 for a in 0..n {
                     let k = t.kinetic[a * n + n - 1];
                     for r in 0..d {
-                        ws.grad[a * d + r] += k * ws.small_rhs[r];
+                        ws.stage.grad[a * d + r] += k * ws.stage.small_rhs[r];
                     }
                 }
             }
-            lag.force_at_points(&ws.qj, &mut ws.lq);
+            lag.force_at_points(&ws.stage.qj, &mut ws.stage.lq);
             for j in 0..m {
                 let w = t.weights[j] * h;
                 for r in 0..d {
-                    ws.scaled[j * d + r] = w * ws.lq[j * d + r];
+                    ws.stage.scaled[j * d + r] = w * ws.stage.lq[j * d + r];
                 }
             }
             // grad += Φᵀ (h b ∘ L_q): the transpose is a strided view of the table.
@@ -263,21 +290,21 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 1.0,
                 &t.phi,
                 phi_t,
-                &ws.scaled,
+                &ws.stage.scaled,
                 rd,
                 1.0,
-                &mut ws.grad,
+                &mut ws.stage.grad,
                 rd,
             );
         } else {
             for j in 0..m {
                 let (lq, lv) = (
-                    &mut ws.lq[j * d..(j + 1) * d],
-                    &mut ws.lv[j * d..(j + 1) * d],
+                    &mut ws.stage.lq[j * d..(j + 1) * d],
+                    &mut ws.stage.lv[j * d..(j + 1) * d],
                 );
                 lag.gradient(
-                    &ws.qj[j * d..(j + 1) * d],
-                    &ws.vj[j * d..(j + 1) * d],
+                    &ws.stage.qj[j * d..(j + 1) * d],
+                    &ws.stage.vj[j * d..(j + 1) * d],
                     lq,
                     lv,
                 );
@@ -285,7 +312,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 for a in 0..n {
                     let (fq, fv) = (w * h * t.phi[j * n + a], w * t.dphi[j * n + a]);
                     for r in 0..d {
-                        ws.grad[a * d + r] += fq * lq[r] + fv * lv[r];
+                        ws.stage.grad[a * d + r] += fq * lq[r] + fv * lv[r];
                     }
                 }
             }
@@ -312,15 +339,15 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let t = self.tables();
         let n = t.n;
         // Start from the straight line between the ends, as increments from q0.
-        ws.base.copy_from_slice(q0);
+        ws.newton.base.copy_from_slice(q0);
         for i in 0..n {
             for r in 0..d {
-                ws.coeffs[i * d + r] = t.ramp[i] * (q1[r] - q0[r]);
+                ws.newton.coeffs[i * d + r] = t.ramp[i] * (q1[r] - q0[r]);
             }
         }
-        ws.coeffs[..d].iter_mut().for_each(|x| *x = 0.0);
+        ws.newton.coeffs[..d].iter_mut().for_each(|x| *x = 0.0);
         for r in 0..d {
-            ws.coeffs[(n - 1) * d + r] = q1[r] - q0[r];
+            ws.newton.coeffs[(n - 1) * d + r] = q1[r] - q0[r];
         }
         let mut stats = StepStats::default();
         self.newton(
@@ -345,7 +372,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             p1,
             coefficients: {
                 self.finish_step(&mut ws, q1);
-                ws.abs.clone()
+                ws.last.coefficients().to_vec()
             },
         })
     }

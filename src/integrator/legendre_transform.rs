@@ -32,8 +32,8 @@ use crate::quadrature::Quadrature;
 pub(super) fn legendre_transforms_of_gradient(ws: &Workspace) -> (Vec<f64>, Vec<f64>) {
     let (n, d) = (ws.n, ws.d);
     (
-        ws.grad[..d].iter().map(|x| -x).collect(),
-        ws.grad[(n - 1) * d..n * d].to_vec(),
+        ws.stage.grad[..d].iter().map(|x| -x).collect(),
+        ws.stage.grad[(n - 1) * d..n * d].to_vec(),
     )
 }
 
@@ -55,8 +55,8 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         Ok(legendre_transforms_of_gradient(&ws))
     }
 
-    /// The Legendre-transform rows of the initial-value residual into `ws.rhs[..D]`, and the
-    /// step's total impulse h Σ_j b_j L_q(c_j) into `ws.impulse` + `ws.impulse_lo`.
+    /// The Legendre-transform rows of the initial-value residual into `ws.newton.rhs[..D]`, and the
+    /// step's total impulse h Σ_j b_j L_q(c_j) into `ws.newton.impulse` + `ws.newton.impulse_lo`.
     ///
     /// The rows are p_k + impulse − ∂S/∂ΔQ_{n−1} = 0, the form that makes
     /// p_{k+1} = p_k + impulse exactly D₂L_d of the discrete Lagrangian the tables define (q_k
@@ -79,68 +79,76 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let (t, h) = (self.tables(), self.step_size());
         let (d, n) = (ws.d, ws.n);
         let last = (n - 1) * d;
-        ws.dd_hi.iter_mut().for_each(|x| *x = 0.0);
-        ws.dd_lo.iter_mut().for_each(|x| *x = 0.0);
+        ws.stage.dd_hi.iter_mut().for_each(|x| *x = 0.0);
+        ws.stage.dd_lo.iter_mut().for_each(|x| *x = 0.0);
         let weights = &t.weights;
         dd_acc_columns(
             t.m,
             |j| h * weights[j],
-            &ws.lq,
+            &ws.stage.lq,
             d,
-            &mut ws.dd_hi,
-            &mut ws.dd_lo,
+            &mut ws.stage.dd_hi,
+            &mut ws.stage.dd_lo,
         );
         for r in 0..d {
-            (ws.impulse[r], ws.impulse_lo[r]) = two_sum(ws.dd_hi[r], ws.dd_lo[r]);
-            ws.rhs[r] = (p_k[r] - ws.grad[last + r]) + (ws.impulse[r] + ws.p_err[r]);
+            (ws.newton.impulse[r], ws.newton.impulse_lo[r]) =
+                two_sum(ws.stage.dd_hi[r], ws.stage.dd_lo[r]);
+            ws.newton.rhs[r] =
+                (p_k[r] - ws.stage.grad[last + r]) + (ws.newton.impulse[r] + ws.newton.p_err[r]);
         }
         let Some(sep) = &ws.separable else {
             return;
         };
-        let x = if ws.curve_from_cand {
-            &ws.cand
+        let x = if ws.stage.curve_from_cand {
+            &ws.guess.cand
         } else {
-            &ws.coeffs
+            &ws.newton.coeffs
         };
         // p_k + impulse …
         for r in 0..d {
-            let (s, e) = two_sum(p_k[r], ws.impulse[r]);
-            ws.dd_hi[r] = s;
-            ws.dd_lo[r] = e + (ws.p_err[r] + ws.impulse_lo[r]);
+            let (s, e) = two_sum(p_k[r], ws.newton.impulse[r]);
+            ws.stage.dd_hi[r] = s;
+            ws.stage.dd_lo[r] = e + (ws.newton.p_err[r] + ws.newton.impulse_lo[r]);
         }
         // … − Σ_j φ_{n−1}(c_j) h b_j L_q(c_j) (side by side over r, each sum in the order
         // of j) …
         for j in 0..t.m {
             let w = h * t.weights[j];
             let phi = t.phi[j * n + n - 1];
-            let lq = &ws.lq[j * d..(j + 1) * d];
-            for ((s, e), &f) in ws.dd_hi.iter_mut().zip(ws.dd_lo.iter_mut()).zip(lq) {
+            let lq = &ws.stage.lq[j * d..(j + 1) * d];
+            for ((s, e), &f) in ws
+                .stage
+                .dd_hi
+                .iter_mut()
+                .zip(ws.stage.dd_lo.iter_mut())
+                .zip(lq)
+            {
                 let g = w * f;
                 dd_acc(s, e, -phi, g);
                 *e -= phi * w.mul_add(f, -g);
             }
         }
         for r in 0..d {
-            let (mut s, mut e) = (ws.dd_hi[r], ws.dd_lo[r]);
+            let (mut s, mut e) = (ws.stage.dd_hi[r], ws.stage.dd_lo[r]);
             // … − (1/h) Σ_b K_{n−1,b} M ΔQ_b.
             let row = sep.kinetic_last_start[r]..sep.kinetic_last_start[r + 1];
             let (kinetic, index) = (&sep.kinetic_last[row.clone()], &sep.kinetic_last_index[row]);
             for (c, &i) in kinetic.iter().zip(index) {
                 dd_acc(&mut s, &mut e, -c, x[i]);
             }
-            if !ws.curve_from_cand {
+            if !ws.stage.curve_from_cand {
                 for (c, &i) in kinetic.iter().zip(index) {
                     if i >= last {
-                        e -= c * ws.last_lo[i - last];
+                        e -= c * ws.newton.last_lo[i - last];
                     }
                 }
             }
-            ws.rhs[r] = s + e;
+            ws.newton.rhs[r] = s + e;
         }
     }
 
-    /// Velocity v with ∂L/∂v(q, v) = p into `ws.vel` (inverse Legendre transform), starting
-    /// from the value already in `ws.vel`.
+    /// Velocity v with ∂L/∂v(q, v) = p into `ws.stage.vel` (inverse Legendre transform), starting
+    /// from the value already in `ws.stage.vel`.
     pub(super) fn inverse_legendre<L: Lagrangian>(
         &self,
         lag: &L,
@@ -150,33 +158,40 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
     ) {
         let d = ws.d;
         if let Some(sep) = &ws.separable {
-            ws.vel.copy_from_slice(p);
-            sep.solve_mass(&mut ws.vel, &mut ws.small_scratch);
+            ws.stage.vel.copy_from_slice(p);
+            sep.solve_mass(&mut ws.stage.vel, &mut ws.stage.small_scratch);
             return;
         }
         // Newton on L_v(q, v) = p with Jacobian L_vv.
         for _ in 0..20 {
-            let (lq, lv) = (&mut ws.lq[..d], &mut ws.lv[..d]);
-            lag.gradient(q, &ws.vel, lq, lv);
+            let (lq, lv) = (&mut ws.stage.lq[..d], &mut ws.stage.lv[..d]);
+            lag.gradient(q, &ws.stage.vel, lq, lv);
             let mut err = 0.0f64;
             for r in 0..d {
-                ws.small_rhs[r] = p[r] - lv[r];
-                err = err.max(ws.small_rhs[r].abs());
+                ws.stage.small_rhs[r] = p[r] - lv[r];
+                err = err.max(ws.stage.small_rhs[r].abs());
             }
             if err <= 1e-15 * (1.0 + max_abs(p)) {
                 return;
             }
-            lag.hessian(q, &ws.vel, &mut ws.hqq, &mut ws.hqv, &mut ws.hvv);
-            if ws.small.refactor(&ws.hvv).is_err() {
+            lag.hessian(
+                q,
+                &ws.stage.vel,
+                &mut ws.stage.hqq,
+                &mut ws.stage.hqv,
+                &mut ws.stage.hvv,
+            );
+            if ws.stage.small.refactor(&ws.stage.hvv).is_err() {
                 return;
             }
-            ws.small
-                .solve_in_place(&mut ws.small_rhs, &mut ws.small_scratch);
+            ws.stage
+                .small
+                .solve_in_place(&mut ws.stage.small_rhs, &mut ws.stage.small_scratch);
             for r in 0..d {
-                ws.vel[r] += ws.small_rhs[r];
+                ws.stage.vel[r] += ws.stage.small_rhs[r];
             }
-            if !ws.vel.iter().all(|x| x.is_finite()) {
-                ws.vel.copy_from_slice(p);
+            if !ws.stage.vel.iter().all(|x| x.is_finite()) {
+                ws.stage.vel.copy_from_slice(p);
                 return;
             }
         }

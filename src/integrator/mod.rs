@@ -30,14 +30,18 @@ mod discrete_action;
 mod equations;
 mod frozen;
 mod guess;
+mod guess_state;
 mod kronecker;
 mod krylov;
 mod legendre_transform;
 mod modal;
 mod newton;
+mod newton_state;
 mod options;
+mod separable;
 mod solver;
 mod stage;
+mod stage_scratch;
 mod tangent;
 mod workspace;
 

@@ -40,7 +40,7 @@ impl Mode {
 }
 
 impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
-    /// Residual of the stage equations for `mode` into `ws.rhs` (negated, ready for the
+    /// Residual of the stage equations for `mode` into `ws.newton.rhs` (negated, ready for the
     /// Newton solve); returns its max-norm.
     pub(super) fn residual(&self, ws: &mut Workspace, mode: Mode, p_k: &[f64]) -> f64 {
         let (d, n) = (ws.d, ws.n);
@@ -52,11 +52,11 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         }
         for i in 0..rows {
             let r = if mode == Mode::InitialValue && i < d {
-                ws.rhs[i]
+                ws.newton.rhs[i]
             } else {
-                ws.grad[off + i]
+                ws.stage.grad[off + i]
             };
-            ws.rhs[i] = -r;
+            ws.newton.rhs[i] = -r;
             norm = norm.max(r.abs());
             if !r.is_finite() {
                 norm = f64::INFINITY;
@@ -65,7 +65,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         norm
     }
 
-    /// Assemble the exact Jacobian ∂²S/∂Q_a∂Q_b for `mode` into `ws.jac` (uses the curve values
+    /// Assemble the exact Jacobian ∂²S/∂Q_a∂Q_b for `mode` into `ws.newton.jac` (uses the curve values
     /// left in the workspace by the last gradient evaluation). Returns Hessian evaluations.
     pub(super) fn jacobian<L: Lagrangian>(&self, lag: &L, ws: &mut Workspace, mode: Mode) -> usize {
         let evals = self.jacobian_rows(lag, ws, mode);
@@ -75,7 +75,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             let t = self.tables();
             let (n, d) = (t.n, ws.d);
             let size = (n - 1) * d;
-            let (first, rest) = ws.jac[..size * size].split_at_mut(d * size);
+            let (first, rest) = ws.newton.jac[..size * size].split_at_mut(d * size);
             for a in 1..n - 1 {
                 let u = t.unit[a];
                 if u != 0.0 {
@@ -101,7 +101,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let cnt = mode.count(n);
         let size = cnt * d;
         let (r0, u0) = (mode.row_offset(), mode.first_unknown());
-        let jac = &mut ws.jac[..size * size];
+        let jac = &mut ws.newton.jac[..size * size];
         match (&ws.separable, mode) {
             (Some(sep), Mode::InitialValue) => jac.copy_from_slice(&sep.kinetic_jacobian),
             (Some(sep), Mode::BoundaryValue) => {
@@ -122,28 +122,34 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             // Potential part Σ_j h b_j φ_a(c_j) φ_b(c_j) L_qq(c_j) as d² weighted Gram
             // products Φᵀ diag(g_rs) Φ (one GEMM each) instead of scalar loops (docs/DESIGN.md §4).
             let dd = d * d;
-            lag.force_jacobian_at_points(&ws.qj, &mut ws.hall);
-            ws.hall_stale = false;
+            lag.force_jacobian_at_points(&ws.stage.qj, &mut ws.stage.hall);
+            ws.stage.hall_stale = false;
             if d <= 4 && dd <= m {
                 // Few coordinates: all d² blocks in one pass over the nodes (the same products
                 // and the same order of summation as the per-block products below).
-                gram_blocks_fused(t, &ws.hall, &mut ws.gram, jac, (cnt, d, h, r0, u0));
+                gram_blocks_fused(
+                    t,
+                    &ws.stage.hall,
+                    &mut ws.stage.gram,
+                    jac,
+                    (cnt, d, h, r0, u0),
+                );
                 return m;
             }
             for r in 0..d {
                 for s in 0..d {
                     for a in 0..cnt {
                         for j in 0..m {
-                            ws.gram[a * m + j] = t.phi[j * n + a + r0]
+                            ws.stage.gram[a * m + j] = t.phi[j * n + a + r0]
                                 * t.weights[j]
                                 * h
-                                * ws.hall[j * dd + r * d + s];
+                                * ws.stage.hall[j * dd + r * d + s];
                         }
                     }
                     gram_accumulate(
-                        &ws.gram,
+                        &ws.stage.gram,
                         &t.phi,
-                        &mut ws.block,
+                        &mut ws.stage.block,
                         jac,
                         (cnt, m, n, u0),
                         (r, s),
@@ -153,12 +159,18 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             return m;
         }
         for j in 0..m {
-            let q = &ws.qj[j * d..(j + 1) * d];
+            let q = &ws.stage.qj[j * d..(j + 1) * d];
             let w = t.weights[j];
             let (phi, dphi) = (&t.phi[j * n..(j + 1) * n], &t.dphi[j * n..(j + 1) * n]);
             {
-                let v = &ws.vj[j * d..(j + 1) * d];
-                lag.hessian(q, v, &mut ws.hqq, &mut ws.hqv, &mut ws.hvv);
+                let v = &ws.stage.vj[j * d..(j + 1) * d];
+                lag.hessian(
+                    q,
+                    v,
+                    &mut ws.stage.hqq,
+                    &mut ws.stage.hqv,
+                    &mut ws.stage.hvv,
+                );
                 for a in 0..cnt {
                     let (pa, da) = (phi[a + r0], dphi[a + r0]);
                     for b in 0..cnt {
@@ -170,10 +182,10 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                         for r in 0..d {
                             let row = (a * d + r) * size + b * d;
                             for s in 0..d {
-                                jac[row + s] += cqq * ws.hqq[r * d + s]
-                                    + cqv * ws.hqv[r * d + s]
-                                    + cvq * ws.hqv[s * d + r]
-                                    + cvv * ws.hvv[r * d + s];
+                                jac[row + s] += cqq * ws.stage.hqq[r * d + s]
+                                    + cqv * ws.stage.hqv[r * d + s]
+                                    + cvq * ws.stage.hqv[s * d + r]
+                                    + cvv * ws.stage.hvv[r * d + s];
                             }
                         }
                     }
