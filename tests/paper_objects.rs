@@ -4,7 +4,12 @@
 
 use galerkin_vi::basis::Basis;
 use galerkin_vi::curve::{GalerkinCurve, GalerkinCurveRef};
+use galerkin_vi::integrator::Workspace;
 use galerkin_vi::prelude::*;
+
+#[path = "common/counting.rs"]
+mod counting;
+use counting::allocations;
 
 /// Charged particle in a magnetic field with a quartic potential: not separable (L_qv ≠ 0),
 /// so the general gradient path is exercised.
@@ -372,4 +377,42 @@ fn owned_curves_and_bad_input() {
     assert!(gvi5.discrete_legendre_transforms(&kepler, ok).is_err());
     let traj = gvi.integrate(&kepler, 0.0, &q0, &p0, 1).unwrap();
     assert!(traj.curve(1).is_err());
+}
+
+/// Reading a step's curve inside a step loop allocates nothing: the workspace's view, its
+/// evaluation into caller buffers, and an owned curve refilled within its capacity (counted by
+/// the test's allocator; negative control: the allocating convenience `state_at` is counted).
+#[test]
+fn curve_views_allocate_nothing_in_a_step_loop() {
+    let kepler = Kepler::new(1.0).unwrap();
+    let (q0, p0) = Kepler::paper_initial_state();
+    let gvi = GalerkinIntegrator::spectral(16, 2.0).unwrap();
+    let mut ws = gvi.workspace(&kepler).unwrap();
+    let (mut q, mut p) = (q0.to_vec(), p0.to_vec());
+    let (mut qn, mut pn) = (vec![0.0; 2], vec![0.0; 2]);
+    let (mut phi, mut dphi) = (vec![0.0; 16], vec![0.0; 16]);
+    let (mut x, mut v) = (vec![0.0; 2], vec![0.0; 2]);
+    let mut keep = GalerkinCurve::with_capacity(16, 2, 2.0);
+    let mut sum = 0.0;
+    let mut step = |k: usize, ws: &mut Workspace, sum: &mut f64| {
+        gvi.step(&kepler, ws, &q, &p, &mut qn, &mut pn).unwrap();
+        std::mem::swap(&mut q, &mut qn);
+        std::mem::swap(&mut p, &mut pn);
+        let curve = ws.curve().starting_at(2.0 * k as f64);
+        curve.state_into(gvi.basis(), 0.5, &mut phi, &mut dphi, &mut x, &mut v);
+        keep.set(curve);
+        *sum += x[0] + v[1] + keep.coefficients()[3];
+    };
+    for k in 0..3 {
+        step(k, &mut ws, &mut sum);
+    }
+    let before = allocations();
+    for k in 3..10 {
+        step(k, &mut ws, &mut sum);
+    }
+    assert_eq!(allocations() - before, 0);
+    assert!(sum.is_finite());
+    let before = allocations();
+    let _ = ws.curve().state_at(gvi.basis(), 1.0).unwrap();
+    assert!(allocations() > before, "the negative control must allocate");
 }
