@@ -10,7 +10,7 @@
 //! solvers are made of:
 //!
 //! - the residual F(ΔQ) of the stage equations (the Legendre-transform row and the
-//!   u-weighted stage rows; paper eq. (3.2)) at the current iterate, negated, in
+//!   u-weighted stage rows; paper eqs. (3)–(4)) at the current iterate, negated, in
 //!   [`correction`](StageEquations::correction);
 //! - exact products J x with the Newton matrix, matrix-free
 //!   ([`jacobian_product`](StageEquations::jacobian_product));

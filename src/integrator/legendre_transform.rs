@@ -45,6 +45,27 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
     /// curve they are the end momenta its action assigns.
     ///
     /// Errors: a curve whose n, h or dimension is not this integrator's and the Lagrangian's.
+    ///
+    /// ```
+    /// use galerkin_vi::prelude::*;
+    ///
+    /// let kepler = Kepler::new(1.0)?;
+    /// let (q0, p0) = Kepler::paper_initial_state();
+    /// let gvi = GalerkinIntegrator::spectral(32, 2.0)?;
+    /// let mut ws = gvi.workspace(&kepler)?;
+    /// let (mut q1, mut p1) = ([0.0; 2], [0.0; 2]);
+    /// gvi.step(&kepler, &mut ws, &q0, &p0, &mut q1, &mut p1)?;
+    ///
+    /// let curve = ws.curve(); // the step's Galerkin curve, no copy
+    /// let (pk, pk1) = gvi.discrete_legendre_transforms(&kepler, curve)?;
+    /// let grad = gvi.discrete_action_gradient(&kepler, curve)?; // (−p0, 0, …, 0, p1)
+    /// let s = gvi.discrete_action(&kepler, curve)?; // L_d(q0, q1)
+    /// let ld = gvi.discrete_lagrangian(&kepler, &q0, &q1)?;
+    /// assert!((s - ld.value).abs() < 1e-12 * ld.value.abs());
+    /// assert!((pk[1] - p0[1]).abs() < 1e-12 && (pk1[0] - p1[0]).abs() < 1e-12);
+    /// assert!(grad[2..62].iter().all(|g| g.abs() < 1e-12));
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn discrete_legendre_transforms<L: Lagrangian>(
         &self,
         lag: &L,

@@ -8,8 +8,8 @@
 //! DifferentialEquations.jl.
 //!
 //! One step, in position–momentum form: given (q_k, p_k), set Q_0 = q_k and solve
-//! p_k + ∂S/∂Q_0 = 0 (the discrete Legendre transform, paper eq. (3.2)) and ∂S/∂Q_i = 0,
-//! i = 1 … n−2 (the internal stage equations (3.1)) for Q_1 … Q_{n−1} by Newton's method with the
+//! p_k + ∂S/∂Q_0 = 0 (the discrete Legendre transform, paper §1.1 and eq. (4)) and ∂S/∂Q_i = 0,
+//! i = 1 … n−2 (the internal stage equations, eq. (3)) for Q_1 … Q_{n−1} by Newton's method with the
 //! exact Jacobian; then q_{k+1} = Q_{n−1} and p_{k+1} = ∂S/∂Q_{n−1}.
 //!
 //! # Round-off
