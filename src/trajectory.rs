@@ -35,7 +35,8 @@ pub struct Trajectory {
     pub q: Vec<Vec<f64>>,
     /// Momenta p_k.
     pub p: Vec<Vec<f64>>,
-    /// Galerkin coefficients of each step, n×D row-major (row i = Q_i).
+    /// Galerkin coefficients of each step, n×D row-major (row i = Q_i); read a step's curve
+    /// with its n, h and start time as a [`GalerkinCurveRef`] by [`Trajectory::curve`].
     pub coefficients: Vec<Vec<f64>>,
     /// Cost of each step.
     pub stats: Vec<StepStats>,
