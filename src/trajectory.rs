@@ -1,10 +1,12 @@
-//! Solutions: states at the step ends plus every step's Galerkin curve (dense output).
+//! Solutions: states at the step ends plus every step's Galerkin curve (dense output,
+//! [`Trajectory::curve`] as a [`GalerkinCurveRef`]).
 
-use crate::basis::{AnyBasis, Basis, BasisKind};
+use crate::basis::{AnyBasis, BasisKind};
+use crate::curve::GalerkinCurveRef;
 use crate::error::{GviError, Result};
-use crate::integrator::StepStats;
 use crate::lagrangian::Lagrangian;
 use crate::quadrature::QuadratureKind;
+use crate::stats::StepStats;
 use serde::{Deserialize, Serialize};
 use std::sync::OnceLock;
 
@@ -33,7 +35,8 @@ pub struct Trajectory {
     pub q: Vec<Vec<f64>>,
     /// Momenta p_k.
     pub p: Vec<Vec<f64>>,
-    /// Galerkin coefficients of each step, n×D row-major (row i = Q_i).
+    /// Galerkin coefficients of each step, n×D row-major (row i = Q_i); read a step's curve
+    /// with its n, h and start time as a [`GalerkinCurveRef`] by [`Trajectory::curve`].
     pub coefficients: Vec<Vec<f64>>,
     /// Cost of each step.
     pub stats: Vec<StepStats>,
@@ -80,11 +83,11 @@ impl Trajectory {
         self.p.push(p.to_vec());
     }
 
-    /// Append a step whose curve has `n` basis functions (tolerance-driven runs).
+    /// Append a step whose curve's n may differ from the trajectory's (tolerance-driven runs:
+    /// every step's n is then recorded).
     pub(crate) fn push_step_with_n(
         &mut self,
-        n: usize,
-        coeffs: &[f64],
+        curve: GalerkinCurveRef<'_>,
         q: &[f64],
         p: &[f64],
         stats: StepStats,
@@ -95,12 +98,20 @@ impl Trajectory {
         while self.step_n.len() < self.coefficients.len() {
             self.step_n.push(self.n);
         }
-        self.step_n.push(n);
-        self.push_step(coeffs, q, p, stats);
+        self.step_n.push(curve.n());
+        self.push_step(curve, q, p, stats);
     }
 
-    pub(crate) fn push_step(&mut self, coeffs: &[f64], q: &[f64], p: &[f64], stats: StepStats) {
-        self.coefficients.push(coeffs.to_vec());
+    /// Append a step: its curve, the state at its end and its cost.
+    pub(crate) fn push_step(
+        &mut self,
+        curve: GalerkinCurveRef<'_>,
+        q: &[f64],
+        p: &[f64],
+        stats: StepStats,
+    ) {
+        debug_assert_eq!(curve.dim(), self.dim);
+        self.coefficients.push(curve.coefficients().to_vec());
         self.stats.push(stats);
         self.push_state(q, p);
     }
@@ -171,25 +182,38 @@ impl Trajectory {
         self.step_n.get(k).copied().unwrap_or(self.n)
     }
 
+    /// The Galerkin curve of step k (from t_k to t_{k+1}).
+    ///
+    /// Errors: k is not a completed step.
+    pub fn curve(&self, k: usize) -> Result<GalerkinCurveRef<'_>> {
+        let c = self
+            .coefficients
+            .get(k)
+            .ok_or_else(|| GviError::InvalidInput {
+                name: "step".into(),
+                reason: format!("{k} is not a completed step (0 ≤ k < {})", self.steps()),
+            })?;
+        Ok(GalerkinCurveRef::from_parts(
+            c,
+            self.n_of_step(k),
+            self.dim,
+            self.h,
+            self.time(k),
+        ))
+    }
+
     /// Galerkin curve position q(t) and velocity q̇(t) at any t in [t0, t_end].
     pub fn state_on_curve(&self, t: f64) -> Result<(Vec<f64>, Vec<f64>)> {
         let (k, tau) = self.locate(t)?;
-        let n = self.n_of_step(k);
-        let d = self.dim;
+        let curve = self.curve(k)?;
+        let (n, d) = (curve.n(), self.dim);
         let (mut phi, mut dphi) = (vec![0.0; n], vec![0.0; n]);
+        let (mut q, mut v) = (vec![0.0; d], vec![0.0; d]);
         if n == self.n {
-            self.basis()?.eval(tau, &mut phi, &mut dphi);
+            curve.state_into(self.basis()?, tau, &mut phi, &mut dphi, &mut q, &mut v);
         } else {
-            self.basis.build(n)?.eval(tau, &mut phi, &mut dphi);
-        }
-        let c = &self.coefficients[k];
-        let mut q = vec![0.0; d];
-        let mut v = vec![0.0; d];
-        for i in 0..n {
-            for r in 0..d {
-                q[r] += phi[i] * c[i * d + r];
-                v[r] += dphi[i] * c[i * d + r] / self.h;
-            }
+            let basis = self.basis.build(n)?;
+            curve.state_into(&basis, tau, &mut phi, &mut dphi, &mut q, &mut v);
         }
         Ok((q, v))
     }

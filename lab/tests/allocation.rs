@@ -5,7 +5,7 @@
 
 use galerkin_vi::prelude::*;
 
-#[path = "common/counting.rs"]
+#[path = "../../tests/common/counting.rs"]
 mod counting;
 use counting::allocations;
 

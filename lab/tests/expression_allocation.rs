@@ -6,7 +6,7 @@
 use galerkin_vi::prelude::*;
 use galerkin_vi_lab::scene::{Scene, SystemSpec};
 
-#[path = "common/counting.rs"]
+#[path = "../../tests/common/counting.rs"]
 mod counting;
 use counting::allocations;
 

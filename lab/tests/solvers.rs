@@ -11,7 +11,7 @@ use galerkin_vi::prelude::*;
 use galerkin_vi_lab::scene::Scene;
 use nalgebra::DMatrix;
 
-#[path = "common/counting.rs"]
+#[path = "../../tests/common/counting.rs"]
 mod counting;
 use counting::allocations;
 #[path = "common/distance.rs"]

@@ -6,6 +6,7 @@ use super::embedded::{NOISE_MARGIN, embedded_step};
 use super::indicator::{Calibration, calibrated_step, indicator_step};
 use super::ladder::{Ladder, Rung, START_RETRY, Transfers};
 use super::{AdaptiveOptions, AdaptiveRun, ErrorControl, INDICATOR_EXPONENT};
+use crate::curve::GalerkinCurve;
 use crate::error::GviError;
 use crate::integrator::{GalerkinIntegrator, IntegrationFailure, StepFailure, StepStats};
 use crate::lagrangian::Lagrangian;
@@ -58,7 +59,7 @@ pub fn integrate_adaptive<L: Lagrangian>(
         recent_len: 0,
         follow_swings: opts.follow_swings,
         transfers: Transfers::new(opts.ladder.len()),
-        prev: vec![0.0; opts.ladder.last().copied().unwrap_or(0) * d],
+        prev: GalerkinCurve::with_capacity(opts.ladder.last().copied().unwrap_or(0), d, opts.h),
         prev_rung: None,
         first_cost: (0, 0),
         refit_cost: (0, 0),
@@ -205,19 +206,12 @@ pub fn integrate_adaptive<L: Lagrangian>(
             ));
         }
         let r = &ladder.rungs[acc.keep];
-        traj.push_step_with_n(
-            opts.ladder[acc.keep],
-            r.ws.coefficients(),
-            &r.q,
-            &r.p,
-            r.stats,
-        );
+        traj.push_step_with_n(r.ws.curve().starting_at(t), &r.q, &r.p, r.stats);
         run.indicators.push(r.ind);
         run.estimates.push(acc.estimate);
         q.copy_from_slice(&r.q);
         p.copy_from_slice(&r.p);
-        let c = r.ws.coefficients();
-        ladder.prev[..c.len()].copy_from_slice(c);
+        ladder.prev.set(r.ws.curve().starting_at(t));
         ladder.prev_rung = Some(acc.keep);
         // Rungs not solved at this step remember a stale curve.
         for r in ladder.rungs.iter_mut() {

@@ -10,9 +10,6 @@ use crate::lagrangian::Lagrangian;
 /// [`ErrorControl::Embedded`](super::ErrorControl::Embedded): an unchecked step is allowed while the indicator is at most
 /// this factor above that of the last check.
 const GROWTH: f64 = 1.0;
-/// Step down one rung per factor DOWN that the estimate lies below the budget (at most
-/// [`MAX_DOWN`]), unless staying is predicted cheaper ([`Ladder::next_rung`]).
-const DOWN: f64 = 0.05;
 /// Ratio of the decay rate (per unit n) of the embedded estimate to that of the Chebyshev
 /// coefficients of the curve, measured 1.5–1.7 on Kepler e = 0.6 (h = 1, n = 4…24).
 const DECAY_RATIO: f64 = 1.5;
@@ -31,9 +28,6 @@ const STALL_FLOOR: f64 = 1e4;
 /// 3e-13…1e-12 AU whatever n, so without the probe a run that climbed to n = 24 stayed
 /// there).
 pub(super) const NOISE_MARGIN: f64 = 2.0;
-/// At most this many rungs down from one step to the next.
-const MAX_DOWN: usize = 5;
-
 /// The last embedded check of [`ErrorControl::Embedded`](super::ErrorControl::Embedded): at step `step`, rung `rung` had
 /// the estimate `est` and the indicator `ind`.
 #[derive(Debug, Clone, Copy)]
@@ -185,16 +179,4 @@ pub(super) fn jump(ladder: &Ladder, lo: usize, est: f64, budget: f64) -> usize {
     (lo + 1..top)
         .find(|&j| est * (-sigma * (ladder.rungs[j].gvi.n() as f64 - n0)).exp() <= budget)
         .unwrap_or(top - 1)
-}
-
-/// How many rungs to step down after an estimate `e`: one per factor [`DOWN`] below the
-/// budget, at most [`MAX_DOWN`].
-pub(super) fn rungs_down(e: f64, budget: f64) -> usize {
-    let mut k = 0;
-    let mut level = DOWN * budget;
-    while e < level && k < MAX_DOWN {
-        k += 1;
-        level *= DOWN;
-    }
-    k
 }

@@ -3,8 +3,9 @@
 //! continuation, the integrator's own guesses), the transfer matrices between rungs, and the
 //! bookkeeping the error controls share (costs per start, streaks, the round-off floor).
 
-use super::embedded::rungs_down;
+use super::descent::rungs_down;
 use crate::basis::{AnyBasis, Basis};
+use crate::curve::GalerkinCurve;
 use crate::integrator::{GalerkinIntegrator, StepFailure, StepStats, Workspace};
 use crate::lagrangian::Lagrangian;
 use crate::quadrature::QuadratureRule;
@@ -82,8 +83,8 @@ pub(super) struct Ladder {
     /// [`AdaptiveOptions::follow_swings`](super::AdaptiveOptions::follow_swings).
     pub(super) follow_swings: bool,
     pub(super) transfers: Transfers,
-    /// The last accepted step's curve (coefficients of rung `prev_rung`).
-    pub(super) prev: Vec<f64>,
+    /// The last accepted step's curve (solved at rung `prev_rung`; room for the largest n).
+    pub(super) prev: GalerkinCurve,
     pub(super) prev_rung: Option<usize>,
     /// Force evaluations and quadrature nodes of the solves so far, by start: first solves of
     /// a step (continued or cold) and refitted ones.
@@ -140,7 +141,7 @@ impl Transfers {
         self.refit[from * self.rungs + to].get_or_insert_with(|| {
             let (src, dst) = (&rungs[from].gvi, &rungs[to].gvi);
             let nf = src.n();
-            let fit = &dst.tables().fit;
+            let fit = dst.curve_fit();
             let mut t = vec![0.0; dst.n() * nf];
             let (mut v, mut dv) = (vec![0.0; nf], vec![0.0; nf]);
             for (k, &x) in fit.nodes().iter().enumerate() {
@@ -155,7 +156,7 @@ impl Transfers {
     pub(super) fn cheb(&mut self, rungs: &[Rung], from: usize, to: usize) -> &[f64] {
         self.cheb[from * self.rungs + to].get_or_insert_with(|| {
             let nf = rungs[from].gvi.n();
-            let nodes = rungs[to].gvi.tables().fit.nodes();
+            let nodes = rungs[to].gvi.curve_fit().nodes();
             let mut t = vec![0.0; nodes.len() * nf];
             for (k, &x) in nodes.iter().enumerate() {
                 let y = 1.0 + 2.0 * x;
@@ -183,7 +184,7 @@ impl Ladder {
                 }
                 let nf = self.rungs[j].gvi.n();
                 let t = self.transfers.refit(&self.rungs, j, i);
-                let src = self.rungs[j].ws.coefficients();
+                let src = self.rungs[j].ws.curve().coefficients();
                 let out = &mut self.buf[..nt * d];
                 for (k, row) in t.chunks_exact(nf).enumerate() {
                     for r in 0..d {
@@ -201,13 +202,13 @@ impl Ladder {
                 };
                 let nf = self.rungs[j].gvi.n();
                 // Chebyshev coefficients a of the last accepted curve.
-                let c = &self.rungs[j].gvi.tables().chebyshev;
+                let c = self.rungs[j].gvi.chebyshev_transform();
                 let a = &mut self.cheb[..nf * d];
                 for (jj, row) in c.chunks_exact(nf).enumerate() {
                     for r in 0..d {
                         a[jj * d + r] = row
                             .iter()
-                            .zip(self.prev.chunks_exact(d))
+                            .zip(self.prev.coefficients().chunks_exact(d))
                             .map(|(w, q)| w * q[r])
                             .sum();
                     }
@@ -237,7 +238,7 @@ impl Ladder {
                     }
                 }
                 let (col, scratch) = self.fit_scratch.split_at_mut(nt);
-                self.rungs[i].gvi.tables().fit.values_to_coefficients_with(
+                self.rungs[i].gvi.curve_fit().values_to_coefficients_with(
                     out,
                     d,
                     col,

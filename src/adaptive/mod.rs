@@ -135,6 +135,7 @@
 //! change only where Newton starts, not the equations it solves; a warm-started solve to be
 //! kept whose stage residual is not at round-off (above 1e-8·max|p|) is redone cold.
 
+mod descent;
 mod driver;
 mod embedded;
 mod indicator;

@@ -1,5 +1,11 @@
 //! Double-double helpers: error-free sums and products (TwoSum, Fast2Sum, FMA) used to keep
-//! the stage residuals and the state increments free of rounding bias (docs/DESIGN.md §4).
+//! the stage residuals and the state increments free of rounding bias (docs/DESIGN.md §4),
+//! and the max-norm the Newton iteration measures its residuals and increments with.
+
+/// The max-norm max_i |x_i| (0 for an empty slice).
+pub(super) fn max_abs(x: &[f64]) -> f64 {
+    x.iter().fold(0.0f64, |m, v| m.max(v.abs()))
+}
 
 /// Knuth's TwoSum: s = fl(a + b) and the exact rounding error e, a + b = s + e.
 #[inline]

@@ -10,7 +10,7 @@
 //! solvers are made of:
 //!
 //! - the residual F(ΔQ) of the stage equations (the Legendre-transform row and the
-//!   u-weighted stage rows; paper eq. (3.2)) at the current iterate, negated, in
+//!   u-weighted stage rows; paper eqs. (3)–(4)) at the current iterate, negated, in
 //!   [`correction`](StageEquations::correction);
 //! - exact products J x with the Newton matrix, matrix-free
 //!   ([`jacobian_product`](StageEquations::jacobian_product));
@@ -25,7 +25,7 @@
 //! integrator re-evaluates the residual at the iterate a solver returns, so the step's
 //! momentum and statistics always describe the final iterate.
 
-use super::newton::max_abs;
+use super::dd::max_abs;
 use super::stage::Mode;
 use super::{GalerkinIntegrator, NewtonOptions, StageSolver, StepFailure, StepStats, Workspace};
 use crate::basis::Basis;
@@ -179,8 +179,8 @@ impl<'a, B: Basis, Q: Quadrature, L: Lagrangian> StepEquations<'a, B, Q, L> {
         p_k: &'a [f64],
         stats: &'a mut StepStats,
     ) -> Self {
-        ws.last_lo.iter_mut().for_each(|x| *x = 0.0);
-        ws.residual_ready = None;
+        ws.newton.last_lo.iter_mut().for_each(|x| *x = 0.0);
+        ws.newton.residual_ready = None;
         StepEquations {
             gvi,
             lag,
@@ -231,7 +231,7 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> StageEquations for StepEquations<'_
     }
 
     fn iterate(&self) -> &[f64] {
-        &self.ws.coeffs[self.ws.d..]
+        &self.ws.newton.coeffs[self.ws.d..]
     }
 
     fn residual(&mut self) -> f64 {
@@ -244,7 +244,7 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> StageEquations for StepEquations<'_
 
     fn correction(&mut self) -> &mut [f64] {
         let size = self.size();
-        &mut self.ws.rhs[..size]
+        &mut self.ws.newton.rhs[..size]
     }
 
     fn apply_correction(&mut self) -> Correction {
@@ -256,11 +256,11 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> StageEquations for StepEquations<'_
         for i in 0..size {
             let k = d + i;
             if k >= last && separable {
-                let (s, e) = super::dd::two_sum(ws.coeffs[k], ws.rhs[i]);
-                ws.coeffs[k] = s;
-                ws.last_lo[k - last] += e;
+                let (s, e) = super::dd::two_sum(ws.newton.coeffs[k], ws.newton.rhs[i]);
+                ws.newton.coeffs[k] = s;
+                ws.newton.last_lo[k - last] += e;
             } else {
-                ws.coeffs[k] += ws.rhs[i];
+                ws.newton.coeffs[k] += ws.newton.rhs[i];
             }
         }
         self.stats.iterations += 1;
@@ -268,8 +268,8 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> StageEquations for StepEquations<'_
         self.hessians_fresh = false;
         self.jacobian_fresh = false;
         Correction {
-            size: max_abs(&ws.rhs[..size]),
-            scale: max_abs(&ws.coeffs).max(f64::MIN_POSITIVE),
+            size: max_abs(&ws.newton.rhs[..size]),
+            scale: max_abs(&ws.newton.coeffs).max(f64::MIN_POSITIVE),
         }
     }
 
@@ -282,19 +282,25 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> StageEquations for StepEquations<'_
             self.jacobian_fresh = true;
         }
         let ws = &mut *self.ws;
-        if ws.lu.dim() != size {
-            ws.lu = crate::linalg::Lu::with_capacity(size);
+        if ws.newton.lu.dim() != size {
+            ws.newton.lu = crate::linalg::Lu::with_capacity(size);
         }
         self.stats.factorizations += 1;
-        ws.lu_valid = false;
-        if ws.lu.refactor(&ws.jac[..size * size]).is_err() {
+        ws.newton.lu_valid = false;
+        if ws
+            .newton
+            .lu
+            .refactor(&ws.newton.jac[..size * size])
+            .is_err()
+        {
             self.factored = false;
             return Err(self.failure("singular Jacobian"));
         }
         self.factored = true;
         let ws = &mut *self.ws;
-        ws.lu
-            .solve_in_place(&mut ws.rhs[..size], &mut ws.scratch[..size]);
+        ws.newton
+            .lu
+            .solve_in_place(&mut ws.newton.rhs[..size], &mut ws.newton.scratch[..size]);
         Ok(())
     }
 
@@ -304,8 +310,9 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> StageEquations for StepEquations<'_
         }
         let size = self.size();
         let ws = &mut *self.ws;
-        ws.lu
-            .solve_in_place(&mut ws.rhs[..size], &mut ws.scratch[..size]);
+        ws.newton
+            .lu
+            .solve_in_place(&mut ws.newton.rhs[..size], &mut ws.newton.scratch[..size]);
         true
     }
 
@@ -331,10 +338,10 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> StageEquations for StepEquations<'_
         match (
             self.frozen,
             self.gvi.tables().kron.as_ref(),
-            self.ws.kron.as_mut(),
+            self.ws.newton.kron.as_mut(),
         ) {
             (true, Some(kt), Some(kw)) => {
-                kw.solve(kt, h, &mut self.ws.rhs[..size]);
+                kw.solve(kt, h, &mut self.ws.newton.rhs[..size]);
                 Ok(())
             }
             _ => Err(self.failure("no frozen Hessian: call freeze_hessian first")),
@@ -372,7 +379,7 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> StageEquations for StepEquations<'_
         let size = self.size();
         let (h, d) = (self.gvi.step_size(), self.ws.d);
         self.ensure_curve();
-        if self.ws.krylov.is_some() && self.ws.separable.is_some() {
+        if self.ws.newton.krylov.is_some() && self.ws.separable.is_some() {
             if !self.hessians_fresh {
                 self.stats.hessian_evaluations += self.gvi.node_force_jacobians(self.lag, self.ws);
                 self.hessians_fresh = true;
@@ -405,7 +412,7 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> StageEquations for StepEquations<'_
                 self.gvi.jacobian(self.lag, self.ws, Mode::InitialValue);
             self.jacobian_fresh = true;
         }
-        let jac = &self.ws.jac[..size * size];
+        let jac = &self.ws.newton.jac[..size * size];
         for (row, yi) in jac.chunks_exact(size).zip(y.iter_mut()) {
             *yi = row.iter().zip(x).map(|(a, b)| a * b).sum();
         }
@@ -450,8 +457,11 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let mut evals = 0;
         if !hessians_fresh {
             for j in 0..m {
-                let (q, v) = (&ws.qj[j * d..(j + 1) * d], &ws.vj[j * d..(j + 1) * d]);
-                let node = &mut ws.node_hessians[3 * dd * j..3 * dd * (j + 1)];
+                let (q, v) = (
+                    &ws.stage.qj[j * d..(j + 1) * d],
+                    &ws.stage.vj[j * d..(j + 1) * d],
+                );
+                let node = &mut ws.stage.node_hessians[3 * dd * j..3 * dd * (j + 1)];
                 let (hqq, rest) = node.split_at_mut(dd);
                 let (hqv, hvv) = rest.split_at_mut(dd);
                 lag.hessian(q, v, hqq, hqv, hvv);
@@ -459,7 +469,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             evals = m;
         }
         y[..k * d].iter_mut().for_each(|v| *v = 0.0);
-        let (dq, rest) = ws.jvp_scratch.split_at_mut(d);
+        let (dq, rest) = ws.stage.jvp_scratch.split_at_mut(d);
         let (dv, rest) = rest.split_at_mut(d);
         let (fq, fv) = rest.split_at_mut(d);
         for j in 0..m {
@@ -474,7 +484,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                     dv[s] += dphi[b] * xb[s];
                 }
             }
-            let node = &ws.node_hessians[3 * dd * j..3 * dd * (j + 1)];
+            let node = &ws.stage.node_hessians[3 * dd * j..3 * dd * (j + 1)];
             let (hqq, hqv, hvv) = (&node[..dd], &node[dd..2 * dd], &node[2 * dd..]);
             for r in 0..d {
                 let (mut a, mut c) = (0.0, 0.0);

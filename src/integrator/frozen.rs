@@ -20,7 +20,7 @@ impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIn
         let t = self.tables();
         let (m, d, h) = (t.m, ws.d, self.step_size());
         let dd = d * d;
-        let (Some(kt), Some(kw)) = (t.kron.as_ref(), ws.kron.as_mut()) else {
+        let (Some(kt), Some(kw)) = (t.kron.as_ref(), ws.newton.kron.as_mut()) else {
             return Err(GviError::Unsupported(
                 "the Kronecker solver needs a separable Lagrangian".into(),
             ));
@@ -30,15 +30,15 @@ impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIn
             kw.factor(kt, h)?;
             return Ok(0);
         }
-        if !ws.hblocks.is_empty()
-            && lag.force_jacobian_diagonal_blocks_at_points(&ws.qj, &mut ws.hblocks)
+        if !ws.stage.hblocks.is_empty()
+            && lag.force_jacobian_diagonal_blocks_at_points(&ws.stage.qj, &mut ws.stage.hblocks)
         {
             // Only the diagonal blocks of H̄ are used (block-diagonal preconditioner): the
             // same weighted sums of the same entries, without forming the node Jacobians.
-            ws.hall_stale = true;
+            ws.stage.hall_stale = true;
             let b = kw.block();
             let (bb, blocks) = (b * b, d / b);
-            for (j, hj) in ws.hblocks.chunks_exact(d * b).enumerate() {
+            for (j, hj) in ws.stage.hblocks.chunks_exact(d * b).enumerate() {
                 let w = t.weights[j];
                 for c in 0..blocks {
                     for r in 0..b {
@@ -49,9 +49,9 @@ impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIn
                 }
             }
         } else {
-            lag.force_jacobian_at_points(&ws.qj, &mut ws.hall);
-            ws.hall_stale = false;
-            for (j, hj) in ws.hall.chunks_exact(dd).enumerate() {
+            lag.force_jacobian_at_points(&ws.stage.qj, &mut ws.stage.hall);
+            ws.stage.hall_stale = false;
+            for (j, hj) in ws.stage.hall.chunks_exact(dd).enumerate() {
                 let w = t.weights[j];
                 for (x, y) in kw.hbar.iter_mut().zip(hj) {
                     *x += w * y;
@@ -65,7 +65,7 @@ impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIn
 
 impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIntegrator<B, Q> {
     /// Force Jacobians L_qq at every node of the curve last evaluated in `ws`, into
-    /// `ws.hall`. Returns the Hessian evaluations.
+    /// `ws.stage.hall`. Returns the Hessian evaluations.
     pub(super) fn node_force_jacobians<L: crate::lagrangian::Lagrangian>(
         &self,
         lag: &L,
@@ -75,8 +75,8 @@ impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIn
             // The products are evaluated pairwise by the system when GMRES needs them.
             return 0;
         }
-        lag.force_jacobian_at_points(&ws.qj, &mut ws.hall);
-        ws.hall_stale = false;
+        lag.force_jacobian_at_points(&ws.stage.qj, &mut ws.stage.hall);
+        ws.stage.hall_stale = false;
         self.tables().m
     }
 
@@ -115,10 +115,10 @@ impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIn
         use super::StageSolver;
         match solver {
             StageSolver::Auto => {
-                if ws.kron.is_none() || (ws.n - 1) * ws.d <= AUTO_DENSE_SIZE {
+                if ws.newton.kron.is_none() || (ws.n - 1) * ws.d <= AUTO_DENSE_SIZE {
                     StageSolver::Exact
                 } else {
-                    match ws.auto_level {
+                    match ws.newton.auto_level {
                         0 | 1 => StageSolver::Kronecker,
                         _ => StageSolver::NewtonKrylov,
                     }

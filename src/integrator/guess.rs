@@ -2,12 +2,12 @@
 //! RK4-predictor curves, and the residual competition that picks among them
 //! ([`InitialGuess`]).
 
-use super::newton::{InitialGuess, max_abs};
 use super::stage::Mode;
 use super::{GalerkinIntegrator, Workspace};
 use crate::basis::Basis;
 use crate::lagrangian::Lagrangian;
 use crate::quadrature::Quadrature;
+use crate::stats::InitialGuess;
 
 /// Steps between full competitions of the initial guesses.
 const GUESS_RECHECK: usize = 16;
@@ -16,44 +16,7 @@ const GUESS_RECHECK: usize = 16;
 const GUESS_SLACK: f64 = 4.0;
 
 impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
-    /// Velocity v with ∂L/∂v(q, v) = p into `ws.vel` (inverse Legendre transform), starting
-    /// from the value already in `ws.vel`.
-    fn inverse_legendre<L: Lagrangian>(&self, lag: &L, ws: &mut Workspace, q: &[f64], p: &[f64]) {
-        let d = ws.d;
-        if let Some(sep) = &ws.separable {
-            ws.vel.copy_from_slice(p);
-            sep.solve_mass(&mut ws.vel, &mut ws.small_scratch);
-            return;
-        }
-        // Newton on L_v(q, v) = p with Jacobian L_vv.
-        for _ in 0..20 {
-            let (lq, lv) = (&mut ws.lq[..d], &mut ws.lv[..d]);
-            lag.gradient(q, &ws.vel, lq, lv);
-            let mut err = 0.0f64;
-            for r in 0..d {
-                ws.small_rhs[r] = p[r] - lv[r];
-                err = err.max(ws.small_rhs[r].abs());
-            }
-            if err <= 1e-15 * (1.0 + max_abs(p)) {
-                return;
-            }
-            lag.hessian(q, &ws.vel, &mut ws.hqq, &mut ws.hqv, &mut ws.hvv);
-            if ws.small.refactor(&ws.hvv).is_err() {
-                return;
-            }
-            ws.small
-                .solve_in_place(&mut ws.small_rhs, &mut ws.small_scratch);
-            for r in 0..d {
-                ws.vel[r] += ws.small_rhs[r];
-            }
-            if !ws.vel.iter().all(|x| x.is_finite()) {
-                ws.vel.copy_from_slice(p);
-                return;
-            }
-        }
-    }
-
-    /// The RK4 predictor into `ws.cand`; false when unavailable (non-separable Lagrangian) or
+    /// The RK4 predictor into `ws.guess.cand`; false when unavailable (non-separable Lagrangian) or
     /// not finite.
     fn predict<L: Lagrangian>(&self, lag: &L, ws: &mut Workspace, q: &[f64], p: &[f64]) -> bool {
         let Some(sep) = &ws.separable else {
@@ -61,16 +24,16 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         };
         let t = self.tables();
         let (d, h) = (ws.d, self.step_size());
-        let sub = ws.rk_substeps;
+        let sub = ws.guess.rk_substeps;
         let dt = h / sub as f64;
         let w = 2 * d;
         // State y = (q, v) at every substep end, v = M⁻¹p at the start.
-        ws.rk_states[..d].copy_from_slice(q);
-        ws.vel.copy_from_slice(p);
-        sep.solve_mass(&mut ws.vel, &mut ws.small_scratch);
-        ws.rk_states[d..w].copy_from_slice(&ws.vel);
+        ws.guess.rk_states[..d].copy_from_slice(q);
+        ws.stage.vel.copy_from_slice(p);
+        sep.solve_mass(&mut ws.stage.vel, &mut ws.stage.small_scratch);
+        ws.guess.rk_states[d..w].copy_from_slice(&ws.stage.vel);
         for s in 0..sub {
-            let (done, rest) = ws.rk_states.split_at_mut((s + 1) * w);
+            let (done, rest) = ws.guess.rk_states.split_at_mut((s + 1) * w);
             let y0 = &done[s * w..];
             let y1 = &mut rest[..w];
             // k_i = f(y0 + c_i dt k_{i−1}); f(q, v) = (v, M⁻¹ L_q(q)).
@@ -84,18 +47,18 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                     let prev = if stage == 0 {
                         0.0
                     } else {
-                        ws.rk_k[(stage - 1) * w + r]
+                        ws.guess.rk_k[(stage - 1) * w + r]
                     };
-                    ws.rk_tmp[r] = y0[r] + c * prev;
+                    ws.guess.rk_tmp[r] = y0[r] + c * prev;
                 }
-                let k = &mut ws.rk_k[stage * w..(stage + 1) * w];
-                k[..d].copy_from_slice(&ws.rk_tmp[d..w]);
-                lag.force(&ws.rk_tmp[..d], &mut k[d..w]);
-                ws.guess_force_evaluations += 1;
-                sep.solve_mass(&mut k[d..w], &mut ws.small_scratch);
+                let k = &mut ws.guess.rk_k[stage * w..(stage + 1) * w];
+                k[..d].copy_from_slice(&ws.guess.rk_tmp[d..w]);
+                lag.force(&ws.guess.rk_tmp[..d], &mut k[d..w]);
+                ws.guess.guess_force_evaluations += 1;
+                sep.solve_mass(&mut k[d..w], &mut ws.stage.small_scratch);
             }
             for r in 0..w {
-                let k = &ws.rk_k;
+                let k = &ws.guess.rk_k;
                 y1[r] =
                     y0[r] + dt / 6.0 * (k[r] + 2.0 * k[w + r] + 2.0 * k[2 * w + r] + k[3 * w + r]);
             }
@@ -113,23 +76,27 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 s3 - s2,
             );
             let (a, b) = (
-                &ws.rk_states[i * w..(i + 1) * w],
-                &ws.rk_states[(i + 1) * w..(i + 2) * w],
+                &ws.guess.rk_states[i * w..(i + 1) * w],
+                &ws.guess.rk_states[(i + 1) * w..(i + 2) * w],
             );
             // Increments from q_k (h00 + h01 = 1).
             for r in 0..d {
-                ws.cand[k * d + r] = h00 * (a[r] - q[r])
+                ws.guess.cand[k * d + r] = h00 * (a[r] - q[r])
                     + h10 * dt * a[d + r]
                     + h01 * (b[r] - q[r])
                     + h11 * dt * b[d + r];
             }
         }
-        t.fit
-            .values_to_coefficients_with(&mut ws.cand, d, &mut ws.fit_col, &mut ws.fit_scratch);
+        t.fit.values_to_coefficients_with(
+            &mut ws.guess.cand,
+            d,
+            &mut ws.guess.fit_col,
+            &mut ws.guess.fit_scratch,
+        );
         true
     }
 
-    /// Fill `ws.cand` with the guess of kind `g`; false if that guess is unavailable.
+    /// Fill `ws.guess.cand` with the guess of kind `g`; false if that guess is unavailable.
     pub(super) fn make_guess<L: Lagrangian>(
         &self,
         lag: &L,
@@ -142,24 +109,24 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let (n, d, h) = (t.n, ws.d, self.step_size());
         match g {
             InitialGuess::Constant | InitialGuess::BestResidual | InitialGuess::Warm => {
-                ws.cand.iter_mut().for_each(|x| *x = 0.0);
+                ws.guess.cand.iter_mut().for_each(|x| *x = 0.0);
             }
             InitialGuess::Linear => {
-                if ws.has_prev {
+                if ws.guess.has_prev {
                     // End velocity of the previous Galerkin curve.
                     for r in 0..d {
-                        ws.vel[r] = (0..n)
-                            .map(|i| t.dphi_end[i] * ws.prev[i * d + r])
+                        ws.stage.vel[r] = (0..n)
+                            .map(|i| t.dphi_end[i] * ws.guess.prev[i * d + r])
                             .sum::<f64>()
                             / h;
                     }
                 } else {
-                    ws.vel.copy_from_slice(p);
+                    ws.stage.vel.copy_from_slice(p);
                     self.inverse_legendre(lag, ws, q, p);
                 }
                 for i in 0..n {
                     for r in 0..d {
-                        ws.cand[i * d + r] = t.ramp[i] * h * ws.vel[r];
+                        ws.guess.cand[i * d + r] = t.ramp[i] * h * ws.stage.vel[r];
                     }
                 }
             }
@@ -172,7 +139,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 let Some(e) = &t.extrapolate else {
                     return false;
                 };
-                if !ws.has_prev {
+                if !ws.guess.has_prev {
                     return false;
                 }
                 // The previous curve is q_{k−1} + Σ ΔP_i φ_i and q_k = q_{k−1} + ΔP_{n−1}; E
@@ -181,18 +148,20 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 let last = (n - 1) * d;
                 for i in 0..n {
                     for r in 0..d {
-                        let c: f64 = (0..n).map(|k| e[i * n + k] * ws.prev[k * d + r]).sum();
-                        ws.cand[i * d + r] = c - t.unit[i] * ws.prev[last + r];
+                        let c: f64 = (0..n)
+                            .map(|k| e[i * n + k] * ws.guess.prev[k * d + r])
+                            .sum();
+                        ws.guess.cand[i * d + r] = c - t.unit[i] * ws.guess.prev[last + r];
                     }
                 }
             }
         }
         // The start of the curve is q_k exactly: ΔQ_0 = 0.
-        ws.cand[..d].iter_mut().for_each(|x| *x = 0.0);
-        ws.cand.iter().all(|x| x.is_finite())
+        ws.guess.cand[..d].iter_mut().for_each(|x| *x = 0.0);
+        ws.guess.cand.iter().all(|x| x.is_finite())
     }
 
-    /// Choose the initial guess into `ws.coeffs`; returns (choice, gradient evaluations).
+    /// Choose the initial guess into `ws.newton.coeffs`; returns (choice, gradient evaluations).
     pub(super) fn initial_guess<L: Lagrangian>(
         &self,
         lag: &L,
@@ -200,16 +169,16 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         q: &[f64],
         p: &[f64],
     ) -> (InitialGuess, usize) {
-        if ws.has_warm {
-            ws.has_warm = false;
+        if ws.guess.has_warm {
+            ws.guess.has_warm = false;
             // Absolute coefficients to increments from q_k (ΔQ_0 = 0).
             let (t, d) = (self.tables(), ws.d);
             for i in 0..t.n {
                 for r in 0..d {
-                    ws.coeffs[i * d + r] = ws.warm[i * d + r] - t.unit[i] * q[r];
+                    ws.newton.coeffs[i * d + r] = ws.guess.warm[i * d + r] - t.unit[i] * q[r];
                 }
             }
-            ws.coeffs[..d].iter_mut().for_each(|x| *x = 0.0);
+            ws.newton.coeffs[..d].iter_mut().for_each(|x| *x = 0.0);
             return (InitialGuess::Warm, 0);
         }
         let choice = self.options().initial_guess;
@@ -220,7 +189,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 self.make_guess(lag, ws, InitialGuess::Linear, q, p);
                 InitialGuess::Linear
             };
-            ws.coeffs.copy_from_slice(&ws.cand);
+            ws.newton.coeffs.copy_from_slice(&ws.guess.cand);
             return (g, 0);
         }
         let mut evals = 0;
@@ -228,17 +197,17 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         // at once if its residual is within GUESS_SLACK of the last competition's: the ranking
         // changes slowly along a trajectory, and the competition costs three more residuals and
         // an RK4 integration (more than the Newton iteration itself at small h). Its residual
-        // is Newton's first (`ws.residual_ready`), so the check costs nothing when it passes.
-        if let Some(winner) = ws.guess_winner
-            && ws.guess_age < GUESS_RECHECK
+        // is Newton's first (`ws.newton.residual_ready`), so the check costs nothing when it passes.
+        if let Some(winner) = ws.guess.guess_winner
+            && ws.guess.guess_age < GUESS_RECHECK
             && self.make_guess(lag, ws, winner, q, p)
         {
             evals += self.action_gradient(lag, ws, true);
             let r = self.residual(ws, Mode::InitialValue, p);
-            if r <= GUESS_SLACK * ws.guess_reference {
-                ws.guess_age += 1;
-                ws.coeffs.copy_from_slice(&ws.cand);
-                ws.residual_ready = Some(r);
+            if r <= GUESS_SLACK * ws.guess.guess_reference {
+                ws.guess.guess_age += 1;
+                ws.newton.coeffs.copy_from_slice(&ws.guess.cand);
+                ws.newton.residual_ready = Some(r);
                 return (winner, evals);
             }
         }
@@ -256,17 +225,17 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             let r = self.residual(ws, Mode::InitialValue, p);
             if r < best.1 {
                 best = (g, r);
-                ws.best.copy_from_slice(&ws.cand);
+                ws.guess.best.copy_from_slice(&ws.guess.cand);
             }
         }
         if best.1.is_finite() {
-            ws.coeffs.copy_from_slice(&ws.best);
-            ws.guess_winner = Some(best.0);
-            ws.guess_reference = best.1;
-            ws.guess_age = 0;
+            ws.newton.coeffs.copy_from_slice(&ws.guess.best);
+            ws.guess.guess_winner = Some(best.0);
+            ws.guess.guess_reference = best.1;
+            ws.guess.guess_age = 0;
         } else {
             self.make_guess(lag, ws, InitialGuess::Constant, q, p);
-            ws.coeffs.copy_from_slice(&ws.cand);
+            ws.newton.coeffs.copy_from_slice(&ws.guess.cand);
         }
         (best.0, evals)
     }

@@ -319,14 +319,14 @@ impl Workspace {
         &mut [f64],
     )> {
         let sep = self.separable.as_ref()?;
-        let kw = self.kron.as_mut()?;
-        let kv = self.krylov.as_mut()?;
+        let kw = self.newton.kron.as_mut()?;
+        let kv = self.newton.krylov.as_mut()?;
         let operands = Operands {
             mass: &sep.mass,
             mass_diagonal: sep.mass_diagonal.as_deref(),
-            hall: &self.hall,
-            matrix_free_nodes: self.matrix_free.then_some(&self.qj[..]),
+            hall: &self.stage.hall,
+            matrix_free_nodes: self.matrix_free.then_some(&self.stage.qj[..]),
         };
-        Some((kw, kv, operands, &mut self.rhs))
+        Some((kw, kv, operands, &mut self.newton.rhs))
     }
 }

@@ -8,8 +8,8 @@
 //! DifferentialEquations.jl.
 //!
 //! One step, in position–momentum form: given (q_k, p_k), set Q_0 = q_k and solve
-//! p_k + ∂S/∂Q_0 = 0 (the discrete Legendre transform, paper eq. (3.2)) and ∂S/∂Q_i = 0,
-//! i = 1 … n−2 (the internal stage equations (3.1)) for Q_1 … Q_{n−1} by Newton's method with the
+//! p_k + ∂S/∂Q_0 = 0 (the discrete Legendre transform, paper §1.1 and eq. (4)) and ∂S/∂Q_i = 0,
+//! i = 1 … n−2 (the internal stage equations, eq. (3)) for Q_1 … Q_{n−1} by Newton's method with the
 //! exact Jacobian; then q_{k+1} = Q_{n−1} and p_{k+1} = ∂S/∂Q_{n−1}.
 //!
 //! # Round-off
@@ -26,21 +26,28 @@
 //! ([`Workspace::coefficients`], `Trajectory::coefficients`) stay absolute Q.
 
 mod dd;
+mod discrete_action;
 mod equations;
 mod frozen;
 mod guess;
+mod guess_state;
 mod kronecker;
 mod krylov;
+mod legendre_transform;
 mod modal;
 mod newton;
+mod newton_state;
 mod options;
+mod separable;
 mod solver;
 mod stage;
+mod stage_scratch;
 mod tangent;
 mod workspace;
 
+pub use discrete_action::DiscreteLagrangian;
 pub use equations::{Correction, StageEquations, StageSolve};
-pub use newton::{DiscreteLagrangian, InitialGuess, NewtonOptions, StepFailure, StepStats};
+pub use newton::{InitialGuess, NewtonOptions, StepFailure, StepStats};
 pub use solver::StageSolver;
 pub use tangent::StepJacobian;
 pub use workspace::{MATRIX_FREE_MIN_DIM, Workspace};
@@ -218,6 +225,19 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         &self.tables
     }
 
+    /// Interpolation of curve values at the basis's interpolation nodes (values to
+    /// coefficients): how a curve known by its values, e.g. another rung's curve or a
+    /// predictor, becomes coefficients in this integrator's basis.
+    pub fn curve_fit(&self) -> &CurveFit {
+        &self.tables.fit
+    }
+
+    /// The n×n matrix C of the Chebyshev coefficients of a curve from its basis coefficients,
+    /// a = C·Q with q(τ) ≈ Σ_j a_j T_j(2τ − 1) (exact for polynomial bases); row j is mode j.
+    pub fn chebyshev_transform(&self) -> &[f64] {
+        &self.tables.chebyshev
+    }
+
     /// The kinetic matrix K_ab = Σ_j b_j φ_a'(c_j) φ_b'(c_j) (n×n, row-major, τ-units): the
     /// Jacobian of a free particle's stage equations is K ⊗ M / h.
     pub fn kinetic_matrix(&self) -> &[f64] {
@@ -361,7 +381,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             };
             match result {
                 Ok(stats) => {
-                    traj.push_step(ws.coefficients(), &q, &p, stats);
+                    traj.push_step(ws.curve().starting_at(t), &q, &p, stats);
                 }
                 Err(failure) => {
                     return Err(IntegrationFailure {

@@ -2,13 +2,12 @@
 //! the step (plain and compensated) and the discrete Lagrangian. The stage equations and
 //! their Jacobian are in `stage`, the initial guesses in `guess`.
 
-use super::dd::{dd_add, two_sum};
+use super::dd::{dd_add, max_abs, two_sum};
 pub use super::options::{InitialGuess, NewtonOptions, StepFailure, StepStats};
 use super::solver::StageSolver;
 use super::stage::Mode;
 use super::{GalerkinIntegrator, Workspace};
 use crate::basis::Basis;
-use crate::error::{GviError, Result, ensure_finite, ensure_len};
 use crate::lagrangian::Lagrangian;
 use crate::quadrature::Quadrature;
 
@@ -45,13 +44,9 @@ const AUTO_HOLDOFF: usize = 32;
 /// (once) and then abandoned for exact Newton within the step.
 const KRONECKER_STALL: f64 = 0.5;
 
-pub(super) fn max_abs(x: &[f64]) -> f64 {
-    x.iter().fold(0.0f64, |m, v| m.max(v.abs()))
-}
-
 impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
     /// Newton's method on the stage equations of `mode`, from the coefficients in
-    /// `ws.coeffs`; on success the coefficients solve them and `ws.grad` holds ∂S/∂Q at the
+    /// `ws.newton.coeffs`; on success the coefficients solve them and `ws.stage.grad` holds ∂S/∂Q at the
     /// solution.
     pub(super) fn newton<L: Lagrangian>(
         &self,
@@ -67,7 +62,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let size = mode.count(n) * d;
         let u0 = mode.first_unknown() * d;
         let mut previous_increment = f64::INFINITY;
-        ws.last_lo.iter_mut().for_each(|x| *x = 0.0);
+        ws.newton.last_lo.iter_mut().for_each(|x| *x = 0.0);
         let fail = |residual: f64, iterations, reason: &str| StepFailure {
             residual,
             iterations,
@@ -82,33 +77,34 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         // previous step) while the iteration contracts fast; refactor at the current iterate
         // (full Newton) as soon as it does not.
         let reuse = opts.reuse_jacobian && mode == Mode::InitialValue;
-        let mut have_lu = reuse && opts.reuse_across_steps && ws.lu_valid && ws.lu.dim() == size;
+        let mut have_lu =
+            reuse && opts.reuse_across_steps && ws.newton.lu_valid && ws.newton.lu.dim() == size;
         let mut fresh = false;
         // The structured solvers (initial-value steps of separable Lagrangians): the
         // Kronecker solver freezes the Hessian per step (refrozen once if the iteration
         // contracts slowly); Newton–Krylov freezes it for its preconditioner only. Either
         // continues with exact dense Newton within the step if it stalls.
         let structured = mode == Mode::InitialValue
-            && ws.kron.is_some()
-            && ws.krylov.is_some()
+            && ws.newton.kron.is_some()
+            && ws.newton.krylov.is_some()
             && self.tables().kron.is_some();
         let auto = solver == StageSolver::Auto;
         if auto {
             // Try the cheaper rung again once the hold-off has passed.
-            if ws.auto_holdoff == 0 && ws.auto_level > 1 {
-                ws.auto_level -= 1;
-                ws.auto_holdoff = AUTO_HOLDOFF;
+            if ws.newton.auto_holdoff == 0 && ws.newton.auto_level > 1 {
+                ws.newton.auto_level -= 1;
+                ws.newton.auto_holdoff = AUTO_HOLDOFF;
             }
-            ws.auto_holdoff = ws.auto_holdoff.saturating_sub(1);
-            ws.auto_calm += 1;
-            if ws.auto_calm > AUTO_CALM {
-                ws.auto_recent = 0;
+            ws.newton.auto_holdoff = ws.newton.auto_holdoff.saturating_sub(1);
+            ws.newton.auto_calm += 1;
+            if ws.newton.auto_calm > AUTO_CALM {
+                ws.newton.auto_recent = 0;
             }
         }
         let escalate = |ws: &mut Workspace, level: usize| {
-            if auto && level > ws.auto_level {
-                ws.auto_level = level;
-                ws.auto_holdoff = AUTO_HOLDOFF;
+            if auto && level > ws.newton.auto_level {
+                ws.newton.auto_level = level;
+                ws.newton.auto_holdoff = AUTO_HOLDOFF;
             }
         };
         let mut fixed_point = false;
@@ -130,7 +126,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let mut it = 0;
         loop {
             // The initial guess's residual may already be in the workspace (same point).
-            let res = match ws.residual_ready.take().filter(|_| it == 0) {
+            let res = match ws.newton.residual_ready.take().filter(|_| it == 0) {
                 Some(r) => r,
                 None => {
                     stats.gradient_evaluations += self.action_gradient(lag, ws, false);
@@ -139,7 +135,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             };
             stats.residual = res;
             if !res.is_finite() {
-                ws.lu_valid = false;
+                ws.newton.lu_valid = false;
                 return Err(fail(
                     res,
                     it,
@@ -147,7 +143,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 ));
             }
             if it >= opts.max_iterations {
-                ws.lu_valid = false;
+                ws.newton.lu_valid = false;
                 return Err(fail(res, it, "iteration limit reached"));
             }
             if linear == Linear::Krylov && have_lu {
@@ -161,7 +157,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                         stats.hessian_evaluations += evals;
                         have_lu = true;
                         fresh = true;
-                        if linear == Linear::Krylov && ws.hall_stale {
+                        if linear == Linear::Krylov && ws.stage.hall_stale {
                             // The freeze formed only the diagonal blocks; GMRES needs the
                             // node Jacobians at this iterate.
                             stats.hessian_evaluations += self.node_force_jacobians(lag, ws);
@@ -175,15 +171,20 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             }
             if !have_lu {
                 stats.hessian_evaluations += self.jacobian(lag, ws, mode);
-                if ws.lu.dim() != size {
-                    ws.lu = crate::linalg::Lu::with_capacity(size);
+                if ws.newton.lu.dim() != size {
+                    ws.newton.lu = crate::linalg::Lu::with_capacity(size);
                 }
                 stats.factorizations += 1;
-                if ws.lu.refactor(&ws.jac[..size * size]).is_err() {
-                    ws.lu_valid = false;
+                if ws
+                    .newton
+                    .lu
+                    .refactor(&ws.newton.jac[..size * size])
+                    .is_err()
+                {
+                    ws.newton.lu_valid = false;
                     return Err(fail(res, it, "singular Jacobian"));
                 }
-                ws.lu_valid = mode == Mode::InitialValue;
+                ws.newton.lu_valid = mode == Mode::InitialValue;
                 have_lu = true;
                 fresh = true;
             }
@@ -191,8 +192,8 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             let kt = self.tables().kron.as_ref();
             match (linear, kt) {
                 (Linear::Frozen, Some(kt)) => {
-                    if let Some(kw) = ws.kron.as_mut() {
-                        kw.solve(kt, h, &mut ws.rhs[..size]);
+                    if let Some(kw) = ws.newton.kron.as_mut() {
+                        kw.solve(kt, h, &mut ws.newton.rhs[..size]);
                     }
                 }
                 (Linear::Krylov, Some(kt)) => {
@@ -206,12 +207,13 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                     }
                 }
                 _ => ws
+                    .newton
                     .lu
-                    .solve_in_place(&mut ws.rhs[..size], &mut ws.scratch[..size]),
+                    .solve_in_place(&mut ws.newton.rhs[..size], &mut ws.newton.scratch[..size]),
             }
             it += 1;
             stats.iterations += 1;
-            let delta = max_abs(&ws.rhs[..size]);
+            let delta = max_abs(&ws.newton.rhs[..size]);
             // ΔQ_{n−1} (the increment of q) is kept as hi + lo: the corrections of the last
             // iterations lie below its ulp, and the compensated Legendre-transform row resolves
             // them.
@@ -219,18 +221,18 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             for i in 0..size {
                 let k = u0 + i;
                 if k >= last && ws.separable.is_some() {
-                    let (s, e) = two_sum(ws.coeffs[k], ws.rhs[i]);
-                    ws.coeffs[k] = s;
-                    ws.last_lo[k - last] += e;
+                    let (s, e) = two_sum(ws.newton.coeffs[k], ws.newton.rhs[i]);
+                    ws.newton.coeffs[k] = s;
+                    ws.newton.last_lo[k - last] += e;
                 } else {
-                    ws.coeffs[k] += ws.rhs[i];
+                    ws.newton.coeffs[k] += ws.newton.rhs[i];
                 }
             }
             // The scale of the unknowns, the increments ΔQ (which the stage equations determine
             // to a relative accuracy far better than ε|q_k| when h is small).
-            let scale = max_abs(&ws.coeffs).max(f64::MIN_POSITIVE);
+            let scale = max_abs(&ws.newton.coeffs).max(f64::MIN_POSITIVE);
             if !delta.is_finite() || !scale.is_finite() {
-                ws.lu_valid = false;
+                ws.newton.lu_valid = false;
                 return Err(fail(f64::INFINITY, it, "non-finite Newton update"));
             }
             // θ estimates the contraction; undefined on the first iteration. A slow contraction
@@ -302,11 +304,11 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                         // Start the next solves with Newton–Krylov only when the frozen
                         // Hessian fails repeatedly, not at an occasional hard step (Kepler's
                         // periapsis).
-                        ws.auto_calm = 0;
-                        ws.auto_recent += 1;
-                        if ws.auto_recent >= 2 {
+                        ws.newton.auto_calm = 0;
+                        ws.newton.auto_recent += 1;
+                        if ws.newton.auto_recent >= 2 {
                             escalate(ws, 2);
-                            ws.auto_recent = 0;
+                            ws.newton.auto_recent = 0;
                         }
                         previous_increment = f64::INFINITY;
                         continue;
@@ -366,8 +368,8 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let last = (ws.n - 1) * d;
         for r in 0..d {
             // Correctly rounded sums of the state and the double-double increments.
-            q_next[r] = dd_add(q[r], 0.0, ws.coeffs[last + r], ws.last_lo[r]).0;
-            p_next[r] = dd_add(p[r], 0.0, ws.impulse[r], ws.impulse_lo[r]).0;
+            q_next[r] = dd_add(q[r], 0.0, ws.newton.coeffs[last + r], ws.newton.last_lo[r]).0;
+            p_next[r] = dd_add(p[r], 0.0, ws.newton.impulse[r], ws.newton.impulse_lo[r]).0;
         }
         self.finish_step(ws, q_next);
         Ok(stats)
@@ -389,17 +391,27 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         p: &mut [f64],
         p_err: &mut [f64],
     ) -> std::result::Result<StepStats, StepFailure> {
-        ws.base_err.copy_from_slice(q_err);
-        ws.p_err.copy_from_slice(p_err);
+        ws.newton.base_err.copy_from_slice(q_err);
+        ws.newton.p_err.copy_from_slice(p_err);
         let solved = self.solve_step(lag, ws, q, p);
-        ws.base_err.iter_mut().for_each(|x| *x = 0.0);
-        ws.p_err.iter_mut().for_each(|x| *x = 0.0);
+        ws.newton.base_err.iter_mut().for_each(|x| *x = 0.0);
+        ws.newton.p_err.iter_mut().for_each(|x| *x = 0.0);
         let stats = solved?;
         let d = ws.d;
         let last = (ws.n - 1) * d;
         for r in 0..d {
-            (q[r], q_err[r]) = dd_add(q[r], q_err[r], ws.coeffs[last + r], ws.last_lo[r]);
-            (p[r], p_err[r]) = dd_add(p[r], p_err[r], ws.impulse[r], ws.impulse_lo[r]);
+            (q[r], q_err[r]) = dd_add(
+                q[r],
+                q_err[r],
+                ws.newton.coeffs[last + r],
+                ws.newton.last_lo[r],
+            );
+            (p[r], p_err[r]) = dd_add(
+                p[r],
+                p_err[r],
+                ws.newton.impulse[r],
+                ws.newton.impulse_lo[r],
+            );
         }
         self.finish_step(ws, q);
         Ok(stats)
@@ -407,22 +419,23 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
 
     /// Absolute coefficients for [`Workspace::coefficients`] (Q_i = u_i q_k + ΔQ_i, with the
     /// ends exactly q_k and the returned q_{k+1}), and the increments kept for the next guess.
-    fn finish_step(&self, ws: &mut Workspace, q_next: &[f64]) {
+    pub(super) fn finish_step(&self, ws: &mut Workspace, q_next: &[f64]) {
         let t = self.tables();
         let (n, d) = (t.n, ws.d);
+        let last = ws.last.coefficients_mut();
         for i in 1..n - 1 {
             for r in 0..d {
-                ws.abs[i * d + r] = t.unit[i] * ws.base[r] + ws.coeffs[i * d + r];
+                last[i * d + r] = t.unit[i] * ws.newton.base[r] + ws.newton.coeffs[i * d + r];
             }
         }
-        ws.abs[..d].copy_from_slice(&ws.base);
-        ws.abs[(n - 1) * d..].copy_from_slice(q_next);
-        ws.prev.copy_from_slice(&ws.coeffs);
-        ws.has_prev = true;
+        last[..d].copy_from_slice(&ws.newton.base);
+        last[(n - 1) * d..].copy_from_slice(q_next);
+        ws.guess.prev.copy_from_slice(&ws.newton.coeffs);
+        ws.guess.has_prev = true;
     }
 
-    /// Solve the stage equations of one step from (q, p): on success `ws.coeffs` holds the
-    /// increments ΔQ and `ws.impulse` the total impulse h Σ_j b_j L_q(c_j).
+    /// Solve the stage equations of one step from (q, p): on success `ws.newton.coeffs` holds the
+    /// increments ΔQ and `ws.newton.impulse` the total impulse h Σ_j b_j L_q(c_j).
     fn solve_step<L: Lagrangian>(
         &self,
         lag: &L,
@@ -430,7 +443,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         q: &[f64],
         p: &[f64],
     ) -> std::result::Result<StepStats, StepFailure> {
-        ws.base.copy_from_slice(q);
+        ws.newton.base.copy_from_slice(q);
         let mut stats = StepStats::default();
         let (guess, evals) = self.initial_guess(lag, ws, q, p);
         stats.guess = guess;
@@ -448,7 +461,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 if g == guess || !self.make_guess(lag, ws, g, q, p) {
                     continue;
                 }
-                ws.coeffs.copy_from_slice(&ws.cand);
+                ws.newton.coeffs.copy_from_slice(&ws.guess.cand);
                 if self.solve_stage_equations(lag, ws, p, &mut stats).is_ok() {
                     stats.guess = g;
                     solved = true;
@@ -456,8 +469,8 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 }
             }
             if !solved {
-                ws.has_prev = false;
-                ws.guess_force_evaluations = 0;
+                ws.guess.has_prev = false;
+                ws.guess.guess_force_evaluations = 0;
                 return Err(StepFailure {
                     iterations: stats.iterations,
                     ..first
@@ -465,13 +478,13 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             }
         }
         // The RK4 predictor's force evaluations are right-hand-side evaluations too.
-        stats.gradient_evaluations += std::mem::take(&mut ws.guess_force_evaluations);
-        // The total impulse h Σ_j b_j L_q(c_j) at the solution is left in ws.impulse by the
+        stats.gradient_evaluations += std::mem::take(&mut ws.guess.guess_force_evaluations);
+        // The total impulse h Σ_j b_j L_q(c_j) at the solution is left in ws.newton.impulse by the
         // last residual evaluation.
         Ok(stats)
     }
 
-    /// The stage equations of an initial-value step from the iterate in `ws.coeffs`, by the
+    /// The stage equations of an initial-value step from the iterate in `ws.newton.coeffs`, by the
     /// integrator's custom stage solver if it has one, else by the built-in one its options
     /// name. A custom solver's result is re-evaluated here, so the impulse and ∂S/∂Q in the
     /// workspace belong to the iterate it returns.
@@ -490,7 +503,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         custom.solve(&mut equations)?;
         let residual = equations.residual();
         if !residual.is_finite() {
-            ws.lu_valid = false;
+            ws.newton.lu_valid = false;
             return Err(StepFailure {
                 residual,
                 iterations: stats.iterations,
@@ -502,81 +515,4 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         }
         Ok(())
     }
-
-    /// The discrete Lagrangian L_d(q0, q1) = ext h Σ_j b_j L(q(c_j), q̇(c_j)) over Galerkin
-    /// curves with q(0) = q0 and q(h) = q1 (paper eq. (1.1)), together with the discrete
-    /// Legendre transforms p0 = −D₁L_d(q0, q1) and p1 = D₂L_d(q0, q1).
-    pub fn discrete_lagrangian<L: Lagrangian>(
-        &self,
-        lag: &L,
-        q0: &[f64],
-        q1: &[f64],
-    ) -> Result<DiscreteLagrangian> {
-        let d = lag.dim();
-        ensure_len("q0", d, q0.len())?;
-        ensure_len("q1", d, q1.len())?;
-        ensure_finite("q0", q0)?;
-        ensure_finite("q1", q1)?;
-        let mut ws = self.workspace(lag)?;
-        ws.need_velocities = true;
-        let t = self.tables();
-        let n = t.n;
-        // Start from the straight line between the ends, as increments from q0.
-        ws.base.copy_from_slice(q0);
-        for i in 0..n {
-            for r in 0..d {
-                ws.coeffs[i * d + r] = t.ramp[i] * (q1[r] - q0[r]);
-            }
-        }
-        ws.coeffs[..d].iter_mut().for_each(|x| *x = 0.0);
-        for r in 0..d {
-            ws.coeffs[(n - 1) * d + r] = q1[r] - q0[r];
-        }
-        let mut stats = StepStats::default();
-        self.newton(
-            lag,
-            &mut ws,
-            Mode::BoundaryValue,
-            &[],
-            &mut stats,
-            self.options().solver,
-        )
-        .map_err(|f| GviError::NewtonFailure {
-            step: 0,
-            t: 0.0,
-            residual: f.residual,
-            iterations: f.iterations,
-            reason: format!("discrete Lagrangian: {}", f.reason),
-        })?;
-        let h = self.step_size();
-        let mut value = 0.0;
-        for j in 0..t.m {
-            value +=
-                t.weights[j] * lag.value(&ws.qj[j * d..(j + 1) * d], &ws.vj[j * d..(j + 1) * d]);
-        }
-        Ok(DiscreteLagrangian {
-            value: h * value,
-            p0: ws.grad[..d].iter().map(|x| -x).collect(),
-            p1: ws.grad[(n - 1) * d..n * d].to_vec(),
-            coefficients: {
-                self.finish_step(&mut ws, q1);
-                ws.abs.clone()
-            },
-        })
-    }
-}
-
-impl std::error::Error for StepFailure {}
-
-/// The discrete Lagrangian and its discrete Legendre transforms at one pair of end points.
-#[derive(Debug, Clone, PartialEq)]
-pub struct DiscreteLagrangian {
-    /// L_d(q0, q1).
-    pub value: f64,
-    /// p0 = −D₁L_d(q0, q1) (the discrete Legendre transform F⁻L_d).
-    pub p0: Vec<f64>,
-    /// p1 = D₂L_d(q0, q1) (F⁺L_d).
-    pub p1: Vec<f64>,
-    /// The extremal Galerkin curve's coefficients (n×D).
-    pub coefficients: Vec<f64>,
 }

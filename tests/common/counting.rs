@@ -1,7 +1,7 @@
 //! A counting global allocator for the no-allocation tests: every allocation and reallocation
 //! made by the current thread is counted (each test counts only its own; the harness and other
 //! tests allocate on other threads meanwhile). Include with
-//! `#[path = "common/counting.rs"] mod counting;`.
+//! `#[path = "common/counting.rs"] mod counting;` (from the lab's tests: `"../../tests/common/counting.rs"`).
 
 use std::alloc::{GlobalAlloc, Layout, System as SystemAlloc};
 use std::cell::Cell;

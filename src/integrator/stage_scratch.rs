@@ -1,0 +1,106 @@
+//! Scratch of the stage equations: the Galerkin curve and the Lagrangian's derivatives at the
+//! quadrature nodes, the action gradient ∂S/∂Q assembled from them, and the small buffers of
+//! their products (docs/DESIGN.md §2).
+//!
+//! Written by every evaluation of the discrete action's derivatives
+//! ([`super::discrete_action`]) and read by the residual, the Newton matrix, the structured
+//! solvers and the Legendre-transform rows. Nothing here outlives one evaluation except
+//! `hall_stale` (whether `hall` belongs to the current iterate); all of it is sized once, by
+//! [`StageScratch::new`], so that a step allocates nothing.
+
+/// Node values, derivatives and products of one evaluation of the stage equations
+/// (m quadrature nodes, n basis functions, D coordinates).
+#[derive(Debug, Clone)]
+pub(crate) struct StageScratch {
+    /// Curve values q(c_j) at the quadrature nodes (m×D).
+    pub qj: Vec<f64>,
+    /// Curve velocities q̇(c_j) (m×D); separable Lagrangians skip them unless asked.
+    pub vj: Vec<f64>,
+    /// L_q at the nodes (m×D).
+    pub lq: Vec<f64>,
+    /// L_v at the nodes (m×D).
+    pub lv: Vec<f64>,
+    /// Whether the last curve evaluation used the Newton state's candidate (else its iterate).
+    pub curve_from_cand: bool,
+    /// ∂S/∂Q_a for every a (n×D).
+    pub grad: Vec<f64>,
+    /// Weighted forces h b_j L_q(c_j) (m×D).
+    pub scaled: Vec<f64>,
+    /// M (Q_b − u_b q_k) for the separable residual (n×D).
+    pub mq: Vec<f64>,
+    /// L_qq at every node (m×D×D).
+    pub hall: Vec<f64>,
+    /// `hall` is not at the iterate of the last freeze (which formed only diagonal blocks).
+    pub hall_stale: bool,
+    /// Diagonal b×b blocks of the node force Jacobians (m·D·b), when the system provides them
+    /// and the frozen-Hessian preconditioner uses only those; empty otherwise.
+    pub hblocks: Vec<f64>,
+    /// The weighted basis table of one Gram product (n×m).
+    pub gram: Vec<f64>,
+    /// One (n−1)×(n−1) block of the Newton matrix.
+    pub block: Vec<f64>,
+    /// Non-separable Lagrangians: L_qq, L_qv, L_vv at every node (m × 3 × D²), for matrix-free
+    /// Jacobian products; empty otherwise.
+    pub node_hessians: Vec<f64>,
+    /// Four D-vectors of scratch for those products (empty for separable Lagrangians).
+    pub jvp_scratch: Vec<f64>,
+    /// L_qq, L_qv, L_vv at one node (D×D each).
+    pub hqq: Vec<f64>,
+    /// See `hqq`.
+    pub hqv: Vec<f64>,
+    /// See `hqq`.
+    pub hvv: Vec<f64>,
+    /// Double-double accumulators, one pair per coordinate (D each).
+    pub dd_hi: Vec<f64>,
+    /// See `dd_hi`.
+    pub dd_lo: Vec<f64>,
+    /// A velocity (D), e.g. of an inverse Legendre transform.
+    pub vel: Vec<f64>,
+    /// A small D×D solver (inverse Legendre transforms) with its right-hand side and scratch.
+    pub small: crate::linalg::Lu,
+    /// See `small`.
+    pub small_rhs: Vec<f64>,
+    /// See `small`.
+    pub small_scratch: Vec<f64>,
+}
+
+impl StageScratch {
+    /// Buffers for n basis functions, m nodes, D coordinates; `general`: the Lagrangian is not
+    /// separable (node Hessians are kept); `block_entries`: size of `hblocks` (0: unused).
+    pub(crate) fn new(n: usize, m: usize, d: usize, general: bool, block_entries: usize) -> Self {
+        StageScratch {
+            qj: vec![0.0; m * d],
+            vj: vec![0.0; m * d],
+            lq: vec![0.0; m * d],
+            lv: vec![0.0; m * d],
+            curve_from_cand: false,
+            grad: vec![0.0; n * d],
+            scaled: vec![0.0; m * d],
+            mq: vec![0.0; n * d],
+            hall: vec![0.0; m * d * d],
+            hall_stale: true,
+            hblocks: vec![0.0; block_entries],
+            gram: vec![0.0; n * m],
+            block: vec![0.0; n * n],
+            node_hessians: if general {
+                vec![0.0; 3 * m * d * d]
+            } else {
+                Vec::new()
+            },
+            jvp_scratch: if general {
+                vec![0.0; 4 * d]
+            } else {
+                Vec::new()
+            },
+            hqq: vec![0.0; d * d],
+            hqv: vec![0.0; d * d],
+            hvv: vec![0.0; d * d],
+            dd_hi: vec![0.0; d],
+            dd_lo: vec![0.0; d],
+            vel: vec![0.0; d],
+            small: crate::linalg::Lu::with_capacity(d),
+            small_rhs: vec![0.0; d],
+            small_scratch: vec![0.0; d],
+        }
+    }
+}
