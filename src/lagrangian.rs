@@ -8,7 +8,7 @@
 //! Jacobian (docs/DESIGN.md §2) for it.
 //!
 //! The integrator needs L_q and L_v at every quadrature node (the stage residual, paper eqs.
-//! (3.1)–(3.2)) and, for Newton's method, the second derivatives L_qq, L_qv, L_vv. A system may
+//! (3)–(4)) and, for Newton's method, the second derivatives L_qq, L_qv, L_vv. A system may
 //! also supply batched kernels (forces and force Jacobians at all nodes at once, and for large
 //! N-body systems pairwise Jacobian–vector products, so that no 3N×3N matrix is formed); each has
 //! a default built from the per-point derivatives, so a user writes only

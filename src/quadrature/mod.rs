@@ -1,6 +1,6 @@
 //! Quadrature rules on [0, 1].
 //!
-//! The discrete action of one step is S(Q) = h Σ_j b_j L(q(c_j), q̇(c_j)) (paper eq. (1.1)) with
+//! The discrete action of one step is S(Q) = h Σ_j b_j L(q(c_j), q̇(c_j)) (paper eq. (1)) with
 //! nodes c_j ∈ [0, 1] and weights b_j summing to 1. A [`Quadrature`] produces a
 //! [`QuadratureRule`] (nodes, weights and the degree of polynomial exactness);
 //! [`QuadratureKind`] names the rules for scene files and the command line.
