@@ -4,8 +4,10 @@
 //!
 //! Each implements [`Mechanical`](crate::Mechanical) with hand-written gradient and Hessian
 //! (the AD defaults are checked against them in tests) and [`System`], which adds the
-//! invariants reported in output and, where known, the exact solution.
+//! invariants reported in output and, where known, the exact solution. [`AnySystem`] holds any
+//! of them chosen at run time (a scene file) and implements both traits by dispatch.
 
+mod any;
 pub mod expression;
 mod harmonic;
 mod kepler;
@@ -13,6 +15,7 @@ pub mod kepler_orbit;
 mod nbody;
 mod pendulum;
 
+pub use any::AnySystem;
 pub use expression::ExpressionLagrangian;
 pub use harmonic::HarmonicOscillator;
 pub use kepler::Kepler;
