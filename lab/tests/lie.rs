@@ -272,7 +272,11 @@ fn rigid_body_scene_reaches_1e_12() {
             "missing {col} in {header}"
         );
     }
-    let top = run_scene(&Scene::load("heavy-top").unwrap().build().unwrap(), RunOptions::default()).unwrap();
+    let top = run_scene(
+        &Scene::load("heavy-top").unwrap().build().unwrap(),
+        RunOptions::default(),
+    )
+    .unwrap();
     assert!(top.summary.max_position_error.is_none());
     let (name, lz) = &top.summary.invariant_errors[1];
     assert_eq!(name, "vertical angular momentum lz");

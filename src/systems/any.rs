@@ -204,11 +204,11 @@ impl System for AnySystem {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{GalerkinIntegrator, NewtonOptions};
     use crate::adaptive::{AdaptiveOptions, integrate_adaptive};
     use crate::basis::BasisKind;
     use crate::integrator::StageSolver;
     use crate::quadrature::QuadratureKind;
+    use crate::{GalerkinIntegrator, NewtonOptions};
 
     /// Bits of a slice, so that `assert_eq!` compares NaNs and signed zeros exactly.
     fn bits(x: &[f64]) -> Vec<u64> {
@@ -324,7 +324,8 @@ mod tests {
             assert_eq!(bits(a), bits(b), "step ends");
         }
         assert_eq!(t1.newton_iterations(), t2.newton_iterations());
-        let opts = AdaptiveOptions::new(1e-10, BasisKind::Chebyshev, QuadratureKind::default(), 0.1);
+        let opts =
+            AdaptiveOptions::new(1e-10, BasisKind::Chebyshev, QuadratureKind::default(), 0.1);
         let a1 = integrate_adaptive(&any, &opts, 0.0, &q, &p, 6).unwrap();
         let a2 = integrate_adaptive(s, &opts, 0.0, &q, &p, 6).unwrap();
         assert_eq!(a1.trajectory.step_n, a2.trajectory.step_n);
@@ -335,7 +336,10 @@ mod tests {
 
     #[test]
     fn every_variant_dispatches_bit_identically() {
-        check_identical(&HarmonicOscillator::new(1.5, 2.0).unwrap(), StageSolver::Auto);
+        check_identical(
+            &HarmonicOscillator::new(1.5, 2.0).unwrap(),
+            StageSolver::Auto,
+        );
         check_identical(&Kepler::new(1.0).unwrap(), StageSolver::Auto);
         check_identical(&Pendulum::new(1.2, 9.8, 0.5).unwrap(), StageSolver::Auto);
         let nbody = NBody::new(vec![1.0, 1e-3, 2e-3, 1e-4], 1.0, 3)

@@ -151,7 +151,9 @@ impl RunArgs {
 
 /// Load the scene named on the command line, apply the flag overrides and build it (once).
 pub fn load_scene(a: &SceneArgs) -> Result<BuiltScene, LabError> {
-    Scene::load(&a.scene)?.with_overrides(&a.overrides()?).build()
+    Scene::load(&a.scene)?
+        .with_overrides(&a.overrides()?)
+        .build()
 }
 
 /// In-memory runs whose estimated memory exceeds this are refused up front (streamed runs

@@ -117,10 +117,13 @@ pub struct NBodyReport {
 /// Run an N-body scene with its Galerkin method and compare it with a Gauss-collocation
 /// reference of the same model (module docs). A Galerkin solver failure is an error.
 pub fn nbody_report(scene: &BuiltScene, options: ReportOptions) -> Result<NBodyReport> {
-    let system = scene.euclidean()?.as_nbody().ok_or_else(|| LabError::Scene {
-        source_name: scene.name.clone(),
-        reason: "the N-body report needs an N-body scene (type = \"nbody\")".into(),
-    })?;
+    let system = scene
+        .euclidean()?
+        .as_nbody()
+        .ok_or_else(|| LabError::Scene {
+            source_name: scene.name.clone(),
+            reason: "the N-body report needs an N-body scene (type = \"nbody\")".into(),
+        })?;
     // The initial state was checked against the system when the scene was built.
     let m = &scene.method;
     let init = &scene.initial;
@@ -138,8 +141,7 @@ pub fn nbody_report(scene: &BuiltScene, options: ReportOptions) -> Result<NBodyR
     let mut gauss = GaussCollocationBaseline::new(system, options.stages, m.h / k as f64)?;
     let (rq, rp) = gauss.integrate_compensated(&init.q, &init.p, m.steps * k, k)?;
     let reference_uncertainty = if options.cross_check {
-        let mut fine =
-            GaussCollocationBaseline::new(system, options.stages, m.h / (2 * k) as f64)?;
+        let mut fine = GaussCollocationBaseline::new(system, options.stages, m.h / (2 * k) as f64)?;
         let (fq, _) = fine.integrate_compensated(&init.q, &init.p, m.steps * 2 * k, 2 * k)?;
         Some(
             rq.iter()

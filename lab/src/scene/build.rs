@@ -114,20 +114,15 @@ impl Scene {
                 barycentric,
                 bodies,
             } => {
-                let (system, from_bodies) = crate::nbody_scene::build(
-                    *dim,
-                    *g,
-                    aggregate.as_deref(),
-                    *barycentric,
-                    bodies,
-                )
-                .map_err(|e| match e {
-                    LabError::Scene { reason, .. } => LabError::Scene {
-                        source_name: self.name.clone(),
-                        reason,
-                    },
-                    e => e,
-                })?;
+                let (system, from_bodies) =
+                    crate::nbody_scene::build(*dim, *g, aggregate.as_deref(), *barycentric, bodies)
+                        .map_err(|e| match e {
+                            LabError::Scene { reason, .. } => LabError::Scene {
+                                source_name: self.name.clone(),
+                                reason,
+                            },
+                            e => e,
+                        })?;
                 // An explicit `[initial]` q or p overrides the bodies' positions or momenta.
                 if initial.q.is_empty() {
                     initial.q = from_bodies.q;
@@ -158,7 +153,7 @@ impl Scene {
         if self.method.steps == 0 {
             return Err(GviError::InvalidStepCount {
                 steps: 0,
-                reason: "a run needs at least one step".into(),
+                reason: format!("need 1 ≤ steps ≤ {}", galerkin_vi::integrator::MAX_STEPS),
             }
             .into());
         }
@@ -244,13 +239,18 @@ mod tests {
             Err(LabError::Core(GviError::InvalidStepCount { steps: 0, .. }))
         ));
         // Rigid bodies: a rotation vector and a body momentum, three entries each.
-        let top = Scene::load("heavy-top").unwrap().with_overrides(&Overrides {
-            q0: Some(vec![0.0; 4]),
-            ..Overrides::default()
-        });
+        let top = Scene::load("heavy-top")
+            .unwrap()
+            .with_overrides(&Overrides {
+                q0: Some(vec![0.0; 4]),
+                ..Overrides::default()
+            });
         assert!(matches!(
             top.build(),
-            Err(LabError::Core(GviError::DimensionMismatch { expected: 3, .. }))
+            Err(LabError::Core(GviError::DimensionMismatch {
+                expected: 3,
+                ..
+            }))
         ));
     }
 

@@ -64,9 +64,15 @@ pub const BUILTIN_SCENES: [(&str, &str); 15] = [
         "lagrange-triangle",
         include_str!("../../../scenes/lagrange-triangle.toml"),
     ),
-    ("rigid-body", include_str!("../../../scenes/rigid-body.toml")),
+    (
+        "rigid-body",
+        include_str!("../../../scenes/rigid-body.toml"),
+    ),
     ("heavy-top", include_str!("../../../scenes/heavy-top.toml")),
-    ("pendulum-3d", include_str!("../../../scenes/pendulum-3d.toml")),
+    (
+        "pendulum-3d",
+        include_str!("../../../scenes/pendulum-3d.toml"),
+    ),
     (
         "henon-heiles",
         include_str!("../../../scenes/henon-heiles.toml"),

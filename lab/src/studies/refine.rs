@@ -143,7 +143,12 @@ pub struct RefineStudy {
 /// Run the sweep: every value of `values` (n or h) with the scene's other settings, in
 /// parallel. For h-sweeps the horizon h·steps of the scene is kept (steps = round(T/h))
 /// unless `fixed_steps`.
-pub fn refine(scene: &BuiltScene, vary: Vary, values: &[f64], fixed_steps: bool) -> Result<RefineStudy> {
+pub fn refine(
+    scene: &BuiltScene,
+    vary: Vary,
+    values: &[f64],
+    fixed_steps: bool,
+) -> Result<RefineStudy> {
     if values.is_empty() {
         return Err(LabError::InvalidArgument {
             name: "--range".into(),

@@ -275,7 +275,13 @@ fn classify(energy: f64, growing: bool, position_ok: bool) -> Class {
     }
 }
 
-fn galerkin_cell<S: System>(system: &S, scene: &BuiltScene, n: usize, h: f64, steps: usize) -> Cell {
+fn galerkin_cell<S: System>(
+    system: &S,
+    scene: &BuiltScene,
+    n: usize,
+    h: f64,
+    steps: usize,
+) -> Cell {
     let init = &scene.initial;
     let m = &scene.method;
     let mut cell = Cell {
@@ -318,7 +324,13 @@ fn galerkin_cell<S: System>(system: &S, scene: &BuiltScene, n: usize, h: f64, st
 }
 
 /// Whether `peer` keeps a bounded energy over `steps` steps of size h.
-pub fn bounded_at<S: System>(system: &S, scene: &BuiltScene, peer: Peer, h: f64, steps: usize) -> bool {
+pub fn bounded_at<S: System>(
+    system: &S,
+    scene: &BuiltScene,
+    peer: Peer,
+    h: f64,
+    steps: usize,
+) -> bool {
     match run_peer(system, &scene.initial, peer, h, 1, steps) {
         Ok(run) if run.failure.is_none() => {
             let (e, growing) = energy_profile(system, &run.q, &run.p);

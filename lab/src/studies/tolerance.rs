@@ -111,7 +111,10 @@ pub fn tolerance_study(scene: &BuiltScene, config: &ToleranceConfig) -> Result<T
 }
 
 /// Reference positions at the step ends t0 + k h, k = 0…steps.
-fn step_end_reference<S: System>(system: &S, scene: &BuiltScene) -> Result<(Vec<Vec<f64>>, String)> {
+fn step_end_reference<S: System>(
+    system: &S,
+    scene: &BuiltScene,
+) -> Result<(Vec<Vec<f64>>, String)> {
     let (m, init) = (&scene.method, &scene.initial);
     if let Some(nbody) = scene.euclidean()?.as_nbody() {
         let k = gauss_substeps(nbody, &init.q, m.h);

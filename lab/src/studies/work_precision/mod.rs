@@ -184,7 +184,10 @@ pub struct WorkPrecisionStudy {
 pub const TARGETS: [f64; 3] = [1e-6, 1e-9, 1e-12];
 
 /// Run the study on a scene.
-pub fn work_precision(scene: &BuiltScene, config: &WorkPrecisionConfig) -> Result<WorkPrecisionStudy> {
+pub fn work_precision(
+    scene: &BuiltScene,
+    config: &WorkPrecisionConfig,
+) -> Result<WorkPrecisionStudy> {
     let system = scene.euclidean()?;
     study_system(system, scene, config)
 }
