@@ -28,7 +28,17 @@ use nalgebra::DMatrix;
 use num_dual::DualNum;
 
 /// Any of the crate's Euclidean systems, chosen at run time; implements [`Lagrangian`] and
-/// [`System`] by dispatch (see the [module documentation](self)).
+/// [`System`] by dispatch.
+///
+/// `System` has a method generic over the scalar, so it cannot be a trait object; this enum
+/// is what code that learns its system at run time (a scene file) holds instead, as
+/// [`AnyBasis`](crate::basis::AnyBasis) is for bases. Every method is forwarded — the optional
+/// fast kernels included (forces and Jacobians at all nodes, the N-body pairwise products and
+/// diagonal blocks, the mass matrix, invariants, symmetries, exact solutions, body names) — so
+/// generic code performs the same arithmetic as with the concrete type, bit for bit. It
+/// implements `Lagrangian` directly, not [`Mechanical`](crate::Mechanical) (the blanket
+/// implementation would conflict); `mass_matrix` is `Some` exactly when the variant is
+/// separable.
 ///
 /// ```
 /// use galerkin_vi::systems::{AnySystem, Kepler, System};
@@ -360,6 +370,19 @@ mod tests {
         let separable =
             ExpressionLagrangian::parse("x_dot^2/2 - x^4/4 - x^2/2", &["x"], &[]).unwrap();
         check_identical(&separable, StageSolver::Auto);
+    }
+
+    #[test]
+    fn the_bit_comparison_sees_one_ulp() {
+        // Negative control: a Kepler problem whose μ differs by one ulp gives other bits, so
+        // the dispatch test above fails on any difference in arithmetic.
+        let a = AnySystem::from(Kepler::new(1.0).unwrap());
+        let b = Kepler::new(1.0 + f64::EPSILON).unwrap();
+        let q = point(2, 0.0);
+        let (mut f1, mut f2) = ([0.0; 2], [0.0; 2]);
+        a.force(&q, &mut f1);
+        b.force(&q, &mut f2);
+        assert_ne!(bits(&f1), bits(&f2));
     }
 
     #[test]

@@ -2,7 +2,7 @@
 //! the number of steps and a run stopped early (a failure, a kill) has written every step
 //! before it. Used when nothing needs the whole trajectory (no chart, no JSON, no `--tol`).
 //!
-//! The table and summary are those of [`super::run_system`]: the same monitor watches the
+//! The table and summary are those of [`super::run_scene`]: the same monitor watches the
 //! step ends, and the error along the Galerkin curves is sampled from each step's
 //! coefficients while they are in the workspace.
 
