@@ -191,7 +191,8 @@ const MAX_STEPS_PER_INTERVAL: usize = 10_000_000;
 /// interval h.
 ///
 /// ```
-/// use galerkin_vi::baselines::{Dop853Baseline, OneStepMethod};
+/// use galerkin_vi::baselines::OneStepMethod;
+/// use galerkin_vi_lab::dop853::Dop853Baseline;
 /// use galerkin_vi::systems::HarmonicOscillator;
 ///
 /// let ho = HarmonicOscillator::unit();
@@ -201,7 +202,7 @@ const MAX_STEPS_PER_INTERVAL: usize = 10_000_000;
 /// m.step(0.0, &[1.0], &[0.0], &mut q, &mut p)?;
 /// assert!((q[0] - 1.0f64.cos()).abs() < 1e-10);
 /// assert!(m.force_evaluations() > 0);
-/// # Ok::<(), galerkin_vi::GviError>(())
+/// # Ok::<(), galerkin_vi_lab::error::LabError>(())
 /// ```
 pub struct Dop853Baseline<'a, L: Lagrangian> {
     h: f64,

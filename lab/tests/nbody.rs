@@ -142,8 +142,8 @@ fn two_body_reproduces_the_relative_kepler_run() {
 
 #[test]
 fn figure_eight_returns_after_one_period() {
-    let scene = Scene::load("figure-eight").unwrap();
-    let r = run_scene(&scene.build().unwrap(), RunOptions::default()).unwrap();
+    let scene = Scene::load("figure-eight").unwrap().build().unwrap();
+    let r = run_scene(&scene, RunOptions::default()).unwrap();
     assert!(r.failure.is_none());
     let t = r.trajectory.unwrap();
     assert!((t.end_time() - 6.32591398).abs() < 1e-12);

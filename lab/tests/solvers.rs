@@ -150,8 +150,8 @@ fn every_solver_gives_the_exact_newton_map_across_bases_and_systems() {
     let o = Case {
         name: "outer solar system",
         lag: &nbody,
-        q0: &scene.initial.q,
-        p0: &scene.initial.p,
+        q0: &built.initial.q,
+        p0: &built.initial.p,
         n: 12,
         h: scene.method.h,
         steps: 20,
@@ -276,7 +276,7 @@ fn every_solver_conserves_the_noether_momenta() {
     let scene = Scene::load("outer-solar-system").unwrap();
     let built = scene.build().unwrap();
     let nbody = built.euclidean().unwrap().as_nbody().unwrap().clone();
-    let (q0, p0) = (&scene.initial.q, &scene.initial.p);
+    let (q0, p0) = (&built.initial.q, &built.initial.p);
     let steps = 100;
     let maps: Vec<(&str, Box<dyn MomentumMap>)> = vec![
         ("P_x", Box::new(Translation::axis(3, 6, 0).unwrap())),
@@ -371,8 +371,8 @@ fn no_solver_allocates_per_step() {
     for solver in StageSolver::ALL {
         let gvi = with_solver(BasisKind::Chebyshev, 12, scene.method.h, solver);
         let mut ws = gvi.workspace(&nbody).unwrap();
-        let d = scene.initial.q.len();
-        let (mut q, mut p) = (scene.initial.q.clone(), scene.initial.p.clone());
+        let d = built.initial.q.len();
+        let (mut q, mut p) = (built.initial.q.clone(), built.initial.p.clone());
         let (mut qn, mut pn) = (vec![0.0; d], vec![0.0; d]);
         gvi.step(&nbody, &mut ws, &q, &p, &mut qn, &mut pn).unwrap();
         std::mem::swap(&mut q, &mut qn);

@@ -10,7 +10,7 @@
 //! let mut scene = Scene::load("harmonic").unwrap();
 //! scene.method.h = 2.0;
 //! scene.method.steps = 5;
-//! let study = compare_refinement(&scene, &CompareConfig::quick()).unwrap();
+//! let study = compare_refinement(&scene.build().unwrap(), &CompareConfig::quick()).unwrap();
 //! // 2 fixed-h n-paths and 2 fixed-n h-paths for every basis.
 //! assert_eq!(study.paths.len(), 4 * galerkin_vi::basis::BasisKind::ALL.len());
 //! ```

@@ -3,7 +3,7 @@
 //! ```
 //! use galerkin_vi_lab::scene::Scene;
 //! use galerkin_vi_lab::studies::refine::{refine, Vary, RateFit};
-//! let scene = Scene::load("kepler").unwrap();
+//! let scene = Scene::load("kepler").unwrap().build().unwrap();
 //! let ns: Vec<f64> = (10..=30).step_by(4).map(|n| n as f64).collect();
 //! let study = refine(&scene, Vary::N, &ns, false).unwrap();
 //! match study.fit {

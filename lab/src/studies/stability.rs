@@ -19,7 +19,7 @@
 //! ```
 //! use galerkin_vi_lab::scene::Scene;
 //! use galerkin_vi_lab::studies::stability::{stability, StabilityConfig};
-//! let scene = Scene::load("harmonic").unwrap();
+//! let scene = Scene::load("harmonic").unwrap().build().unwrap();
 //! let study = stability(&scene, &StabilityConfig::quick()).unwrap();
 //! let verlet = study.baselines.iter().find(|b| b.method == "stormer-verlet").unwrap();
 //! assert!((verlet.largest_stable_h - 2.0).abs() < 0.01);

@@ -26,7 +26,7 @@
 //! let mut scene = Scene::load("harmonic").unwrap();
 //! scene.method.h = 1.0;
 //! scene.method.steps = 10;
-//! let study = work_precision(&scene, &WorkPrecisionConfig::quick()).unwrap();
+//! let study = work_precision(&scene.build().unwrap(), &WorkPrecisionConfig::quick()).unwrap();
 //! assert!(study.points.iter().any(|p| p.method.starts_with("galerkin")));
 //! assert!(!study.pareto_front().is_empty());
 //! ```
