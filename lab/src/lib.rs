@@ -6,7 +6,8 @@
 //! reports. It owns the application dependencies (clap, plotters, indicatif, toml, serde_json,
 //! the DOP853 peer), so that a user of the library pulls in none of them.
 //!
-//! - [`scene`]: the scene file format and the built-in scenes.
+//! - [`scene`]: the scene file format and the built-in scenes; `Scene::build` turns a scene into
+//!   the system, the validated initial state and the method, once.
 //! - [`run`]: one run of a scene (`gvi run`), streamed or in memory, with monitors.
 //! - [`studies`]: refinement, basis comparison, work–precision, stability, tolerance and scaling
 //!   studies, and the paper's experiments.
