@@ -80,14 +80,6 @@ impl BuiltScene {
     pub fn periodic(&self) -> Option<&crate::periodic::PeriodicSpec> {
         self.scene.periodic.as_ref()
     }
-
-    /// The same problem with another method (a sweep's point).
-    pub fn with_method(&self, method: MethodSpec) -> BuiltScene {
-        BuiltScene {
-            method,
-            ..self.clone()
-        }
-    }
 }
 
 impl Scene {
