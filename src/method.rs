@@ -1,4 +1,5 @@
-//! The method: everything that chooses how a problem is integrated, as one serialisable value.
+//! The method: everything that chooses how a problem is integrated, as one serialisable value,
+//! and [`InitialState`], the problem's initial value.
 //!
 //! DifferentialEquations.jl and argmin keep the problem (here a [`Lagrangian`](crate::Lagrangian)
 //! with its initial state), the method and the solution ([`Trajectory`](crate::Trajectory)) as
@@ -114,4 +115,27 @@ impl MethodSpec {
             retraction: None,
         }
     }
+}
+
+/// The problem's initial value: the time t₀ and the phase-space point (q₀, p₀) at which a run
+/// starts. Scene files store it as their `[initial]` table, which is why it derives serde; the
+/// lengths are checked against the system when a scene is built (the lab's `Scene::build`).
+///
+/// ```
+/// use galerkin_vi::method::InitialState;
+/// let init = InitialState { t0: 0.0, q: vec![1.0, 0.0], p: vec![0.0, 1.0] };
+/// assert_eq!(init.q.len(), init.p.len());
+/// ```
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InitialState {
+    /// Initial time.
+    #[serde(default)]
+    pub t0: f64,
+    /// Initial position (required unless the system is an N-body system).
+    #[serde(default)]
+    pub q: Vec<f64>,
+    /// Initial momentum (required unless the system is an N-body system).
+    #[serde(default)]
+    pub p: Vec<f64>,
 }

@@ -70,12 +70,14 @@ fn solvers(c: &mut Criterion) {
         );
     }
     let outer = Scene::load("outer-solar-system").expect("built-in scene");
-    if let Ok(Some((system, init))) = outer.system.nbody() {
+    if let Ok(built) = outer.build()
+        && let Some(system) = built.euclidean().ok().and_then(|s| s.as_nbody())
+    {
         bench_case(
             c,
             "outer_solar_system_n12",
-            &system,
-            &init,
+            system,
+            &built.initial,
             12,
             outer.method.h,
             10,

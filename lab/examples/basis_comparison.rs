@@ -11,7 +11,7 @@ fn main() -> Result<(), galerkin_vi_lab::error::LabError> {
     let scene = Scene::load("kepler")?;
     let ns: Vec<usize> = (8..=64).step_by(8).collect();
     let quads = [QuadratureKind::GaussLegendre, QuadratureKind::GaussLobatto];
-    let cmp = compare_bases(&scene, &ns, &quads)?;
+    let cmp = compare_bases(&scene.build()?, &ns, &quads)?;
     println!(
         "{:<11} {:<15} {:>3} {:>11} {:>11} {:>8}",
         "basis", "quadrature", "n", "map error", "condition", "newton"

@@ -6,11 +6,12 @@
 //! reports. It owns the application dependencies (clap, plotters, indicatif, toml, serde_json,
 //! the DOP853 peer), so that a user of the library pulls in none of them.
 //!
-//! - [`scene`]: the scene file format and the built-in scenes.
+//! - [`scene`]: the scene file format and the built-in scenes; `Scene::build` turns a scene into
+//!   the system, the validated initial state and the method, once.
 //! - [`run`]: one run of a scene (`gvi run`), streamed or in memory, with monitors.
 //! - [`studies`]: refinement, basis comparison, work–precision, stability, tolerance and scaling
 //!   studies, and the paper's experiments.
-//! - [`nbody_report`], [`periodic`], [`lie_run`]: N-body accuracy reports, periodic orbits of
+//! - [`nbody_report`], [`periodic`], [`run::rigid_body`]: N-body accuracy reports, periodic orbits of
 //!   scenes, rigid-body runs.
 //! - [`fit`], [`plot`], [`output`], [`progress`]: rate fits, SVG charts, atomic file output and
 //!   progress bars.
@@ -27,7 +28,6 @@ pub mod cli;
 pub mod dop853;
 pub mod error;
 pub mod fit;
-pub mod lie_run;
 pub mod nbody_report;
 pub mod nbody_scene;
 pub mod output;

@@ -1,9 +1,32 @@
-//! Building an [`NBody`] system and its initial state from a scene's `[[system.bodies]]`.
+//! Building an [`NBody`] system and its initial state from a scene's `[[system.bodies]]`
+//! ([`Body`], re-exported as `scene::Body`).
 
 use crate::error::LabError;
 use crate::error::Result;
-use crate::scene::{Body, InitialState};
+use galerkin_vi::method::InitialState;
 use galerkin_vi::systems::NBody;
+use serde::{Deserialize, Serialize};
+
+/// One body of an N-body scene: a name, exactly one of `mass` (with the system's G) or `gm`
+/// (gravitational parameter; then G = 1 and GM is used as the mass, see
+/// [`NBody::from_gm`](galerkin_vi::systems::NBody::from_gm)), position `q` and velocity `v`
+/// (not momentum: p = m v is formed when the scene is loaded).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Body {
+    /// Name, unique within the scene (e.g. `"Mercury"`).
+    pub name: String,
+    /// Mass (with the system's G).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mass: Option<f64>,
+    /// Gravitational parameter GM (G = 1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gm: Option<f64>,
+    /// Position (length `dim`).
+    pub q: Vec<f64>,
+    /// Velocity (length `dim`).
+    pub v: Vec<f64>,
+}
 
 fn scene_error(reason: String) -> LabError {
     LabError::Scene {

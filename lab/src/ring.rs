@@ -13,7 +13,8 @@
 
 use crate::error::LabError;
 use crate::error::Result;
-use crate::scene::{Body, InitialState};
+use crate::nbody_scene::Body;
+use galerkin_vi::method::InitialState;
 use galerkin_vi::systems::NBody;
 use std::f64::consts::TAU;
 

@@ -2,16 +2,18 @@
 //! invariants and (where an exact solution exists) errors. This is what `gvi run` does.
 
 use crate::error::LabError;
-use crate::error::{GviError, Result};
+use crate::error::Result;
 use crate::plot::{Chart, Series};
-use crate::scene::{Scene, SystemSpec};
+use crate::scene::{BuiltScene, BuiltSystem, Scene};
+use galerkin_vi::Lagrangian;
 use galerkin_vi::adaptive::{AdaptiveOptions, integrate_adaptive};
-use galerkin_vi::systems::{HarmonicOscillator, Kepler, Pendulum, System};
+use galerkin_vi::systems::{AnySystem, System};
 use galerkin_vi::trajectory::Trajectory;
 use serde::Serialize;
 use std::time::Instant;
 
 mod monitor;
+pub mod rigid_body;
 pub mod stream;
 use monitor::Monitor;
 pub use monitor::{Encounter, SANITY_THRESHOLD};
@@ -160,56 +162,13 @@ impl Default for RunOptions {
     }
 }
 
-/// Something to do with a concrete system, whatever its type: the way scene files (which
-/// name a system at run time) reach code that is generic over [`System`].
-pub trait SystemVisitor {
-    /// What the visit returns.
-    type Output;
-    /// Do it with the concrete system.
-    fn visit<S: System + Sync>(self, system: &S) -> Result<Self::Output>;
-}
-
-/// Build the system a scene names and hand it to `visitor`.
-pub fn visit_system<V: SystemVisitor>(spec: &SystemSpec, visitor: V) -> Result<V::Output> {
-    match spec {
-        SystemSpec::Harmonic { mass, stiffness } => {
-            visitor.visit(&HarmonicOscillator::new(*mass, *stiffness)?)
-        }
-        SystemSpec::Kepler { mu } => visitor.visit(&Kepler::new(*mu)?),
-        SystemSpec::Pendulum {
-            length,
-            gravity,
-            mass,
-        } => visitor.visit(&Pendulum::new(*length, *gravity, *mass)?),
-        SystemSpec::RigidBody { .. } | SystemSpec::HeavyTop { .. } => Err(GviError::Unsupported(
-            "rigid bodies live on SO(3): only `gvi run` supports them (galerkin_vi::lie)".into(),
-        )
-        .into()),
-        SystemSpec::Lagrangian(spec) => visitor.visit(&spec.build()?),
-        SystemSpec::NBody { .. } => match spec.nbody()? {
-            Some((system, _)) => visitor.visit(&system),
-            None => Err(LabError::Scene {
-                source_name: "[system]".into(),
-                reason: "not an N-body system".into(),
-            }),
-        },
-    }
-}
-
-/// Run a scene. Invalid input is an `Err`; a Newton failure is `Ok` with
+/// Run a built scene. Invalid input is an `Err`; a Newton failure is `Ok` with
 /// [`RunResult::failure`] set and the partial trajectory kept.
-pub fn run_scene(scene: &Scene, options: RunOptions) -> Result<RunResult> {
-    if let Some(result) = crate::lie_run::run_rigid_body_scene(scene, options)? {
-        return Ok(result);
+pub fn run_scene(scene: &BuiltScene, options: RunOptions) -> Result<RunResult> {
+    match &scene.system {
+        BuiltSystem::RigidBody(body) => rigid_body::run_rigid_body(body, scene),
+        BuiltSystem::Euclidean(system) => run_system(system, scene, options),
     }
-    struct Run<'a>(&'a Scene, RunOptions);
-    impl SystemVisitor for Run<'_> {
-        type Output = RunResult;
-        fn visit<S: System + Sync>(self, system: &S) -> Result<RunResult> {
-            run_system(system, self.0, self.1)
-        }
-    }
-    visit_system(&scene.system, Run(scene, options))
 }
 
 /// Per-step outputs of a tolerance-driven run for the table.
@@ -220,14 +179,13 @@ struct AdaptiveColumns {
     evaluations: usize,
 }
 
-/// Run a scene's initial state and method on any [`System`].
-pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> Result<RunResult> {
+/// Run a built scene's initial state and method on its (Euclidean) system; the state was
+/// checked against it by [`crate::scene::Scene::build`].
+fn run_system(system: &AnySystem, scene: &BuiltScene, options: RunOptions) -> Result<RunResult> {
     let m = &scene.method;
     let init = &scene.initial;
     let gvi = m.integrator()?;
     let d = system.dim();
-    crate::error::ensure_len("initial q (system dimension)", d, init.q.len())?;
-    crate::error::ensure_len("initial p (system dimension)", d, init.p.len())?;
     let exact = system.exact_solution(init.t0, &init.q, &init.p)?;
     let start = Instant::now();
     let mut adaptive: Option<AdaptiveColumns> = None;
@@ -435,7 +393,7 @@ pub fn run_system<S: System>(system: &S, scene: &Scene, options: RunOptions) -> 
     });
     Ok(RunResult {
         n_chart,
-        scene: scene.clone(),
+        scene: scene.scene(),
         columns,
         rows,
         summary,
@@ -469,7 +427,7 @@ fn max_norm_diff(a: &[f64], b: &[f64]) -> f64 {
 /// solution.
 fn run_chart<S: System>(
     system: &S,
-    scene: &Scene,
+    scene: &BuiltScene,
     traj: &Trajectory,
     exact: Option<&galerkin_vi::systems::ExactSolution>,
 ) -> Result<Chart> {

@@ -501,7 +501,7 @@ fn oracle_allocation_finds_savings_only_where_the_need_varies() {
         ladder: DEFAULT_LADDER.to_vec(),
     };
     let saving = |scene: &Scene| {
-        let study = tolerance_study(scene, &config).unwrap();
+        let study = tolerance_study(&scene.build().unwrap(), &config).unwrap();
         let row = &study.rows[0];
         let fixed = row.fixed.expect("a fixed n meets tol");
         let oracle = row.oracle.expect("oracle bound");
@@ -627,7 +627,7 @@ fn scene_files_choose_h_from_tol() {
         )
     };
     let scene = Scene::from_toml_str("inline", &text("tol = 1e-8\nauto_h = true")).unwrap();
-    let result = run_scene(&scene, RunOptions::default()).unwrap();
+    let result = run_scene(&scene.build().unwrap(), RunOptions::default()).unwrap();
     let choice = result.summary.step_choice.expect("h was chosen");
     let traj = result.trajectory.expect("trajectory");
     assert_eq!(traj.h, choice.h);
@@ -636,7 +636,7 @@ fn scene_files_choose_h_from_tol() {
     assert!(result.summary.max_position_error.unwrap() <= 2.2e-8);
     let scene = Scene::from_toml_str("inline", &text("auto_h = true")).unwrap();
     assert!(matches!(
-        run_scene(&scene, RunOptions::default()),
+        run_scene(&scene.build().unwrap(), RunOptions::default()),
         Err(LabError::InvalidArgument { .. })
     ));
 }

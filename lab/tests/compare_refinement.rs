@@ -11,7 +11,7 @@ use galerkin_vi_lab::studies::refine::Vary;
 fn kepler_paths_and_cheapest() {
     let mut scene = Scene::load("kepler").unwrap();
     scene.method.steps = 5;
-    let study = compare_refinement(&scene, &CompareConfig::quick()).unwrap();
+    let study = compare_refinement(&scene.build().unwrap(), &CompareConfig::quick()).unwrap();
     assert_eq!(study.paths.len(), 4 * BasisKind::ALL.len());
     // Refining costs more overall along every path (not always monotonically: at the
     // coarsest points Newton may need its fallback guesses), and errors fall along the

@@ -186,7 +186,9 @@ fn custom_solvers_give_the_exact_newton_map() {
     let kepler = Kepler::new(1.0).unwrap();
     let (q0, p0) = Kepler::paper_initial_state();
     let scene = Scene::load("solar-system").unwrap();
-    let (nbody, init) = scene.system.nbody().unwrap().unwrap();
+    let built = scene.build().unwrap();
+    let nbody = built.euclidean().unwrap().as_nbody().unwrap().clone();
+    let init = built.initial.clone();
     let cases: Vec<(&str, f64, f64, f64)> = {
         let mut v = Vec::new();
         for (name, n, h, steps) in [("kepler", 12, 0.5, 60), ("magnetic", 10, 0.5, 60)] {
@@ -255,7 +257,9 @@ fn custom_solvers_give_the_exact_newton_map() {
 #[test]
 fn jacobian_products_are_the_exact_jacobians() {
     let scene = Scene::load("solar-system").unwrap();
-    let (nbody, init) = scene.system.nbody().unwrap().unwrap();
+    let built = scene.build().unwrap();
+    let nbody = built.euclidean().unwrap().as_nbody().unwrap().clone();
+    let init = built.initial.clone();
     let probe = |frozen: bool, run: &dyn Fn(ProductProbe)| {
         let worst = Arc::new(Mutex::new(0.0));
         run(ProductProbe {

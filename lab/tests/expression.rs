@@ -46,7 +46,11 @@ fn magnetic_scene_matches_its_exact_circle_to_1e9_over_t50() {
     let coarse = max_error_against_circle(4, 0.5, 100);
     assert!(coarse > 1e-6, "n = 4 should miss 1e-9 (got {coarse:e})");
     // The run path uses the scene's own exact solution (through p = ∂L/∂v at t0) and agrees.
-    let run = run_scene(&Scene::load("magnetic").unwrap(), RunOptions::default()).unwrap();
+    let run = run_scene(
+        &Scene::load("magnetic").unwrap().build().unwrap(),
+        RunOptions::default(),
+    )
+    .unwrap();
     let e = run.summary.max_position_error.expect("exact solution used");
     assert!(e < 1e-9, "{e:e}");
     let curve = run.summary.max_curve_error.expect("curve error");
@@ -186,7 +190,7 @@ fn every_expression_scene_runs() {
         let mut scene = Scene::load(name).unwrap();
         assert!(scene.source.contains(','), "{name} cites a source");
         scene.method.steps = 10;
-        let run = run_scene(&scene, RunOptions::default()).unwrap();
+        let run = run_scene(&scene.build().unwrap(), RunOptions::default()).unwrap();
         assert!(run.failure.is_none(), "{name}");
         assert_eq!(run.rows.len(), 11);
         let (_, de) = &run.summary.invariant_errors[0];

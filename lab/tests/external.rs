@@ -37,7 +37,7 @@ fn sample_rows_merge_into_table_front_and_chart() {
 
     let mut scene = Scene::load("kepler").unwrap();
     scene.method.steps = 3;
-    let mut study = work_precision(&scene, &WorkPrecisionConfig::quick()).unwrap();
+    let mut study = work_precision(&scene.build().unwrap(), &WorkPrecisionConfig::quick()).unwrap();
     let internal = study.points.len();
     // Synthetic internal times (slower than every external row), so that the front is
     // determined by the committed numbers alone: WHFast at dt = 0.25 (1.6e-13 in 7.7e-4 s) is
@@ -260,7 +260,7 @@ fn absurd_horizons_are_refused_up_front_with_the_estimate() {
     let mut config = WorkPrecisionConfig::full();
     config.horizon = Some(1e300);
     let start = std::time::Instant::now();
-    match work_precision(&scene, &config) {
+    match work_precision(&scene.build().unwrap(), &config) {
         Err(
             e @ LabError::CostTooHigh {
                 estimate, limit, ..
@@ -273,13 +273,13 @@ fn absurd_horizons_are_refused_up_front_with_the_estimate() {
         other => panic!("expected CostTooHigh, got {other:?}"),
     }
     assert!(matches!(
-        reference_csv(&scene, &config),
+        reference_csv(&scene.build().unwrap(), &config),
         Err(LabError::CostTooHigh { .. })
     ));
     // Few enough samples, too many steps: 10⁶ samples × (4 bases × 19 n × (1+2+4+8)) × 5
     // repeats of Galerkin steps alone.
     config.horizon = Some(2e6);
-    match work_precision(&scene, &config) {
+    match work_precision(&scene.build().unwrap(), &config) {
         Err(LabError::CostTooHigh {
             estimate, limit, ..
         }) => {
@@ -302,7 +302,7 @@ fn reference_file_samples_the_study_grid() {
     let scene = Scene::load("kepler").unwrap();
     let mut config = WorkPrecisionConfig::quick();
     config.horizon = Some(20.0);
-    let r = reference_csv(&scene, &config).unwrap();
+    let r = reference_csv(&scene.build().unwrap(), &config).unwrap();
     assert_eq!(r.t.len(), 11);
     assert_eq!(r.t[10], 20.0);
     assert!((r.q[0][0] - 0.4).abs() < 1e-15 && r.q[0][1].abs() < 1e-15);

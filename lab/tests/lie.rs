@@ -261,7 +261,7 @@ fn rigid_body_scene_reaches_1e_12() {
     use galerkin_vi_lab::run::{RunOptions, run_scene};
     use galerkin_vi_lab::scene::Scene;
     let scene = Scene::load("rigid-body").unwrap();
-    let result = run_scene(&scene, RunOptions::default()).unwrap();
+    let result = run_scene(&scene.build().unwrap(), RunOptions::default()).unwrap();
     let err = result.summary.max_position_error.unwrap();
     assert!(err <= 1e-12, "orientation error {err:e}");
     let csv = result.to_csv();
@@ -272,7 +272,11 @@ fn rigid_body_scene_reaches_1e_12() {
             "missing {col} in {header}"
         );
     }
-    let top = run_scene(&Scene::load("heavy-top").unwrap(), RunOptions::default()).unwrap();
+    let top = run_scene(
+        &Scene::load("heavy-top").unwrap().build().unwrap(),
+        RunOptions::default(),
+    )
+    .unwrap();
     assert!(top.summary.max_position_error.is_none());
     let (name, lz) = &top.summary.invariant_errors[1];
     assert_eq!(name, "vertical angular momentum lz");
@@ -323,9 +327,10 @@ fn bad_input_is_a_typed_error() {
     use galerkin_vi_lab::scene::Scene;
     let bad = "[system]\ntype = \"rigid-body\"\ninertia = [1, 2, 3]\n[initial]\nq = [0, 0]\n\
                p = [1, 0, 3]\n[method]\nn = 6\nh = 0.5\nsteps = 2\n";
+    // A wrong length is refused when the scene is built, before any run.
     let scene = Scene::from_toml_str("t", bad).unwrap();
     assert!(matches!(
-        galerkin_vi_lab::run::run_scene(&scene, Default::default()),
+        scene.build(),
         Err(LabError::Core(GviError::DimensionMismatch { .. }))
     ));
 }

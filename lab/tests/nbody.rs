@@ -91,8 +91,8 @@ fn two_body_reproduces_the_relative_kepler_run() {
         curve_samples_per_step: 0,
         chart: false,
     };
-    let rk = run_scene(&kepler, opts).unwrap();
-    let rt = run_scene(&two, opts).unwrap();
+    let rk = run_scene(&kepler.build().unwrap(), opts).unwrap();
+    let rt = run_scene(&two.build().unwrap(), opts).unwrap();
     assert!(rk.failure.is_none() && rt.failure.is_none());
     let (tk, tt) = (rk.trajectory.unwrap(), rt.trajectory.unwrap());
     let k = Kepler::new(1.0).unwrap();
@@ -142,7 +142,7 @@ fn two_body_reproduces_the_relative_kepler_run() {
 
 #[test]
 fn figure_eight_returns_after_one_period() {
-    let scene = Scene::load("figure-eight").unwrap();
+    let scene = Scene::load("figure-eight").unwrap().build().unwrap();
     let r = run_scene(&scene, RunOptions::default()).unwrap();
     assert!(r.failure.is_none());
     let t = r.trajectory.unwrap();
@@ -174,7 +174,7 @@ fn paper_solar_system_run() {
         cross_check: false,
         ..ReportOptions::default()
     };
-    let rep = nbody_report(&scene, opts).unwrap();
+    let rep = nbody_report(&scene.build().unwrap(), opts).unwrap();
     eprintln!("{rep}");
     // Discrete Noether: |J_k − J_0| ≤ C ε √k · scale with C = 20 (scale: Σ|pᵢ| for px, py,
     // pz; Σ|qᵢ||pᵢ| for lx, ly, lz); measured ratios |J_k − J_0| / (ε √k · scale) ≤ 4.
@@ -197,7 +197,7 @@ fn paper_solar_system_run() {
     assert!(worst25 < 1e-3, "n = 25 position error {worst25:e} AU");
     let mut coarse = scene.clone();
     coarse.method.n = 15;
-    let rep15 = nbody_report(&coarse, opts).unwrap();
+    let rep15 = nbody_report(&coarse.build().unwrap(), opts).unwrap();
     eprintln!("{rep15}");
     let worst15 = rep15
         .max_position_errors()

@@ -121,7 +121,7 @@ fn ring_scene_file_matches_the_generator() {
         std::fs::write(path, &text).unwrap();
     }
     assert_eq!(std::fs::read_to_string(path).unwrap(), text);
-    let scene = Scene::load("planetesimal-ring").unwrap();
+    let scene = Scene::load("planetesimal-ring").unwrap().build().unwrap();
     let (_, init) = planetesimal_ring(&RingConfig::default()).unwrap();
     assert_eq!((scene.initial.q, scene.initial.p), (init.q, init.p));
     assert!((scene.method.h - std::f64::consts::TAU / 8.0).abs() < 1e-15);

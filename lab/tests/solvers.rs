@@ -145,12 +145,13 @@ fn every_solver_gives_the_exact_newton_map_across_bases_and_systems() {
     let w = agreement(&c, &BasisKind::ALL);
     assert!(w <= bound, "coupled: {w:e}");
     let scene = Scene::load("outer-solar-system").unwrap();
-    let (nbody, _) = scene.system.nbody().unwrap().unwrap();
+    let built = scene.build().unwrap();
+    let nbody = built.euclidean().unwrap().as_nbody().unwrap().clone();
     let o = Case {
         name: "outer solar system",
         lag: &nbody,
-        q0: &scene.initial.q,
-        p0: &scene.initial.p,
+        q0: &built.initial.q,
+        p0: &built.initial.p,
         n: 12,
         h: scene.method.h,
         steps: 20,
@@ -273,8 +274,9 @@ fn every_solver_computes_a_symplectic_map() {
 #[test]
 fn every_solver_conserves_the_noether_momenta() {
     let scene = Scene::load("outer-solar-system").unwrap();
-    let (nbody, _) = scene.system.nbody().unwrap().unwrap();
-    let (q0, p0) = (&scene.initial.q, &scene.initial.p);
+    let built = scene.build().unwrap();
+    let nbody = built.euclidean().unwrap().as_nbody().unwrap().clone();
+    let (q0, p0) = (&built.initial.q, &built.initial.p);
     let steps = 100;
     let maps: Vec<(&str, Box<dyn MomentumMap>)> = vec![
         ("P_x", Box::new(Translation::axis(3, 6, 0).unwrap())),
@@ -364,12 +366,13 @@ fn every_solver_reports_failures_with_the_partial_trajectory() {
 #[test]
 fn no_solver_allocates_per_step() {
     let scene = Scene::load("outer-solar-system").unwrap();
-    let (nbody, _) = scene.system.nbody().unwrap().unwrap();
+    let built = scene.build().unwrap();
+    let nbody = built.euclidean().unwrap().as_nbody().unwrap().clone();
     for solver in StageSolver::ALL {
         let gvi = with_solver(BasisKind::Chebyshev, 12, scene.method.h, solver);
         let mut ws = gvi.workspace(&nbody).unwrap();
-        let d = scene.initial.q.len();
-        let (mut q, mut p) = (scene.initial.q.clone(), scene.initial.p.clone());
+        let d = built.initial.q.len();
+        let (mut q, mut p) = (built.initial.q.clone(), built.initial.p.clone());
         let (mut qn, mut pn) = (vec![0.0; d], vec![0.0; d]);
         gvi.step(&nbody, &mut ws, &q, &p, &mut qn, &mut pn).unwrap();
         std::mem::swap(&mut q, &mut qn);
@@ -398,7 +401,8 @@ fn matrix_free_products_give_the_same_map() {
     let krylov = with_solver(BasisKind::Chebyshev, 8, h, StageSolver::NewtonKrylov);
     assert!(krylov.workspace(&ring).unwrap().uses_matrix_free_products());
     let scene = Scene::load("solar-system").unwrap();
-    let (ten, _) = scene.system.nbody().unwrap().unwrap();
+    let built = scene.build().unwrap();
+    let ten = built.euclidean().unwrap().as_nbody().unwrap().clone();
     assert!(!krylov.workspace(&ten).unwrap().uses_matrix_free_products());
     let a = krylov.integrate(&ring, 0.0, &init.q, &init.p, 3).unwrap();
     let b = with_solver(BasisKind::Chebyshev, 8, h, StageSolver::Kronecker)

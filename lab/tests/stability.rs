@@ -8,7 +8,7 @@ use galerkin_vi_lab::studies::stability::{Class, StabilityConfig, stability};
 fn oscillator_limits_and_spectral_map() {
     let scene = Scene::load("harmonic").unwrap();
     let config = StabilityConfig::quick();
-    let study = stability(&scene, &config).unwrap();
+    let study = stability(&scene.build().unwrap(), &config).unwrap();
     let limit = |name: &str| {
         study
             .baselines
@@ -57,7 +57,7 @@ fn kepler_large_steps_show_solver_failures() {
         steps: 10,
         ..StabilityConfig::quick()
     };
-    let study = stability(&scene, &config).unwrap();
+    let study = stability(&scene.build().unwrap(), &config).unwrap();
     assert_eq!(study.cells.len(), 4);
     // The paper's setting (h = 2, n = 32) is accurate over these steps.
     assert_eq!(study.cell(32, 2.0).unwrap().class, Class::Accurate);

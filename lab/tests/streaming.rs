@@ -73,7 +73,7 @@ fn streamed_run_memory_is_flat_in_the_number_of_steps() {
         let mut rows = 0usize;
         let peak = peak_during(|| {
             let mut sink = CountingSink(&mut rows);
-            let outcome = stream_scene(&scene, 0, &mut sink).unwrap();
+            let outcome = stream_scene(&scene.build().unwrap(), 0, &mut sink).unwrap();
             assert!(outcome.failure.is_none());
             assert_eq!(outcome.summary.steps, steps);
         });
@@ -98,7 +98,7 @@ fn in_memory_run_memory_grows_with_the_steps() {
     for steps in [1_000, 10_000] {
         let scene = harmonic(steps);
         peaks.push(peak_during(|| {
-            let r = run_scene(&scene, RunOptions::default()).unwrap();
+            let r = run_scene(&scene.build().unwrap(), RunOptions::default()).unwrap();
             assert_eq!(r.rows.len(), steps + 1);
         }));
     }
@@ -131,8 +131,8 @@ fn streamed_and_in_memory_runs_agree() {
         let mut scene = Scene::load(name).unwrap();
         scene.method.steps = 20;
         let mut out = Vec::new();
-        let streamed = stream_scene(&scene, 16, &mut out).unwrap();
-        let memory = run_scene(&scene, RunOptions::default()).unwrap();
+        let streamed = stream_scene(&scene.build().unwrap(), 16, &mut out).unwrap();
+        let memory = run_scene(&scene.build().unwrap(), RunOptions::default()).unwrap();
         assert_eq!(String::from_utf8(out).unwrap(), memory.to_csv(), "{name}");
         let (a, b) = (&streamed.summary, &memory.summary);
         assert_eq!(a.steps, b.steps);

@@ -44,7 +44,7 @@ fn reproduce_quick_matches_the_papers_rates() {
 fn refine_fits_the_rate_and_records_failures() {
     let scene = Scene::load("kepler").unwrap();
     let ns: Vec<f64> = (4..=28).step_by(2).map(|n| n as f64).collect();
-    let study = refine(&scene, Vary::N, &ns, false).unwrap();
+    let study = refine(&scene.build().unwrap(), Vary::N, &ns, false).unwrap();
     match &study.fit {
         RateFit::Geometric(g) => assert!((g.rate - 0.56).abs() < 0.06, "{g:?}"),
         other => panic!("{other:?}"),
@@ -53,7 +53,7 @@ fn refine_fits_the_rate_and_records_failures() {
     let mut s4 = scene.clone();
     s4.method.n = 4;
     s4.method.steps = 5; // horizon T = 10
-    let study = refine(&s4, Vary::H, &hs, false).unwrap();
+    let study = refine(&s4.build().unwrap(), Vary::H, &hs, false).unwrap();
     match &study.fit {
         RateFit::Algebraic(a) => assert!((a.order - 6.0).abs() < 0.6, "{a:?}"),
         other => panic!("{other:?}"),
@@ -62,7 +62,7 @@ fn refine_fits_the_rate_and_records_failures() {
     let mut pend = Scene::load("pendulum").unwrap();
     pend.method.n = 4;
     pend.method.steps = 40;
-    let study_p = refine(&pend, Vary::H, &[1.0, 10.0], true).unwrap();
+    let study_p = refine(&pend.build().unwrap(), Vary::H, &[1.0, 10.0], true).unwrap();
     assert!(study_p.points[0].failure.is_none());
     assert!(
         study_p.points[1]

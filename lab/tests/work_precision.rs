@@ -8,7 +8,7 @@ use galerkin_vi_lab::studies::work_precision::{WorkPrecisionConfig, mark_pareto,
 fn reduced_kepler_study() {
     let mut scene = Scene::load("kepler").unwrap();
     scene.method.steps = 5; // T = 10
-    let study = work_precision(&scene, &WorkPrecisionConfig::quick()).unwrap();
+    let study = work_precision(&scene.build().unwrap(), &WorkPrecisionConfig::quick()).unwrap();
     for family in [
         "galerkin-chebyshev",
         "stormer-verlet",
@@ -87,7 +87,7 @@ fn pareto_marks_by_hand() {
     let mut scene = Scene::load("harmonic").unwrap();
     scene.method.h = 1.0;
     scene.method.steps = 4;
-    let mut study = work_precision(&scene, &WorkPrecisionConfig::quick()).unwrap();
+    let mut study = work_precision(&scene.build().unwrap(), &WorkPrecisionConfig::quick()).unwrap();
     // Synthetic times: the front is recomputed from scratch.
     for (i, p) in study.points.iter_mut().enumerate() {
         p.seconds = 1.0 + i as f64;
@@ -116,7 +116,7 @@ fn long_preset_at_a_short_horizon() {
     let mut config = WorkPrecisionConfig::long();
     assert_eq!(config.horizon, Some(20_000.0));
     config.horizon = Some(400.0);
-    let study = work_precision(&scene, &config).unwrap();
+    let study = work_precision(&scene.build().unwrap(), &config).unwrap();
     let families: std::collections::BTreeSet<&str> =
         study.points.iter().map(|p| p.method.as_str()).collect();
     assert!(families.contains("galerkin-legendre") && families.contains("galerkin-chebyshev"));

@@ -4,7 +4,8 @@
 //!
 //! Each implements [`Mechanical`](crate::Mechanical) with hand-written gradient and Hessian
 //! (the AD defaults are checked against them in tests) and [`System`], which adds the
-//! invariants reported in output and, where known, the exact solution.
+//! invariants reported in output and, where known, the exact solution. [`AnySystem`] holds any
+//! of them chosen at run time (a scene file) and implements both traits by dispatch.
 //!
 //! Also here: [`ExpressionLagrangian`] (a Lagrangian parsed from text and compiled to a tape,
 //! differentiated by AD), and [`kepler_orbit`] (Kepler's equation solved to round-off, the
@@ -12,6 +13,7 @@
 //! their `type`; the N-body page of the guide (docs/guide/nbody.md) describes the solar-system
 //! scenes and their sources.
 
+mod any;
 pub mod expression;
 mod harmonic;
 mod kepler;
@@ -19,6 +21,7 @@ pub mod kepler_orbit;
 mod nbody;
 mod pendulum;
 
+pub use any::AnySystem;
 pub use expression::ExpressionLagrangian;
 pub use harmonic::HarmonicOscillator;
 pub use kepler::Kepler;

@@ -2,29 +2,19 @@
 
 use super::run::{SceneArgs, load_scene};
 use crate::error::LabError;
-use crate::run::{SystemVisitor, visit_system};
-use crate::scene::Scene;
-use galerkin_vi::geometry::{CheckReport, check_report};
-use galerkin_vi::systems::System;
+use galerkin_vi::geometry::check_report;
 
 pub fn run_check(args: SceneArgs) -> Result<(), LabError> {
     let scene = load_scene(&args)?;
-    struct Check<'a>(&'a Scene);
-    impl SystemVisitor for Check<'_> {
-        type Output = CheckReport;
-        fn visit<S: System + Sync>(self, system: &S) -> Result<CheckReport, LabError> {
-            let m = &self.0.method;
-            let gvi = m.integrator()?;
-            Ok(check_report(
-                &gvi,
-                system,
-                &self.0.initial.q,
-                &self.0.initial.p,
-                m.steps,
-            )?)
-        }
-    }
-    let report = visit_system(&scene.system, Check(&scene))?;
+    let system = scene.euclidean()?;
+    let gvi = scene.method.integrator()?;
+    let report = check_report(
+        &gvi,
+        system,
+        &scene.initial.q,
+        &scene.initial.p,
+        scene.method.steps,
+    )?;
     println!("{report}");
     Ok(())
 }

@@ -2,7 +2,7 @@
 
 use crate::error::LabError;
 use crate::nbody_report::{ReportOptions, nbody_report};
-use crate::scene::Scene;
+use crate::scene::{Overrides, Scene};
 use clap::Args;
 use std::path::PathBuf;
 
@@ -47,16 +47,14 @@ pub fn run_nbody_report(args: NBodyReportArgs) -> Result<(), LabError> {
         });
     }
     crate::output::check_output_dir(&args.out)?;
-    let mut scene = Scene::load(&args.scene)?;
-    if let Some(n) = args.n {
-        scene.method.n = n;
-    }
-    if let Some(h) = args.h {
-        scene.method.h = h;
-    }
-    if let Some(s) = args.steps {
-        scene.method.steps = s;
-    }
+    let scene = Scene::load(&args.scene)?
+        .with_overrides(&Overrides {
+            n: args.n,
+            h: args.h,
+            steps: args.steps,
+            ..Overrides::default()
+        })
+        .build()?;
     let options = ReportOptions {
         stages: args.stages,
         substeps: args.substeps,

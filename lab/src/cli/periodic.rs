@@ -34,7 +34,7 @@ pub struct PeriodicArgs {
 }
 
 pub fn run_periodic(args: PeriodicArgs) -> Result<(), LabError> {
-    let scene = Scene::load(&args.scene)?;
+    let scene = Scene::load(&args.scene)?.build()?;
     let mut request = PeriodicRequest {
         periods: args.periods,
         ..PeriodicRequest::default()

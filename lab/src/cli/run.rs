@@ -5,9 +5,8 @@ use crate::error::LabError;
 use crate::output::{AtomicFile, check_output_path, ensure_distinct};
 use crate::run::stream::{bytes_per_step, stream_scene};
 use crate::run::{RunOptions, RunSummary, run_scene};
-use crate::scene::{Scene, SystemSpec};
+use crate::scene::{BuiltScene, BuiltSystem, Overrides, Scene};
 use clap::{Args, ValueEnum};
-use galerkin_vi::GviError;
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -96,95 +95,65 @@ pub struct RunArgs {
     pub strict: bool,
 }
 
-/// Load the scene named on the command line and apply the flag overrides.
-pub fn load_scene(a: &SceneArgs) -> Result<Scene, LabError> {
-    let mut scene = Scene::load(&a.scene)?;
-    apply_overrides(&mut scene, a)?;
-    let init = &scene.initial;
-    let named = [
-        ("initial position q0 (--q0, or q in [initial])", &init.q),
-        ("initial momentum p0 (--p0, or p in [initial])", &init.p),
-        ("initial time t0 (t0 in [initial])", &vec![init.t0]),
-    ];
-    for (what, values) in named {
-        if let Some(&value) = values.iter().find(|x| !x.is_finite()) {
-            return Err(GviError::NonFinite {
-                what: what.into(),
-                value,
-            }
-            .into());
-        }
+impl SceneArgs {
+    /// The method and initial-state flags as [`Overrides`] (parsed, not yet checked against
+    /// the system: [`Scene::build`] does that).
+    pub fn overrides(&self) -> Result<Overrides, LabError> {
+        Ok(Overrides {
+            basis: self.basis.as_deref().map(str::parse).transpose()?,
+            quadrature: self.quadrature.as_deref().map(str::parse).transpose()?,
+            n: self.n,
+            quad_points: self.quad_points,
+            economical: self.economical,
+            h: self.h,
+            solver: self.solver.as_deref().map(str::parse).transpose()?,
+            steps: self.steps,
+            retraction: self.retraction.as_deref().map(str::parse).transpose()?,
+            q0: self
+                .q0
+                .as_deref()
+                .map(|q| parse_vector("--q0", q))
+                .transpose()?,
+            p0: self
+                .p0
+                .as_deref()
+                .map(|p| parse_vector("--p0", p))
+                .transpose()?,
+            ..Overrides::default()
+        })
     }
-    Ok(scene)
 }
 
-/// Apply command-line overrides to a scene.
-pub fn apply_overrides(scene: &mut Scene, a: &SceneArgs) -> Result<(), LabError> {
-    if let Some(b) = &a.basis {
-        scene.method.basis = b.parse()?;
+impl RunArgs {
+    /// The scene flags and the tolerance flags of `gvi run` as [`Overrides`].
+    pub fn overrides(&self) -> Result<Overrides, LabError> {
+        let mut o = self.scene.overrides()?;
+        o.tol = self.tol;
+        o.control = self.control.as_deref().map(str::parse).transpose()?;
+        o.auto_h = self.auto_h;
+        if let Some(l) = &self.ladder {
+            let values = parse_vector("--ladder", l)?;
+            let mut ladder = Vec::with_capacity(values.len());
+            for v in values {
+                if !(v.is_finite() && v >= 2.0 && v.fract() == 0.0) {
+                    return Err(LabError::InvalidArgument {
+                        name: "--ladder".into(),
+                        reason: format!("{v} is not a whole number of basis functions ≥ 2"),
+                    });
+                }
+                ladder.push(v as usize);
+            }
+            o.ladder = Some(ladder);
+        }
+        Ok(o)
     }
-    if let Some(q) = &a.quadrature {
-        scene.method.quadrature = q.parse()?;
-    }
-    if let Some(n) = a.n {
-        scene.method.n = n;
-    }
-    if let Some(s) = &a.solver {
-        scene.method.solver = s.parse()?;
-    }
-    if a.quad_points.is_some() {
-        scene.method.quad_points = a.quad_points;
-    }
-    if a.economical && a.quad_points.is_none() {
-        scene.method.quad_points = Some(scene.method.quadrature.economical_points(scene.method.n));
-    }
-    if let Some(h) = a.h {
-        scene.method.h = h;
-    }
-    if let Some(s) = a.steps {
-        scene.method.steps = s;
-    }
-    if let Some(r) = &a.retraction {
-        scene.method.retraction = Some(r.parse()?);
-    }
-    if let Some(q) = &a.q0 {
-        scene.initial.q = parse_vector("--q0", q)?;
-    }
-    if let Some(p) = &a.p0 {
-        scene.initial.p = parse_vector("--p0", p)?;
-    }
-    if a.q0.is_some() || a.p0.is_some() {
-        scene.validate()?;
-    }
-    Ok(())
 }
 
-/// Apply the tolerance flags of `gvi run` to a scene.
-fn apply_tolerance(scene: &mut Scene, a: &RunArgs) -> Result<(), LabError> {
-    if a.tol.is_some() {
-        scene.method.tol = a.tol;
-    }
-    if let Some(c) = &a.control {
-        scene.method.control = Some(c.parse()?);
-    }
-    if a.auto_h {
-        scene.method.auto_h = true;
-    }
-    if let Some(l) = &a.ladder {
-        let values = parse_vector("--ladder", l)?;
-        let mut ladder = Vec::with_capacity(values.len());
-        for v in values {
-            if !(v.is_finite() && v >= 2.0 && v.fract() == 0.0) {
-                return Err(LabError::InvalidArgument {
-                    name: "--ladder".into(),
-                    reason: format!("{v} is not a whole number of basis functions ≥ 2"),
-                });
-            }
-            ladder.push(v as usize);
-        }
-        scene.method.ladder = Some(ladder);
-    }
-    Ok(())
+/// Load the scene named on the command line, apply the flag overrides and build it (once).
+pub fn load_scene(a: &SceneArgs) -> Result<BuiltScene, LabError> {
+    Scene::load(&a.scene)?
+        .with_overrides(&a.overrides()?)
+        .build()
 }
 
 /// In-memory runs whose estimated memory exceeds this are refused up front (streamed runs
@@ -201,8 +170,9 @@ fn sibling(path: &Path, suffix: &str, fallback: &str) -> PathBuf {
 }
 
 pub fn run(args: RunArgs) -> Result<(), LabError> {
-    let mut scene = load_scene(&args.scene)?;
-    apply_tolerance(&mut scene, &args)?;
+    let scene = Scene::load(&args.scene.scene)?
+        .with_overrides(&args.overrides()?)
+        .build()?;
     // Every output is checked before any work: usable, distinct, and not the scene file.
     let mut outputs: Vec<(&str, PathBuf)> = Vec::new();
     if let Some(o) = &args.output {
@@ -210,7 +180,7 @@ pub fn run(args: RunArgs) -> Result<(), LabError> {
     }
     if let Some(p) = &args.plot {
         outputs.push(("--plot", p.clone()));
-        if matches!(scene.system, SystemSpec::NBody { .. }) {
+        if matches!(&scene.system, BuiltSystem::Euclidean(s) if s.as_nbody().is_some()) {
             outputs.push(("the inner-bodies chart", sibling(p, "-inner", "orbits")));
         }
         if scene.method.tol.is_some() {
@@ -230,10 +200,7 @@ pub fn run(args: RunArgs) -> Result<(), LabError> {
     ensure_distinct(&out_refs, &inputs)?;
 
     // Rigid bodies run on SO(3) by their own integrator (galerkin_vi::lie), in memory.
-    let on_so3 = matches!(
-        scene.system,
-        SystemSpec::RigidBody { .. } | SystemSpec::HeavyTop { .. }
-    );
+    let on_so3 = matches!(scene.system, BuiltSystem::RigidBody(_));
     let streamed =
         args.plot.is_none() && args.format == Format::Csv && scene.method.tol.is_none() && !on_so3;
     let samples = RunOptions::default().curve_samples_per_step;
@@ -267,7 +234,7 @@ pub fn run(args: RunArgs) -> Result<(), LabError> {
 }
 
 /// Refuse an in-memory run (chart, JSON or --tol) whose estimated memory is absurd.
-fn refuse_if_too_big(scene: &Scene, args: &RunArgs) -> Result<(), LabError> {
+fn refuse_if_too_big(scene: &BuiltScene, args: &RunArgs) -> Result<(), LabError> {
     let d = scene.initial.q.len();
     let n = match scene.method.tol {
         // A tolerance-driven run may use the largest n of its ladder.
@@ -294,7 +261,7 @@ fn refuse_if_too_big(scene: &Scene, args: &RunArgs) -> Result<(), LabError> {
 }
 
 fn run_in_memory(
-    scene: &Scene,
+    scene: &BuiltScene,
     args: &RunArgs,
 ) -> Result<(RunSummary, Option<LabError>), LabError> {
     let options = RunOptions {

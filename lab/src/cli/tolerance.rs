@@ -2,7 +2,7 @@
 
 use super::parse_vector;
 use crate::error::LabError;
-use crate::scene::Scene;
+use crate::scene::{Overrides, Scene};
 use crate::studies::tolerance::{ToleranceConfig, tolerance_study};
 use clap::Args;
 use galerkin_vi::adaptive::ErrorControl;
@@ -72,15 +72,12 @@ pub fn run_tolerance_study(args: ToleranceArgs) -> Result<(), LabError> {
         crate::output::check_output_dir(dir)?;
     }
     let mut scene = Scene::load(&args.scene)?;
-    if let Some(b) = &args.basis {
-        scene.method.basis = b.parse()?;
-    }
-    if let Some(h) = args.h {
-        scene.method.h = h;
-    }
-    if let Some(s) = args.steps {
-        scene.method.steps = s;
-    }
+    let mut overrides = Overrides {
+        basis: args.basis.as_deref().map(str::parse).transpose()?,
+        h: args.h,
+        steps: args.steps,
+        ..Overrides::default()
+    };
     if let Some(e) = args.eccentricity {
         if !(0.0..1.0).contains(&e) || scene.initial.q.len() != 2 {
             return Err(LabError::InvalidArgument {
@@ -88,10 +85,11 @@ pub fn run_tolerance_study(args: ToleranceArgs) -> Result<(), LabError> {
                 reason: "needs 0 ≤ e < 1 and a planar two-dimensional (Kepler) scene".into(),
             });
         }
-        scene.initial.q = vec![1.0 - e, 0.0];
-        scene.initial.p = vec![0.0, ((1.0 + e) / (1.0 - e)).sqrt()];
+        overrides.q0 = Some(vec![1.0 - e, 0.0]);
+        overrides.p0 = Some(vec![0.0, ((1.0 + e) / (1.0 - e)).sqrt()]);
         scene.name = format!("{}-e{e}", scene.name);
     }
+    let scene = scene.with_overrides(&overrides).build()?;
     let mut config = ToleranceConfig {
         tols: parse_tols(&args.tols)?,
         ..ToleranceConfig::default()

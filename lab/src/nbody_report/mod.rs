@@ -36,9 +36,8 @@ pub use elements::{longitude_of_perihelion, wrap};
 use crate::error::LabError;
 use crate::error::Result;
 use crate::plot::{Chart, Series};
-use crate::scene::Scene;
+use crate::scene::{BuiltScene, Scene};
 use galerkin_vi::baselines::{GaussCollocationBaseline, OneStepMethod};
-use galerkin_vi::lagrangian::Lagrangian;
 use galerkin_vi::systems::{NBody, System};
 use std::time::Instant;
 
@@ -117,32 +116,32 @@ pub struct NBodyReport {
 
 /// Run an N-body scene with its Galerkin method and compare it with a Gauss-collocation
 /// reference of the same model (module docs). A Galerkin solver failure is an error.
-pub fn nbody_report(scene: &Scene, options: ReportOptions) -> Result<NBodyReport> {
-    let (system, _) = scene.system.nbody()?.ok_or_else(|| LabError::Scene {
-        source_name: scene.name.clone(),
-        reason: "the N-body report needs an N-body scene (type = \"nbody\")".into(),
-    })?;
+pub fn nbody_report(scene: &BuiltScene, options: ReportOptions) -> Result<NBodyReport> {
+    let system = scene
+        .euclidean()?
+        .as_nbody()
+        .ok_or_else(|| LabError::Scene {
+            source_name: scene.name.clone(),
+            reason: "the N-body report needs an N-body scene (type = \"nbody\")".into(),
+        })?;
+    // The initial state was checked against the system when the scene was built.
     let m = &scene.method;
     let init = &scene.initial;
-    let d = system.dim();
-    crate::error::ensure_len("initial q", d, init.q.len())?;
-    crate::error::ensure_len("initial p", d, init.p.len())?;
     let gvi = m.integrator()?;
     let start = Instant::now();
     let traj = gvi
-        .integrate(&system, init.t0, &init.q, &init.p, m.steps)
+        .integrate(system, init.t0, &init.q, &init.p, m.steps)
         .map_err(|f| f.error)?;
     let t_gal = start.elapsed().as_secs_f64();
 
     let k = options
         .substeps
-        .unwrap_or_else(|| auto_substeps(&system, &init.q, &init.p, m.h));
+        .unwrap_or_else(|| auto_substeps(system, &init.q, &init.p, m.h));
     let start = Instant::now();
-    let mut gauss = GaussCollocationBaseline::new(&system, options.stages, m.h / k as f64)?;
+    let mut gauss = GaussCollocationBaseline::new(system, options.stages, m.h / k as f64)?;
     let (rq, rp) = gauss.integrate_compensated(&init.q, &init.p, m.steps * k, k)?;
     let reference_uncertainty = if options.cross_check {
-        let mut fine =
-            GaussCollocationBaseline::new(&system, options.stages, m.h / (2 * k) as f64)?;
+        let mut fine = GaussCollocationBaseline::new(system, options.stages, m.h / (2 * k) as f64)?;
         let (fq, _) = fine.integrate_compensated(&init.q, &init.p, m.steps * 2 * k, 2 * k)?;
         Some(
             rq.iter()
@@ -181,7 +180,7 @@ pub fn nbody_report(scene: &Scene, options: ReportOptions) -> Result<NBodyReport
     let ni = inv_names.len();
     let mut inv0 = vec![0.0; ni];
     system.invariants(&init.q, &init.p, &mut inv0);
-    let invariant_scales = momentum_scales(&system, &init.q, &init.p);
+    let invariant_scales = momentum_scales(system, &init.q, &init.p);
     let mut inv = vec![0.0; ni];
     let invariant_errors = (0..traj.q.len())
         .map(|s| {
@@ -194,10 +193,10 @@ pub fn nbody_report(scene: &Scene, options: ReportOptions) -> Result<NBodyReport
                 .collect()
         })
         .collect();
-    let mercury = perihelion_drift(&system, &traj.q, &traj.p, &rq, &rp);
+    let mercury = perihelion_drift(system, &traj.q, &traj.p, &rq, &rp);
     let orbit_charts = orbit_charts(&names, &scene.name, &traj)?;
     Ok(NBodyReport {
-        scene: scene.clone(),
+        scene: scene.scene(),
         body_names: names,
         times: (0..traj.q.len()).map(|s| traj.time(s)).collect(),
         position_errors,

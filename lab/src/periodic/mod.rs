@@ -6,8 +6,7 @@ mod report;
 
 use crate::error::LabError;
 use crate::error::{GviError, Result};
-use crate::run::{SystemVisitor, visit_system};
-use crate::scene::Scene;
+use crate::scene::BuiltScene;
 use galerkin_vi::lagrangian::Lagrangian;
 pub use galerkin_vi::periodic::*;
 use galerkin_vi::systems::System;
@@ -147,26 +146,19 @@ pub struct PeriodicReport {
     pub body_dim: Option<usize>,
 }
 
-/// Solve a scene's periodic problem and analyse the orbit found.
-pub fn analyse_scene(scene: &Scene, request: &PeriodicRequest) -> Result<PeriodicReport> {
-    struct Visit<'a>(&'a Scene, &'a PeriodicRequest);
-    impl SystemVisitor for Visit<'_> {
-        type Output = PeriodicReport;
-        fn visit<S: System + Sync>(self, system: &S) -> Result<PeriodicReport> {
-            analyse(system, self.0, self.1)
-        }
-    }
-    visit_system(&scene.system, Visit(scene, request))
+/// Solve a built scene's periodic problem and analyse the orbit found.
+pub fn analyse_scene(scene: &BuiltScene, request: &PeriodicRequest) -> Result<PeriodicReport> {
+    analyse(scene.euclidean()?, scene, request)
 }
 
 /// The layout, symmetries and body dimension of a scene's periodic problem.
 pub fn problem_of(
-    scene: &Scene,
+    scene: &BuiltScene,
     spec: &PeriodicSpec,
 ) -> Result<(Layout, Vec<Symmetry>, Option<usize>)> {
-    let nbody = scene.system.nbody()?;
-    let (layout, symmetries, body_dim) = match (&nbody, spec.kind) {
-        (Some((nb, _)), kind) => {
+    let nbody = scene.euclidean()?.as_nbody();
+    let (layout, symmetries, body_dim) = match (nbody, spec.kind) {
+        (Some(nb), kind) => {
             let layout = if kind == CurveKind::Choreography {
                 let m0 = nb.masses()[0];
                 if nb.masses().iter().any(|&m| m != m0) {
@@ -204,8 +196,8 @@ pub fn problem_of(
 }
 
 /// The scene's `[periodic]` table, or a typed error naming the scene.
-pub fn spec_of(scene: &Scene) -> Result<&PeriodicSpec> {
-    scene.periodic.as_ref().ok_or_else(|| LabError::Scene {
+pub fn spec_of(scene: &BuiltScene) -> Result<&PeriodicSpec> {
+    scene.periodic().ok_or_else(|| LabError::Scene {
         source_name: scene.name.clone(),
         reason: "no [periodic] table (periodic data and initial guess); see \
                  docs/guide/periodic-orbits.md"
@@ -217,10 +209,10 @@ fn energy_index<S: System>(system: &S) -> Option<usize> {
     system.invariant_names().iter().position(|n| *n == "energy")
 }
 
-/// [`analyse_scene`] for a concrete system.
-pub fn analyse<S: System>(
+/// [`analyse_scene`] for the scene's own system.
+fn analyse<S: System>(
     system: &S,
-    scene: &Scene,
+    scene: &BuiltScene,
     request: &PeriodicRequest,
 ) -> Result<PeriodicReport> {
     let spec = spec_of(scene)?;
@@ -246,8 +238,7 @@ pub fn analyse<S: System>(
             let e = match spec.energy {
                 Some(e) => e,
                 None => {
-                    crate::error::ensure_len("initial q", system.dim(), scene.initial.q.len())?;
-                    crate::error::ensure_len("initial p", system.dim(), scene.initial.p.len())?;
+                    // The scene's state was checked against its system when built.
                     system.invariants(&scene.initial.q, &scene.initial.p, &mut inv);
                     let i = energy_index(system).ok_or_else(|| {
                         GviError::Unsupported("this system reports no energy".into())

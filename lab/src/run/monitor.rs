@@ -2,7 +2,7 @@
 //! steps before it kept), the invariant drifts (absolute and relative), the position error
 //! against an exact solution, and for point masses the closest approach of two bodies.
 //!
-//! The same monitor serves the in-memory table ([`super::run_system`]) and the streamed one
+//! The same monitor serves the in-memory table ([`super::run_scene`]) and the streamed one
 //! ([`super::stream`]), so both report the same figures.
 
 use crate::error::LabError;

@@ -2,16 +2,17 @@
 //! the number of steps and a run stopped early (a failure, a kill) has written every step
 //! before it. Used when nothing needs the whole trajectory (no chart, no JSON, no `--tol`).
 //!
-//! The table and summary are those of [`super::run_system`]: the same monitor watches the
+//! The table and summary are those of [`super::run_scene`]: the same monitor watches the
 //! step ends, and the error along the Galerkin curves is sampled from each step's
 //! coefficients while they are in the workspace.
 
 use super::{Monitor, RunSummary};
 use crate::error::LabError;
 use crate::error::{GviError, Result};
-use crate::scene::Scene;
+use crate::scene::BuiltScene;
+use galerkin_vi::Lagrangian;
 use galerkin_vi::basis::Basis;
-use galerkin_vi::systems::System;
+use galerkin_vi::systems::{AnySystem, System};
 use std::io::Write;
 use std::time::Instant;
 
@@ -39,18 +40,11 @@ pub struct StreamOutcome {
 /// Integrate a scene (without `tol`) and write its CSV table to `out` step by step.
 /// `curve_samples_per_step` as in [`super::RunOptions`].
 pub fn stream_scene(
-    scene: &Scene,
+    scene: &BuiltScene,
     curve_samples_per_step: usize,
     out: &mut dyn Write,
 ) -> Result<StreamOutcome> {
-    struct Stream<'a>(&'a Scene, usize, &'a mut dyn Write);
-    impl super::SystemVisitor for Stream<'_> {
-        type Output = StreamOutcome;
-        fn visit<S: System + Sync>(self, system: &S) -> Result<StreamOutcome> {
-            stream_system(system, self.0, self.1, self.2)
-        }
-    }
-    super::visit_system(&scene.system, Stream(scene, curve_samples_per_step, out))
+    stream_system(scene.euclidean()?, scene, curve_samples_per_step, out)
 }
 
 fn write_row(out: &mut dyn Write, row: &[f64]) -> std::io::Result<()> {
@@ -67,9 +61,9 @@ fn write_row(out: &mut dyn Write, row: &[f64]) -> std::io::Result<()> {
     out.write_all(b"\n")
 }
 
-fn stream_system<S: System>(
-    system: &S,
-    scene: &Scene,
+fn stream_system(
+    system: &AnySystem,
+    scene: &BuiltScene,
     samples: usize,
     out: &mut dyn Write,
 ) -> Result<StreamOutcome> {
@@ -82,13 +76,10 @@ fn stream_system<S: System>(
         .into());
     }
     let gvi = m.integrator()?;
+    // Lengths, finiteness and steps ≥ 1 were checked when the scene was built.
     let d = system.dim();
-    crate::error::ensure_len("initial q (system dimension)", d, init.q.len())?;
-    crate::error::ensure_len("initial p (system dimension)", d, init.p.len())?;
-    crate::error::ensure_finite("initial position q0", &init.q)?;
-    crate::error::ensure_finite("initial momentum p0", &init.p)?;
     let steps = m.steps;
-    if steps == 0 || steps > galerkin_vi::integrator::MAX_STEPS {
+    if steps > galerkin_vi::integrator::MAX_STEPS {
         return Err(GviError::InvalidStepCount {
             steps,
             reason: format!("need 1 ≤ steps ≤ {}", galerkin_vi::integrator::MAX_STEPS),

@@ -16,7 +16,7 @@
 //! than the variation of the need can return.
 
 use crate::error::Result;
-use crate::scene::Scene;
+use crate::scene::BuiltScene;
 use galerkin_vi::integrator::GalerkinIntegrator;
 use galerkin_vi::systems::System;
 use serde::Serialize;
@@ -49,7 +49,7 @@ pub struct Allocation {
 /// results). `cost[i]` is the per-step cost of `ns[i]`.
 pub fn one_step_errors<S: System>(
     system: &S,
-    scene: &Scene,
+    scene: &BuiltScene,
     ns: &[usize],
     cost: &[f64],
     n_ref: usize,

@@ -11,12 +11,11 @@ use super::{Measurement, Reference, measure, measurements_csv, write_file};
 use crate::error::LabError;
 use crate::error::Result;
 use crate::plot::{Chart, Series};
-use crate::run::{SystemVisitor, visit_system};
-use crate::scene::Scene;
+use crate::scene::BuiltScene;
+use galerkin_vi::Lagrangian;
 use galerkin_vi::basis::BasisKind;
 use galerkin_vi::integrator::GalerkinIntegrator;
 use galerkin_vi::quadrature::QuadratureKind;
-use galerkin_vi::systems::System;
 use rayon::prelude::*;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -45,7 +44,7 @@ pub struct BasisComparison {
 
 /// Run every basis × quadrature for every n in `ns` at the scene's h, in parallel.
 pub fn compare_bases(
-    scene: &Scene,
+    scene: &BuiltScene,
     ns: &[usize],
     quadratures: &[QuadratureKind],
 ) -> Result<BasisComparison> {
@@ -55,72 +54,66 @@ pub fn compare_bases(
             reason: "no values of n".into(),
         });
     }
-    struct Visit<'a>(&'a Scene, &'a [usize], &'a [QuadratureKind]);
-    impl SystemVisitor for Visit<'_> {
-        type Output = BasisComparison;
-        fn visit<S: System + Sync>(self, system: &S) -> Result<BasisComparison> {
-            let (scene, ns, quads) = (self.0, self.1, self.2);
-            let m = &scene.method;
-            let horizon = m.h * m.steps as f64;
-            let total = (BasisKind::ALL.len() * quads.len() * ns.len()) as f64 * m.steps as f64
-                + Reference::estimated_steps(system, &scene.initial, m.h, horizon);
-            let limit = super::work_precision::MAX_TOTAL_STEPS;
-            if total > limit {
-                return Err(LabError::CostTooHigh {
-                    what: "the total number of integration steps (bases × quadratures × values \
-                           of n × steps, plus the reference; lower --steps or the range)"
-                        .into(),
-                    estimate: total,
-                    limit,
-                });
+    let system = scene.euclidean()?;
+    let (scene, ns, quads) = (scene, ns, quadratures);
+    let m = &scene.method;
+    let horizon = m.h * m.steps as f64;
+    let total = (BasisKind::ALL.len() * quads.len() * ns.len()) as f64 * m.steps as f64
+        + Reference::estimated_steps(system, &scene.initial, m.h, horizon);
+    let limit = super::work_precision::MAX_TOTAL_STEPS;
+    if total > limit {
+        return Err(LabError::CostTooHigh {
+            what: "the total number of integration steps (bases × quadratures × values \
+                   of n × steps, plus the reference; lower --steps or the range)"
+                .into(),
+            estimate: total,
+            limit,
+        });
+    }
+    let max_n = ns.iter().copied().max().unwrap_or(0);
+    super::refuse_memory(m.steps as f64, max_n, system.dim())?;
+    let reference = Reference::for_system(system, &scene.initial, m.h, horizon)?;
+    let mut jobs = Vec::new();
+    for &b in &BasisKind::ALL {
+        for &q in quads {
+            for &n in ns {
+                let mut method = m.clone();
+                method.basis = b;
+                method.quadrature = q;
+                method.n = n;
+                method.quad_points = None;
+                jobs.push(method);
             }
-            let max_n = ns.iter().copied().max().unwrap_or(0);
-            super::refuse_memory(m.steps as f64, max_n, system.dim())?;
-            let reference = Reference::for_system(system, &scene.initial, m.h, horizon)?;
-            let mut jobs = Vec::new();
-            for &b in &BasisKind::ALL {
-                for &q in quads {
-                    for &n in ns {
-                        let mut method = m.clone();
-                        method.basis = b;
-                        method.quadrature = q;
-                        method.n = n;
-                        method.quad_points = None;
-                        jobs.push(method);
-                    }
-                }
-            }
-            let pb = crate::progress::bar(jobs.len(), "compare-bases");
-            let points = jobs
-                .par_iter()
-                .map(|method| {
-                    let kinetic_condition = GalerkinIntegrator::from_kinds(
-                        method.basis,
-                        method.n,
-                        method.quadrature,
-                        None,
-                        method.h,
-                    )
-                    .map(|g| g.kinetic_condition_number())
-                    .unwrap_or(f64::INFINITY);
-                    let measurement = measure(system, &scene.initial, method, &reference, 8);
-                    pb.inc(1);
-                    BasisPoint {
-                        measurement,
-                        kinetic_condition,
-                    }
-                })
-                .collect();
-            pb.finish_and_clear();
-            Ok(BasisComparison {
-                scene: scene.name.clone(),
-                h: m.h,
-                reference: reference.describe().into(),
-                points,
-            })
         }
     }
-    visit_system(&scene.system, Visit(scene, ns, quadratures))
+    let pb = crate::progress::bar(jobs.len(), "compare-bases");
+    let points = jobs
+        .par_iter()
+        .map(|method| {
+            let kinetic_condition = GalerkinIntegrator::from_kinds(
+                method.basis,
+                method.n,
+                method.quadrature,
+                None,
+                method.h,
+            )
+            .map(|g| g.kinetic_condition_number())
+            .unwrap_or(f64::INFINITY);
+            let measurement = measure(system, &scene.initial, method, &reference, 8);
+            pb.inc(1);
+            BasisPoint {
+                measurement,
+                kinetic_condition,
+            }
+        })
+        .collect();
+    pb.finish_and_clear();
+    Ok(BasisComparison {
+        scene: scene.name.clone(),
+        h: m.h,
+        reference: reference.describe().into(),
+        points,
+    })
 }
 
 impl BasisComparison {

@@ -10,7 +10,7 @@
 //! let mut scene = Scene::load("harmonic").unwrap();
 //! scene.method.h = 2.0;
 //! scene.method.steps = 5;
-//! let study = compare_refinement(&scene, &CompareConfig::quick()).unwrap();
+//! let study = compare_refinement(&scene.build().unwrap(), &CompareConfig::quick()).unwrap();
 //! // 2 fixed-h n-paths and 2 fixed-n h-paths for every basis.
 //! assert_eq!(study.paths.len(), 4 * galerkin_vi::basis::BasisKind::ALL.len());
 //! ```
@@ -20,8 +20,7 @@ use super::{Measurement, Reference, measure, write_file};
 use crate::error::LabError;
 use crate::error::Result;
 use crate::plot::{Chart, Series};
-use crate::run::{SystemVisitor, visit_system};
-use crate::scene::Scene;
+use crate::scene::BuiltScene;
 use galerkin_vi::basis::BasisKind;
 use galerkin_vi::systems::System;
 use serde::Serialize;
@@ -112,20 +111,14 @@ pub struct CompareStudy {
 }
 
 /// Run the comparison on a scene.
-pub fn compare_refinement(scene: &Scene, config: &CompareConfig) -> Result<CompareStudy> {
-    struct Visit<'a>(&'a Scene, &'a CompareConfig);
-    impl SystemVisitor for Visit<'_> {
-        type Output = CompareStudy;
-        fn visit<S: System + Sync>(self, system: &S) -> Result<CompareStudy> {
-            study_system(system, self.0, self.1)
-        }
-    }
-    visit_system(&scene.system, Visit(scene, config))
+pub fn compare_refinement(scene: &BuiltScene, config: &CompareConfig) -> Result<CompareStudy> {
+    let system = scene.euclidean()?;
+    study_system(system, scene, config)
 }
 
 fn study_system<S: System>(
     system: &S,
-    scene: &Scene,
+    scene: &BuiltScene,
     config: &CompareConfig,
 ) -> Result<CompareStudy> {
     let base = &scene.method;

@@ -3,7 +3,7 @@
 //! ```
 //! use galerkin_vi_lab::scene::Scene;
 //! use galerkin_vi_lab::studies::refine::{refine, Vary, RateFit};
-//! let scene = Scene::load("kepler").unwrap();
+//! let scene = Scene::load("kepler").unwrap().build().unwrap();
 //! let ns: Vec<f64> = (10..=30).step_by(4).map(|n| n as f64).collect();
 //! let study = refine(&scene, Vary::N, &ns, false).unwrap();
 //! match study.fit {
@@ -17,8 +17,7 @@ use crate::error::LabError;
 use crate::error::Result;
 use crate::fit::{AlgebraicFit, GeometricFit, fit_algebraic, fit_geometric};
 use crate::plot::{Chart, Series};
-use crate::run::{SystemVisitor, visit_system};
-use crate::scene::Scene;
+use crate::scene::BuiltScene;
 use galerkin_vi::systems::System;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -144,26 +143,25 @@ pub struct RefineStudy {
 /// Run the sweep: every value of `values` (n or h) with the scene's other settings, in
 /// parallel. For h-sweeps the horizon h·steps of the scene is kept (steps = round(T/h))
 /// unless `fixed_steps`.
-pub fn refine(scene: &Scene, vary: Vary, values: &[f64], fixed_steps: bool) -> Result<RefineStudy> {
+pub fn refine(
+    scene: &BuiltScene,
+    vary: Vary,
+    values: &[f64],
+    fixed_steps: bool,
+) -> Result<RefineStudy> {
     if values.is_empty() {
         return Err(LabError::InvalidArgument {
             name: "--range".into(),
             reason: "no values to sweep".into(),
         });
     }
-    struct Visit<'a>(&'a Scene, Vary, &'a [f64], bool);
-    impl SystemVisitor for Visit<'_> {
-        type Output = RefineStudy;
-        fn visit<S: System + Sync>(self, system: &S) -> Result<RefineStudy> {
-            refine_system(system, self.0, self.1, self.2, self.3)
-        }
-    }
-    visit_system(&scene.system, Visit(scene, vary, values, fixed_steps))
+    let system = scene.euclidean()?;
+    refine_system(system, scene, vary, values, fixed_steps)
 }
 
 fn refine_system<S: System + Sync>(
     system: &S,
-    scene: &Scene,
+    scene: &BuiltScene,
     vary: Vary,
     values: &[f64],
     fixed_steps: bool,

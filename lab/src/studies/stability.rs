@@ -19,7 +19,7 @@
 //! ```
 //! use galerkin_vi_lab::scene::Scene;
 //! use galerkin_vi_lab::studies::stability::{stability, StabilityConfig};
-//! let scene = Scene::load("harmonic").unwrap();
+//! let scene = Scene::load("harmonic").unwrap().build().unwrap();
 //! let study = stability(&scene, &StabilityConfig::quick()).unwrap();
 //! let verlet = study.baselines.iter().find(|b| b.method == "stormer-verlet").unwrap();
 //! assert!((verlet.largest_stable_h - 2.0).abs() < 0.01);
@@ -30,8 +30,7 @@ use super::write_file;
 use crate::error::LabError;
 use crate::error::Result;
 use crate::plot::HeatMap;
-use crate::run::{SystemVisitor, visit_system};
-use crate::scene::Scene;
+use crate::scene::BuiltScene;
 use galerkin_vi::baselines::CompositionScheme;
 use galerkin_vi::integrator::GalerkinIntegrator;
 use galerkin_vi::systems::System;
@@ -161,7 +160,7 @@ pub struct StabilityStudy {
 }
 
 /// Run the stability study.
-pub fn stability(scene: &Scene, config: &StabilityConfig) -> Result<StabilityStudy> {
+pub fn stability(scene: &BuiltScene, config: &StabilityConfig) -> Result<StabilityStudy> {
     if config.hs.is_empty() || config.ns.is_empty() || config.steps == 0 {
         return Err(LabError::InvalidArgument {
             name: "stability grid".into(),
@@ -184,19 +183,13 @@ pub fn stability(scene: &Scene, config: &StabilityConfig) -> Result<StabilityStu
     }
     let max_n = config.ns.iter().copied().max().unwrap_or(0);
     super::refuse_memory(config.steps as f64, max_n, scene.initial.q.len())?;
-    struct Visit<'a>(&'a Scene, &'a StabilityConfig);
-    impl SystemVisitor for Visit<'_> {
-        type Output = StabilityStudy;
-        fn visit<S: System + Sync>(self, system: &S) -> Result<StabilityStudy> {
-            study_system(system, self.0, self.1)
-        }
-    }
-    visit_system(&scene.system, Visit(scene, config))
+    let system = scene.euclidean()?;
+    study_system(system, scene, config)
 }
 
 fn study_system<S: System + Sync>(
     system: &S,
-    scene: &Scene,
+    scene: &BuiltScene,
     config: &StabilityConfig,
 ) -> Result<StabilityStudy> {
     let grid: Vec<(usize, f64)> = config
@@ -282,7 +275,13 @@ fn classify(energy: f64, growing: bool, position_ok: bool) -> Class {
     }
 }
 
-fn galerkin_cell<S: System>(system: &S, scene: &Scene, n: usize, h: f64, steps: usize) -> Cell {
+fn galerkin_cell<S: System>(
+    system: &S,
+    scene: &BuiltScene,
+    n: usize,
+    h: f64,
+    steps: usize,
+) -> Cell {
     let init = &scene.initial;
     let m = &scene.method;
     let mut cell = Cell {
@@ -325,7 +324,13 @@ fn galerkin_cell<S: System>(system: &S, scene: &Scene, n: usize, h: f64, steps: 
 }
 
 /// Whether `peer` keeps a bounded energy over `steps` steps of size h.
-pub fn bounded_at<S: System>(system: &S, scene: &Scene, peer: Peer, h: f64, steps: usize) -> bool {
+pub fn bounded_at<S: System>(
+    system: &S,
+    scene: &BuiltScene,
+    peer: Peer,
+    h: f64,
+    steps: usize,
+) -> bool {
     match run_peer(system, &scene.initial, peer, h, 1, steps) {
         Ok(run) if run.failure.is_none() => {
             let (e, growing) = energy_profile(system, &run.q, &run.p);
@@ -337,7 +342,7 @@ pub fn bounded_at<S: System>(system: &S, scene: &Scene, peer: Peer, h: f64, step
 
 fn largest_stable_h<S: System>(
     system: &S,
-    scene: &Scene,
+    scene: &BuiltScene,
     peer: Peer,
     config: &StabilityConfig,
 ) -> BaselineLimit {

@@ -20,8 +20,7 @@ use super::allocation::{Allocation, one_step_errors};
 use super::{Reference, max_norm_diff, write_file};
 use crate::error::Result;
 use crate::plot::{Chart, Series};
-use crate::run::{SystemVisitor, visit_system};
-use crate::scene::Scene;
+use crate::scene::BuiltScene;
 use galerkin_vi::adaptive::{AdaptiveOptions, DEFAULT_LADDER, ErrorControl, integrate_adaptive};
 use galerkin_vi::baselines::GaussCollocationBaseline;
 use galerkin_vi::integrator::GalerkinIntegrator;
@@ -105,24 +104,21 @@ pub struct ToleranceStudy {
 }
 
 /// Run the study on a scene (its method's basis, quadrature, h and steps).
-pub fn tolerance_study(scene: &Scene, config: &ToleranceConfig) -> Result<ToleranceStudy> {
-    struct V<'a>(&'a Scene, &'a ToleranceConfig);
-    impl SystemVisitor for V<'_> {
-        type Output = ToleranceStudy;
-        fn visit<S: System + Sync>(self, system: &S) -> Result<ToleranceStudy> {
-            let (reference, label) = step_end_reference(system, self.0)?;
-            study_system(system, self.0, self.1, &reference, label)
-        }
-    }
-    visit_system(&scene.system, V(scene, config))
+pub fn tolerance_study(scene: &BuiltScene, config: &ToleranceConfig) -> Result<ToleranceStudy> {
+    let system = scene.euclidean()?;
+    let (reference, label) = step_end_reference(system, scene)?;
+    study_system(system, scene, config, &reference, label)
 }
 
 /// Reference positions at the step ends t0 + k h, k = 0…steps.
-fn step_end_reference<S: System>(system: &S, scene: &Scene) -> Result<(Vec<Vec<f64>>, String)> {
+fn step_end_reference<S: System>(
+    system: &S,
+    scene: &BuiltScene,
+) -> Result<(Vec<Vec<f64>>, String)> {
     let (m, init) = (&scene.method, &scene.initial);
-    if let Some((nbody, _)) = scene.system.nbody()? {
-        let k = gauss_substeps(&nbody, &init.q, m.h);
-        let mut gauss = GaussCollocationBaseline::new(&nbody, 6, m.h / k as f64)?;
+    if let Some(nbody) = scene.euclidean()?.as_nbody() {
+        let k = gauss_substeps(nbody, &init.q, m.h);
+        let mut gauss = GaussCollocationBaseline::new(nbody, 6, m.h / k as f64)?;
         let (rq, _) = gauss.integrate_compensated(&init.q, &init.p, m.steps * k, k)?;
         return Ok((rq, format!("Gauss collocation s = 6, h/{k}")));
     }
@@ -175,7 +171,7 @@ fn max_error(traj: &Trajectory, reference: &[Vec<f64>]) -> f64 {
 
 fn study_system<S: System>(
     system: &S,
-    scene: &Scene,
+    scene: &BuiltScene,
     config: &ToleranceConfig,
     reference: &[Vec<f64>],
     label: String,

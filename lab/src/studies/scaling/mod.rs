@@ -219,11 +219,13 @@ pub fn solver_scaling(config: &ScalingConfig, progress: bool) -> Result<ScalingS
     config.validate()?;
     let kepler_scene = Scene::load("kepler")?;
     let kepler = Kepler::new(1.0)?;
-    let outer_scene = Scene::load("outer-solar-system")?;
-    let (outer, outer_init) = outer_scene
-        .system
-        .nbody()?
+    let outer_scene = Scene::load("outer-solar-system")?.build()?;
+    let outer = outer_scene
+        .euclidean()?
+        .as_nbody()
+        .cloned()
         .ok_or_else(|| GviError::Unsupported("outer-solar-system is not an N-body scene".into()))?;
+    let outer_init = outer_scene.initial.clone();
     let mut cases = Vec::new();
     for &n in &config.ns {
         cases.push(Case {

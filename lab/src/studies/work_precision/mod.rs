@@ -26,7 +26,7 @@
 //! let mut scene = Scene::load("harmonic").unwrap();
 //! scene.method.h = 1.0;
 //! scene.method.steps = 10;
-//! let study = work_precision(&scene, &WorkPrecisionConfig::quick()).unwrap();
+//! let study = work_precision(&scene.build().unwrap(), &WorkPrecisionConfig::quick()).unwrap();
 //! assert!(study.points.iter().any(|p| p.method.starts_with("galerkin")));
 //! assert!(!study.pareto_front().is_empty());
 //! ```
@@ -35,8 +35,7 @@ use super::peers::{Peer, run_peer};
 use super::{Reference, max_norm_diff, write_file};
 use crate::error::LabError;
 use crate::error::Result;
-use crate::run::{SystemVisitor, visit_system};
-use crate::scene::Scene;
+use crate::scene::BuiltScene;
 use galerkin_vi::baselines::CompositionScheme;
 use galerkin_vi::basis::BasisKind;
 use galerkin_vi::systems::System;
@@ -185,15 +184,12 @@ pub struct WorkPrecisionStudy {
 pub const TARGETS: [f64; 3] = [1e-6, 1e-9, 1e-12];
 
 /// Run the study on a scene.
-pub fn work_precision(scene: &Scene, config: &WorkPrecisionConfig) -> Result<WorkPrecisionStudy> {
-    struct Visit<'a>(&'a Scene, &'a WorkPrecisionConfig);
-    impl SystemVisitor for Visit<'_> {
-        type Output = WorkPrecisionStudy;
-        fn visit<S: System + Sync>(self, system: &S) -> Result<WorkPrecisionStudy> {
-            study_system(system, self.0, self.1)
-        }
-    }
-    visit_system(&scene.system, Visit(scene, config))
+pub fn work_precision(
+    scene: &BuiltScene,
+    config: &WorkPrecisionConfig,
+) -> Result<WorkPrecisionStudy> {
+    let system = scene.euclidean()?;
+    study_system(system, scene, config)
 }
 
 /// The study's largest number of samples (the reference positions are held in memory).
@@ -203,7 +199,7 @@ pub const MAX_SAMPLES: f64 = 1e8;
 pub const MAX_TOTAL_STEPS: f64 = 1e9;
 
 /// Validate the horizon and return (Δ, samples), refusing more than [`MAX_SAMPLES`] samples.
-fn sample_grid(scene: &Scene, config: &WorkPrecisionConfig) -> Result<(f64, usize)> {
+fn sample_grid(scene: &BuiltScene, config: &WorkPrecisionConfig) -> Result<(f64, usize)> {
     let dt = scene.method.h;
     let horizon = config
         .horizon
@@ -228,7 +224,7 @@ fn sample_grid(scene: &Scene, config: &WorkPrecisionConfig) -> Result<(f64, usiz
 /// The reference positions at t_k = t₀ + kΔ, k = 0 … samples.
 fn reference_positions<S: System>(
     system: &S,
-    scene: &Scene,
+    scene: &BuiltScene,
     dt: f64,
     samples: usize,
 ) -> Result<(Reference, Vec<Vec<f64>>)> {
@@ -276,26 +272,20 @@ impl ReferenceSamples {
 
 /// The study's reference positions at its sample times (the same grid, horizon checks and
 /// reference as [`work_precision`]), for external peers to measure against.
-pub fn reference_csv(scene: &Scene, config: &WorkPrecisionConfig) -> Result<ReferenceSamples> {
-    struct Visit<'a>(&'a Scene, &'a WorkPrecisionConfig);
-    impl SystemVisitor for Visit<'_> {
-        type Output = ReferenceSamples;
-        fn visit<S: System + Sync>(self, system: &S) -> Result<ReferenceSamples> {
-            let (dt, samples) = sample_grid(self.0, self.1)?;
-            let cost = Reference::estimated_steps(system, &self.0.initial, dt, samples as f64 * dt);
-            refuse_steps(cost)?;
-            let (reference, q) = reference_positions(system, self.0, dt, samples)?;
-            Ok(ReferenceSamples {
-                scene: self.0.name.clone(),
-                reference: reference.describe().into(),
-                t: (0..=samples)
-                    .map(|k| self.0.initial.t0 + k as f64 * dt)
-                    .collect(),
-                q,
-            })
-        }
-    }
-    visit_system(&scene.system, Visit(scene, config))
+pub fn reference_csv(scene: &BuiltScene, config: &WorkPrecisionConfig) -> Result<ReferenceSamples> {
+    let system = scene.euclidean()?;
+    let (dt, samples) = sample_grid(scene, config)?;
+    let cost = Reference::estimated_steps(system, &scene.initial, dt, samples as f64 * dt);
+    refuse_steps(cost)?;
+    let (reference, q) = reference_positions(system, scene, dt, samples)?;
+    Ok(ReferenceSamples {
+        scene: scene.name.clone(),
+        reference: reference.describe().into(),
+        t: (0..=samples)
+            .map(|k| scene.initial.t0 + k as f64 * dt)
+            .collect(),
+        q,
+    })
 }
 
 fn refuse_steps(estimate: f64) -> Result<()> {
@@ -314,7 +304,7 @@ fn refuse_steps(estimate: f64) -> Result<()> {
 
 fn study_system<S: System>(
     system: &S,
-    scene: &Scene,
+    scene: &BuiltScene,
     config: &WorkPrecisionConfig,
 ) -> Result<WorkPrecisionStudy> {
     let (dt, samples) = sample_grid(scene, config)?;
@@ -408,7 +398,7 @@ fn study_system<S: System>(
 #[allow(clippy::too_many_arguments)]
 fn time_point<S: System>(
     system: &S,
-    scene: &Scene,
+    scene: &BuiltScene,
     peer: Peer,
     dt: f64,
     m: usize,

@@ -8,60 +8,35 @@
 //! momentum μ₀; `[method] retraction` is `exp` (default) or `cayley`.
 
 use crate::error::{GviError, Result};
-use crate::run::{RunOptions, RunResult, RunSummary};
-use crate::scene::{Scene, SystemSpec};
-use galerkin_vi::lie::body::{FreeRigidBody, HeavyTop, RigidBody};
+use crate::run::{RunResult, RunSummary};
+use crate::scene::BuiltScene;
+use galerkin_vi::lie::body::RigidBody;
 use galerkin_vi::lie::elliptic::FreeBodyExact;
 use galerkin_vi::lie::integrator::{LieGalerkin, LieTrajectory};
 use galerkin_vi::lie::so3::{self, Mat3, Retraction};
 use std::time::Instant;
 
-/// The rigid body a scene names, if it names one.
-pub enum AnyRigidBody {
-    /// A free body.
-    Free(FreeRigidBody),
-    /// A heavy top.
-    Heavy(HeavyTop),
-}
+pub use crate::scene::AnyRigidBody;
 
-impl AnyRigidBody {
-    /// The body of a `rigid-body` or `heavy-top` system spec; `Ok(None)` for other systems.
-    pub fn from_spec(spec: &SystemSpec) -> Result<Option<Self>> {
-        Ok(match spec {
-            SystemSpec::RigidBody { inertia } => Some(Self::Free(FreeRigidBody::new(*inertia)?)),
-            SystemSpec::HeavyTop {
-                inertia,
-                mass,
-                gravity,
-                com,
-            } => Some(Self::Heavy(HeavyTop::new(*inertia, *mass, *gravity, *com)?)),
-            _ => None,
-        })
-    }
-}
-
-/// R₀ and μ₀ from a scene's `[initial]` (rotation vector, body momentum).
-pub fn initial_state(scene: &Scene) -> Result<(Mat3<f64>, [f64; 3])> {
+/// R₀ and μ₀ from a built scene's `[initial]` (rotation vector, body momentum; its lengths
+/// and finiteness were checked by [`crate::scene::Scene::build`]).
+pub fn initial_state(scene: &BuiltScene) -> Result<(Mat3<f64>, [f64; 3])> {
     let init = &scene.initial;
     crate::error::ensure_len("initial q (rotation vector)", 3, init.q.len())?;
     crate::error::ensure_len("initial p (body momentum)", 3, init.p.len())?;
-    crate::error::ensure_finite("initial q", &init.q)?;
-    crate::error::ensure_finite("initial p", &init.p)?;
     let r0 = Retraction::Exp.map(&[init.q[0], init.q[1], init.q[2]]);
     Ok((r0, [init.p[0], init.p[1], init.p[2]]))
 }
 
-/// Run a rigid-body scene; `Ok(None)` when the scene names another kind of system.
-pub fn run_rigid_body_scene(scene: &Scene, options: RunOptions) -> Result<Option<RunResult>> {
-    let _ = options;
-    match AnyRigidBody::from_spec(&scene.system)? {
-        None => Ok(None),
-        Some(AnyRigidBody::Free(b)) => run_body(&b, scene).map(Some),
-        Some(AnyRigidBody::Heavy(b)) => run_body(&b, scene).map(Some),
+/// Run a built rigid-body scene.
+pub fn run_rigid_body(body: &AnyRigidBody, scene: &BuiltScene) -> Result<RunResult> {
+    match body {
+        AnyRigidBody::Free(b) => run_body(b, scene),
+        AnyRigidBody::Heavy(b) => run_body(b, scene),
     }
 }
 
-fn run_body<S: RigidBody>(body: &S, scene: &Scene) -> Result<RunResult> {
+fn run_body<S: RigidBody>(body: &S, scene: &BuiltScene) -> Result<RunResult> {
     let m = &scene.method;
     if m.tol.is_some() || m.auto_h {
         return Err(GviError::Unsupported(
@@ -99,7 +74,7 @@ fn run_body<S: RigidBody>(body: &S, scene: &Scene) -> Result<RunResult> {
 
 fn tabulate<S: RigidBody>(
     body: &S,
-    scene: &Scene,
+    scene: &BuiltScene,
     method: &str,
     traj: &LieTrajectory,
     exact: Option<&FreeBodyExact>,
@@ -218,7 +193,7 @@ fn tabulate<S: RigidBody>(
         step_choice: None,
     };
     Ok(RunResult {
-        scene: scene.clone(),
+        scene: scene.scene(),
         columns,
         rows,
         summary,

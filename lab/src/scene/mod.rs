@@ -28,48 +28,60 @@
 
 use crate::error::LabError;
 use crate::error::Result;
-pub use galerkin_vi::method::MethodSpec;
+pub use crate::nbody_scene::Body;
+pub use galerkin_vi::method::{InitialState, MethodSpec};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
+mod build;
+mod overrides;
+pub use build::{AnyRigidBody, BuiltScene, BuiltSystem};
+pub use overrides::Overrides;
+
 /// The built-in scenes: (name, TOML text).
 pub const BUILTIN_SCENES: [(&str, &str); 15] = [
-    ("harmonic", include_str!("../../scenes/harmonic.toml")),
-    ("kepler", include_str!("../../scenes/kepler.toml")),
-    ("pendulum", include_str!("../../scenes/pendulum.toml")),
+    ("harmonic", include_str!("../../../scenes/harmonic.toml")),
+    ("kepler", include_str!("../../../scenes/kepler.toml")),
+    ("pendulum", include_str!("../../../scenes/pendulum.toml")),
     (
         "solar-system",
-        include_str!("../../scenes/solar-system.toml"),
+        include_str!("../../../scenes/solar-system.toml"),
     ),
     (
         "outer-solar-system",
-        include_str!("../../scenes/outer-solar-system.toml"),
+        include_str!("../../../scenes/outer-solar-system.toml"),
     ),
-    ("two-body", include_str!("../../scenes/two-body.toml")),
+    ("two-body", include_str!("../../../scenes/two-body.toml")),
     (
         "figure-eight",
-        include_str!("../../scenes/figure-eight.toml"),
+        include_str!("../../../scenes/figure-eight.toml"),
     ),
     (
         "planetesimal-ring",
-        include_str!("../../scenes/planetesimal-ring.toml"),
+        include_str!("../../../scenes/planetesimal-ring.toml"),
     ),
     (
         "lagrange-triangle",
-        include_str!("../../scenes/lagrange-triangle.toml"),
+        include_str!("../../../scenes/lagrange-triangle.toml"),
     ),
-    ("rigid-body", include_str!("../../scenes/rigid-body.toml")),
-    ("heavy-top", include_str!("../../scenes/heavy-top.toml")),
-    ("pendulum-3d", include_str!("../../scenes/pendulum-3d.toml")),
+    (
+        "rigid-body",
+        include_str!("../../../scenes/rigid-body.toml"),
+    ),
+    ("heavy-top", include_str!("../../../scenes/heavy-top.toml")),
+    (
+        "pendulum-3d",
+        include_str!("../../../scenes/pendulum-3d.toml"),
+    ),
     (
         "henon-heiles",
-        include_str!("../../scenes/henon-heiles.toml"),
+        include_str!("../../../scenes/henon-heiles.toml"),
     ),
     (
         "double-pendulum",
-        include_str!("../../scenes/double-pendulum.toml"),
+        include_str!("../../../scenes/double-pendulum.toml"),
     ),
-    ("magnetic", include_str!("../../scenes/magnetic.toml")),
+    ("magnetic", include_str!("../../../scenes/magnetic.toml")),
 ];
 
 /// A complete experiment: system, initial state and method.
@@ -88,13 +100,14 @@ pub struct Scene {
     /// The mechanical system.
     pub system: SystemSpec,
     /// Initial state. May be omitted for N-body scenes, whose state comes from the bodies
-    /// (filled in by [`Scene::from_toml_str`]); an explicit `[initial]` with `q` and `p`
-    /// overrides the bodies' state.
+    /// (filled in by [`Scene::build`]); an explicit `q` or `p` in `[initial]` overrides the
+    /// bodies' positions or momenta.
     #[serde(default)]
     pub initial: InitialState,
     /// Integration method.
     pub method: MethodSpec,
-    /// Periodic-orbit data and initial guess for `gvi periodic` (see [`crate::periodic`] (the analysis) and [`galerkin_vi::periodic`] (the solver)).
+    /// Periodic-orbit data and initial guess for `gvi periodic` (see [`crate::periodic`] for
+    /// the analysis and [`galerkin_vi::periodic`] for the solver).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub periodic: Option<galerkin_vi::periodic::PeriodicSpec>,
 }
@@ -192,42 +205,6 @@ fn one() -> f64 {
     1.0
 }
 
-/// One body of an N-body scene: a name, exactly one of `mass` (with the system's G) or `gm`
-/// (gravitational parameter; then G = 1 and GM is used as the mass, see
-/// [`NBody::from_gm`](galerkin_vi::systems::NBody::from_gm)), position `q` and velocity `v`
-/// (not momentum: p = m v is formed when the scene is loaded).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Body {
-    /// Name, unique within the scene (e.g. `"Mercury"`).
-    pub name: String,
-    /// Mass (with the system's G).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub mass: Option<f64>,
-    /// Gravitational parameter GM (G = 1).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub gm: Option<f64>,
-    /// Position (length `dim`).
-    pub q: Vec<f64>,
-    /// Velocity (length `dim`).
-    pub v: Vec<f64>,
-}
-
-/// Initial time and state.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct InitialState {
-    /// Initial time.
-    #[serde(default)]
-    pub t0: f64,
-    /// Initial position (required unless the system is an N-body system).
-    #[serde(default)]
-    pub q: Vec<f64>,
-    /// Initial momentum (required unless the system is an N-body system).
-    #[serde(default)]
-    pub p: Vec<f64>,
-}
-
 /// The `[system]` table is an internally tagged enum, which serde parses from a buffer without
 /// positions, so toml points an unknown key inside it (a typo in a `[[system.bodies]]` entry)
 /// at the `[system]` header. Find the key's own line instead.
@@ -267,41 +244,14 @@ impl Scene {
         if scene.name.is_empty() {
             scene.name = origin.to_string();
         }
-        let missing = scene.initial.q.is_empty() && scene.initial.p.is_empty();
-        match scene.system.nbody() {
-            Ok(Some((_, init))) if missing => {
-                scene.initial.q = init.q;
-                scene.initial.p = init.p;
-            }
-            Ok(Some(_)) => {}
-            Ok(None) if scene.initial.q.is_empty() || scene.initial.p.is_empty() => {
-                return Err(LabError::Scene {
-                    source_name: origin.to_string(),
-                    reason: "missing [initial] q and p".into(),
-                });
-            }
-            Ok(None) => {}
-            Err(LabError::Scene { reason, .. }) => {
-                return Err(LabError::Scene {
-                    source_name: origin.to_string(),
-                    reason,
-                });
-            }
-            Err(e) => return Err(e),
+        let nbody = matches!(scene.system, SystemSpec::NBody { .. });
+        if !nbody && (scene.initial.q.is_empty() || scene.initial.p.is_empty()) {
+            return Err(LabError::Scene {
+                source_name: origin.to_string(),
+                reason: "missing [initial] q and p".into(),
+            });
         }
-        scene.validate()?;
         Ok(scene)
-    }
-
-    /// Checks that need the system and the initial state together: for an expression
-    /// Lagrangian, that it compiles, that q and p have one entry per coordinate and that the
-    /// Lagrangian is regular at the initial state. Called when a scene is loaded and again
-    /// after command-line overrides of the state.
-    pub fn validate(&self) -> Result<()> {
-        if let SystemSpec::Lagrangian(spec) = &self.system {
-            spec.check(&self.initial.q, &self.initial.p)?;
-        }
-        Ok(())
     }
 
     /// A built-in scene by name, or a TOML file by path.
@@ -343,25 +293,6 @@ impl Scene {
     }
 }
 
-impl SystemSpec {
-    /// For an N-body spec: the system (with body names) and the initial state built from the
-    /// bodies (aggregated, then moved to the barycentre if asked; p = m v). `Ok(None)` for
-    /// other systems; malformed bodies are [`LabError::Scene`].
-    pub fn nbody(&self) -> Result<Option<(galerkin_vi::systems::NBody, InitialState)>> {
-        match self {
-            SystemSpec::NBody {
-                dim,
-                g,
-                aggregate,
-                barycentric,
-                bodies,
-            } => crate::nbody_scene::build(*dim, *g, aggregate.as_deref(), *barycentric, bodies)
-                .map(Some),
-            _ => Ok(None),
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -372,6 +303,8 @@ mod tests {
             let s = Scene::load(name).unwrap();
             assert_eq!(s.name, name);
             assert!(!s.source.is_empty());
+            let built = s.build().unwrap();
+            assert_eq!(built.initial.q.len(), built.initial.p.len());
         }
     }
 
@@ -399,12 +332,12 @@ mod tests {
 
     #[test]
     fn nbody_scenes_derive_their_initial_state() {
-        let s = Scene::load("solar-system").unwrap();
+        let s = Scene::load("solar-system").unwrap().build().unwrap();
         assert_eq!((s.initial.q.len(), s.initial.p.len()), (30, 30));
         // p = GM v (barycentric correction of the data is below 1e-8 of the Sun's velocity).
         let mercury_vx = 2.137_177_411_241_642e-2;
         assert!((s.initial.p[3] / 0.4912547451450812e-10 - mercury_vx).abs() < 1e-7);
-        let two = Scene::load("two-body").unwrap();
+        let two = Scene::load("two-body").unwrap().build().unwrap();
         assert_eq!(two.initial.q, [-0.2, 0.0, 0.2, 0.0]);
         assert_eq!(two.initial.p, [0.0, -0.5, 0.0, 0.5]);
     }
@@ -438,7 +371,7 @@ mod tests {
             format!("[system]\ntype = \"kepler\"\n{method}"),
         ];
         for text in bad {
-            match Scene::from_toml_str("t", &text) {
+            match Scene::from_toml_str("t", &text).and_then(|s| s.build()) {
                 Err(LabError::Scene { .. }) => {}
                 other => panic!("expected a scene error for {text:?}, got {other:?}"),
             }
