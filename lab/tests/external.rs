@@ -70,7 +70,7 @@ fn sample_rows_merge_into_table_front_and_chart() {
     assert!(study.fastest.iter().any(|f| f.method == "rebound-whfast"
         && f.target == 1e-9
         && f.best.as_ref().is_some_and(|b| b.0 == "dt = 2")));
-    let csv = study.csv();
+    let csv = study.csv().unwrap();
     assert!(
         csv.lines()
             .next()
@@ -306,7 +306,7 @@ fn reference_file_samples_the_study_grid() {
     assert_eq!(r.t.len(), 11);
     assert_eq!(r.t[10], 20.0);
     assert!((r.q[0][0] - 0.4).abs() < 1e-15 && r.q[0][1].abs() < 1e-15);
-    let csv = r.csv();
+    let csv = r.csv().unwrap();
     let mut lines = csv.lines();
     assert_eq!(lines.next(), Some("k,t,q0,q1"));
     let last: Vec<f64> = lines

@@ -54,7 +54,7 @@ pub fn run_periodic(args: PeriodicArgs) -> Result<(), LabError> {
     let report = analyse_scene(&scene, &request)?;
     let text = match args.format {
         Format::Json => report.to_json()?,
-        Format::Csv => report.to_csv(),
+        Format::Csv => report.to_csv()?,
     };
     write_output(args.output.as_deref(), &text)?;
     let summary = report.summary();

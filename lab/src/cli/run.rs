@@ -303,7 +303,7 @@ fn run_in_memory(
     };
     let result = run_scene(scene, options)?;
     let text = match args.format {
-        Format::Csv => result.to_csv(),
+        Format::Csv => result.to_csv()?,
         Format::Json => result.to_json()?,
     };
     write_output(args.output.as_deref(), &text)?;

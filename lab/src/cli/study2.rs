@@ -122,7 +122,7 @@ pub fn run_work_precision(args: WorkPrecisionArgs) -> Result<(), LabError> {
     }
     if let Some(path) = &args.write_reference {
         let reference = reference_csv(&scene, &config)?;
-        write_file(path, &reference.csv())?;
+        write_file(path, &reference.csv()?)?;
         eprintln!(
             "{}: {} samples of the {} at t = {} … {}\n  wrote {}",
             reference.scene,

@@ -369,7 +369,7 @@ impl RefineStudy {
     /// Write `refine.csv`, `refine.json` and `refine.svg` into `dir`; returns the paths.
     pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>> {
         let csv = dir.join("refine.csv");
-        write_file(&csv, &measurements_csv(&self.points))?;
+        write_file(&csv, &measurements_csv(&self.points)?)?;
         let json = dir.join("refine.json");
         let text =
             serde_json::to_string_pretty(self).map_err(|e| LabError::Serialize(e.to_string()))?;
