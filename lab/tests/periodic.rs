@@ -274,14 +274,14 @@ fn negative_controls_and_bad_input_are_typed_errors() {
         }
         other => panic!("expected PeriodicUnderResolved, got {other:?}"),
     }
-    // Fewer modes than the guess uses.
+    // Fewer modes than the guess uses (the library's curve refuses it).
     let two = PeriodicRequest {
         modes: vec![2],
         ..few.clone()
     };
     assert!(matches!(
         periodic::analyse_scene(&scene, &two),
-        Err(LabError::InvalidArgument { .. })
+        Err(LabError::Core(GviError::InvalidInput { .. }))
     ));
     // K < 1.
     let zero = PeriodicRequest {

@@ -8,6 +8,7 @@ mod scaling;
 mod study;
 mod study2;
 mod tolerance;
+pub mod values;
 
 use crate::error::LabError;
 use clap::{Parser, Subcommand};
@@ -98,17 +99,18 @@ pub fn refuse_ignored(command: &str, flags: &[(&str, bool)], why: &str) -> Resul
     }
 }
 
-/// Parse a comma-separated list of numbers, e.g. `--q0 0.4,0`.
-pub fn parse_vector(name: &str, text: &str) -> Result<Vec<f64>, LabError> {
-    text.split(',')
-        .map(|s| {
-            let s = s.trim();
-            s.parse::<f64>().map_err(|_| LabError::InvalidArgument {
-                name: name.to_string(),
-                reason: format!("'{s}' is not a number (expected a comma-separated list)"),
-            })
-        })
-        .collect()
+/// Name the flag behind a study setting in the study's error: the studies name their
+/// settings (`sweep values`, `horizon`), the command line adds the flag (`--range`).
+pub fn with_flag(e: LabError, setting: &str, flag: &str) -> LabError {
+    match e {
+        LabError::InvalidArgument { name, reason } if name == setting => {
+            LabError::InvalidArgument {
+                name: format!("{setting} ({flag})"),
+                reason,
+            }
+        }
+        other => other,
+    }
 }
 
 pub use crate::output::write_output;

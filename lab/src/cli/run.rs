@@ -1,6 +1,7 @@
 //! `gvi run SCENE`.
 
-use super::{parse_vector, write_output};
+use super::values;
+use super::write_output;
 use crate::error::LabError;
 use crate::output::{AtomicFile, check_output_path, ensure_distinct};
 use crate::run::stream::{bytes_per_step, stream_scene};
@@ -52,11 +53,11 @@ pub struct SceneArgs {
     #[arg(long)]
     pub retraction: Option<String>,
     /// Initial position, comma-separated (e.g. 0.4,0).
-    #[arg(long, allow_hyphen_values = true)]
-    pub q0: Option<String>,
+    #[arg(long, allow_hyphen_values = true, value_delimiter = ',', value_parser = values::number)]
+    pub q0: Option<Vec<f64>>,
     /// Initial momentum, comma-separated.
-    #[arg(long, allow_hyphen_values = true)]
-    pub p0: Option<String>,
+    #[arg(long, allow_hyphen_values = true, value_delimiter = ',', value_parser = values::number)]
+    pub p0: Option<Vec<f64>>,
 }
 
 /// `gvi run`: the scene and method, and what only a run uses (tolerance, outputs).
@@ -64,17 +65,18 @@ pub struct SceneArgs {
 pub struct RunArgs {
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// Tolerance on the max position error: choose n per step (adds the CSV columns `n` and
-    /// `indicator`; with --plot also writes STEM-n.svg).
+    /// Tolerance on the max position error: choose n per step (adds the CSV columns `n`,
+    /// `indicator` and `estimate`; with --plot also writes STEM-n.svg).
     #[arg(long, allow_hyphen_values = true)]
     pub tol: Option<f64>,
     /// Error control of a --tol run: embedded (default; every step also solved at the next n,
-    /// CSV column `estimate`), indicator, or calibrated (experimental).
+    /// whose difference fills the CSV column `estimate`, empty otherwise), indicator, or
+    /// calibrated (experimental).
     #[arg(long, requires = "tol")]
     pub control: Option<String>,
-    /// Values of n a --tol run may use, comma-separated (default 4,6,…,64).
-    #[arg(long, requires = "tol")]
-    pub ladder: Option<String>,
+    /// Values of n a --tol run may use, comma-separated, increasing (default 4,6,…,64).
+    #[arg(long, requires = "tol", value_delimiter = ',', value_parser = values::basis_count)]
+    pub ladder: Option<Vec<usize>>,
     /// With --tol: choose one h for the run (same horizon h·steps) from the tolerance and the
     /// system's time scale by short pilot runs; the choice is reported.
     #[arg(long, requires = "tol")]
@@ -148,10 +150,10 @@ pub fn apply_overrides(scene: &mut Scene, a: &SceneArgs) -> Result<(), LabError>
         scene.method.retraction = Some(r.parse()?);
     }
     if let Some(q) = &a.q0 {
-        scene.initial.q = parse_vector("--q0", q)?;
+        scene.initial.q = q.clone();
     }
     if let Some(p) = &a.p0 {
-        scene.initial.p = parse_vector("--p0", p)?;
+        scene.initial.p = p.clone();
     }
     if a.q0.is_some() || a.p0.is_some() {
         scene.validate()?;
@@ -171,18 +173,7 @@ fn apply_tolerance(scene: &mut Scene, a: &RunArgs) -> Result<(), LabError> {
         scene.method.auto_h = true;
     }
     if let Some(l) = &a.ladder {
-        let values = parse_vector("--ladder", l)?;
-        let mut ladder = Vec::with_capacity(values.len());
-        for v in values {
-            if !(v.is_finite() && v >= 2.0 && v.fract() == 0.0) {
-                return Err(LabError::InvalidArgument {
-                    name: "--ladder".into(),
-                    reason: format!("{v} is not a whole number of basis functions ≥ 2"),
-                });
-            }
-            ladder.push(v as usize);
-        }
-        scene.method.ladder = Some(ladder);
+        scene.method.ladder = Some(l.clone());
     }
     Ok(())
 }

@@ -51,7 +51,7 @@ pub fn compare_bases(
 ) -> Result<BasisComparison> {
     if ns.is_empty() {
         return Err(LabError::InvalidArgument {
-            name: "--range".into(),
+            name: "values of n".into(),
             reason: "no values of n".into(),
         });
     }

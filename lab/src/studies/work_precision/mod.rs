@@ -210,7 +210,7 @@ fn sample_grid(scene: &Scene, config: &WorkPrecisionConfig) -> Result<(f64, usiz
         .unwrap_or(scene.method.h * scene.method.steps as f64);
     if !(horizon.is_finite() && horizon >= dt) {
         return Err(LabError::InvalidArgument {
-            name: "--horizon".into(),
+            name: "horizon".into(),
             reason: format!("{horizon}: must be finite and at least the scene's h = {dt}"),
         });
     }
