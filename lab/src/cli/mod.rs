@@ -87,11 +87,27 @@ pub fn main_with(cli: Cli) -> Result<(), LabError> {
     }
 }
 
-/// Refuse the flags a command would ignore because it sweeps or sets those values itself;
-/// `flags` pairs each flag with whether it was given.
-pub fn refuse_ignored(command: &str, flags: &[(&str, bool)], why: &str) -> Result<(), LabError> {
-    match flags.iter().find(|(_, given)| *given) {
-        Some((name, _)) => Err(LabError::InvalidArgument {
+/// Refuse the method flags (`--n`, `--h`, `--basis`, `--quadrature`, `--quad-points`,
+/// `--economical`, `--solver`) among `flags` that a command would ignore because it sweeps or
+/// sets those values itself.
+pub fn refuse_ignored(
+    command: &str,
+    run: &run::SceneArgs,
+    flags: &[&str],
+    why: &str,
+) -> Result<(), LabError> {
+    let given = |flag: &str| match flag {
+        "--n" => run.n.is_some(),
+        "--h" => run.h.is_some(),
+        "--basis" => run.basis.is_some(),
+        "--quadrature" => run.quadrature.is_some(),
+        "--quad-points" => run.quad_points.is_some(),
+        "--economical" => run.economical,
+        "--solver" => run.solver.is_some(),
+        _ => false,
+    };
+    match flags.iter().find(|f| given(f)) {
+        Some(name) => Err(LabError::InvalidArgument {
             name: (*name).to_string(),
             reason: format!("`gvi {command}` does not use {name}: {why}"),
         }),

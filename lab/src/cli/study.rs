@@ -37,16 +37,12 @@ pub fn run_refine(args: RefineArgs) -> Result<(), LabError> {
     let dir = args.out.unwrap_or_else(|| PathBuf::from("out/refine"));
     let r = &args.run;
     match args.vary {
-        VaryArg::N => super::refuse_ignored(
-            "refine --vary n",
-            &[("--n", r.n.is_some())],
-            "n is swept (--range)",
-        )?,
-        VaryArg::H => super::refuse_ignored(
-            "refine --vary h",
-            &[("--h", r.h.is_some())],
-            "h is swept (--range)",
-        )?,
+        VaryArg::N => {
+            super::refuse_ignored("refine --vary n", r, &["--n"], "n is swept (--range)")?
+        }
+        VaryArg::H => {
+            super::refuse_ignored("refine --vary h", r, &["--h"], "h is swept (--range)")?
+        }
     }
     crate::output::check_output_dir(&dir)?;
     let scene = load_scene(&args.run)?;
@@ -122,12 +118,13 @@ pub fn run_compare_bases(args: CompareBasesArgs) -> Result<(), LabError> {
     let r = &args.run;
     super::refuse_ignored(
         "compare-bases",
+        r,
         &[
-            ("--n", r.n.is_some()),
-            ("--basis", r.basis.is_some()),
-            ("--quadrature", r.quadrature.is_some()),
-            ("--quad-points", r.quad_points.is_some()),
-            ("--economical", r.economical),
+            "--n",
+            "--basis",
+            "--quadrature",
+            "--quad-points",
+            "--economical",
         ],
         "it sweeps every basis and quadrature over n (set n with --range and the quadratures \
          with --quadratures)",

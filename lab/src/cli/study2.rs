@@ -66,13 +66,14 @@ pub fn run_work_precision(args: WorkPrecisionArgs) -> Result<(), LabError> {
     let r = &args.run;
     super::refuse_ignored(
         "work-precision",
+        r,
         &[
-            ("--n", r.n.is_some()),
-            ("--basis", r.basis.is_some()),
-            ("--quadrature", r.quadrature.is_some()),
-            ("--quad-points", r.quad_points.is_some()),
-            ("--economical", r.economical),
-            ("--solver", r.solver.is_some()),
+            "--n",
+            "--basis",
+            "--quadrature",
+            "--quad-points",
+            "--economical",
+            "--solver",
         ],
         "it sweeps the bases and n (--bases, --ns) with the default Gauss–Legendre rule and \
          the auto stage solver",
@@ -259,12 +260,8 @@ pub fn run_compare_refinement(args: CompareRefinementArgs) -> Result<(), LabErro
     let r = &args.run;
     super::refuse_ignored(
         "compare-refinement",
-        &[
-            ("--n", r.n.is_some()),
-            ("--basis", r.basis.is_some()),
-            ("--quad-points", r.quad_points.is_some()),
-            ("--economical", r.economical),
-        ],
+        r,
+        &["--n", "--basis", "--quad-points", "--economical"],
         "it sweeps the bases and n with the quadrature's default number of points",
     )?;
     crate::output::check_output_dir(&dir)?;
