@@ -16,7 +16,7 @@
 //! let kepler = Kepler::new(1.0)?;
 //! let (q0, p0) = Kepler::paper_initial_state();
 //! let traj = gvi.integrate(&kepler, 0.0, &q0, &p0, method.steps)?;
-//! assert_eq!(traj.len(), 11);
+//! assert_eq!(traj.steps(), 10); // states q_0 … q_10
 //! # Ok::<(), galerkin_vi::GviError>(())
 //! ```
 

@@ -191,7 +191,8 @@ const MAX_STEPS_PER_INTERVAL: usize = 10_000_000;
 /// interval h.
 ///
 /// ```
-/// use galerkin_vi::baselines::{Dop853Baseline, OneStepMethod};
+/// use galerkin_vi::baselines::OneStepMethod;
+/// use galerkin_vi_lab::dop853::Dop853Baseline;
 /// use galerkin_vi::systems::HarmonicOscillator;
 ///
 /// let ho = HarmonicOscillator::unit();

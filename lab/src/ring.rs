@@ -216,7 +216,7 @@ impl RingConfig {
 /// use galerkin_vi_lab::ring::{RingConfig, planetesimal_ring};
 /// let (system, init) = planetesimal_ring(&RingConfig::with_bodies(8))?;
 /// assert_eq!((system.bodies(), init.q.len()), (8, 24));
-/// # Ok::<(), galerkin_vi::GviError>(())
+/// # Ok::<(), galerkin_vi_lab::error::LabError>(())
 /// ```
 pub fn planetesimal_ring(config: &RingConfig) -> Result<(NBody, InitialState)> {
     let bodies = config.bodies()?;
