@@ -6,6 +6,7 @@ use crate::error::LabError;
 use crate::studies::refine::{Vary, refine};
 use crate::studies::reproduce::{Size, reproduce};
 use clap::{Args, ValueEnum};
+use galerkin_vi::quadrature::QuadratureKind;
 use std::path::PathBuf;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -102,8 +103,8 @@ pub struct CompareBasesArgs {
     #[arg(long, default_value = "4:48:4")]
     pub range: Range,
     /// Quadratures to pair with every basis, comma-separated (default: all).
-    #[arg(long)]
-    pub quadratures: Option<String>,
+    #[arg(long, value_delimiter = ',', value_parser = super::values::parsed::<QuadratureKind>)]
+    pub quadratures: Option<Vec<QuadratureKind>>,
     /// Output directory (default ./out/compare-bases).
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -130,7 +131,6 @@ pub fn run_compare_bases(args: CompareBasesArgs) -> Result<(), LabError> {
          with --quadratures)",
     )?;
     crate::output::check_output_dir(&dir)?;
-    use galerkin_vi::quadrature::QuadratureKind;
     let scene = load_scene(&args.run)?;
     let ns: Vec<usize> = args
         .range
@@ -140,7 +140,7 @@ pub fn run_compare_bases(args: CompareBasesArgs) -> Result<(), LabError> {
         .collect();
     let quads: Vec<QuadratureKind> = match &args.quadratures {
         None => QuadratureKind::ALL.to_vec(),
-        Some(list) => list.split(',').map(str::parse).collect::<Result<_, _>>()?,
+        Some(list) => list.clone(),
     };
     let cmp = crate::studies::compare_bases::compare_bases(&scene, &ns, &quads)
         .map_err(|e| super::with_flag(e, "values of n", "--range"))?;

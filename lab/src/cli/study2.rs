@@ -9,6 +9,7 @@ use crate::studies::work_precision::{
 };
 use crate::studies::write_file;
 use clap::Args;
+use galerkin_vi::basis::BasisKind;
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -50,8 +51,8 @@ pub struct WorkPrecisionArgs {
     pub write_reference: Option<PathBuf>,
     /// Galerkin bases to sweep, comma-separated (default: the preset's; e.g.
     /// chebyshev,legendre).
-    #[arg(long)]
-    pub bases: Option<String>,
+    #[arg(long, value_delimiter = ',', value_parser = super::values::parsed::<BasisKind>)]
+    pub bases: Option<Vec<BasisKind>>,
     /// Galerkin numbers of basis functions, comma-separated (default: the preset's).
     #[arg(long, value_delimiter = ',', value_parser = super::values::count)]
     pub ns: Option<Vec<usize>>,
@@ -99,10 +100,7 @@ pub fn run_work_precision(args: WorkPrecisionArgs) -> Result<(), LabError> {
     }
     config.repeats = args.repeats.unwrap_or(if args.long { 1 } else { 5 }).max(1);
     if let Some(b) = &args.bases {
-        config.bases = b
-            .split(',')
-            .map(str::parse)
-            .collect::<Result<Vec<_>, _>>()?;
+        config.bases = b.clone();
     }
     if let Some(n) = &args.ns {
         config.ns = n.clone();

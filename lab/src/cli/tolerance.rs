@@ -16,8 +16,13 @@ pub struct ToleranceArgs {
     #[arg(long, default_value = "1e-6:1e-12")]
     pub tols: Tolerances,
     /// Error controls to compare, comma-separated (indicator, embedded, calibrated).
-    #[arg(long, default_value = "calibrated,embedded")]
-    pub controls: String,
+    #[arg(
+        long,
+        default_value = "calibrated,embedded",
+        value_delimiter = ',',
+        value_parser = values::parsed::<ErrorControl>
+    )]
+    pub controls: Vec<ErrorControl>,
     /// Ladder of n, comma-separated (default 4,6,…,64); fixed n runs scan its range.
     #[arg(long, value_delimiter = ',', value_parser = values::basis_count)]
     pub ladder: Option<Vec<usize>>,
@@ -68,11 +73,7 @@ pub fn run_tolerance_study(args: ToleranceArgs) -> Result<(), LabError> {
         tols: args.tols.values().to_vec(),
         ..ToleranceConfig::default()
     };
-    config.controls = args
-        .controls
-        .split(',')
-        .map(|s| s.trim().parse::<ErrorControl>())
-        .collect::<Result<_, _>>()?;
+    config.controls = args.controls.clone();
     if let Some(l) = &args.ladder {
         config.ladder = l.clone();
     }

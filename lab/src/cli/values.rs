@@ -11,6 +11,14 @@ pub fn number(s: &str) -> Result<f64, String> {
         .map_err(|_| format!("'{s}' is not a number (expected a comma-separated list)"))
 }
 
+/// Any value with a `FromStr` (bases, quadratures, error controls); the type's own message.
+pub fn parsed<T: FromStr>(s: &str) -> Result<T, String>
+where
+    T::Err: std::fmt::Display,
+{
+    s.trim().parse().map_err(|e: T::Err| e.to_string())
+}
+
 /// A whole number of basis functions ≥ 2 (a rung of an n ladder).
 pub fn basis_count(s: &str) -> Result<usize, String> {
     let s = s.trim();
