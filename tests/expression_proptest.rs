@@ -76,7 +76,7 @@ proptest! {
         prop_assert!(
             value == direct
                 || (value.is_nan() && direct.is_nan())
-                || (value - direct).abs() <= 1e-12 * (1.0 + direct.abs()),
+                || approx::relative_eq!(value, direct, epsilon = 1e-12, max_relative = 1e-12),
             "{}: tape {} vs tree {}", text, value, direct
         );
         let (mut lq, mut lv) = ([0.0; 2], [0.0; 2]);

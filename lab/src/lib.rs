@@ -24,6 +24,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod cli;
+mod distance;
 #[cfg(feature = "dop853")]
 pub mod dop853;
 pub mod error;
@@ -38,5 +39,6 @@ pub mod ring;
 pub mod run;
 pub mod scene;
 pub mod studies;
+pub mod table;
 
 pub use error::{GviError, Result, ensure_finite, ensure_len};

@@ -253,7 +253,9 @@ fn kepler_to_cartesian(
     (apply(x, y), apply(vx, vy))
 }
 
-/// SplitMix64 (Steele, Lea & Flood 2014): a tiny, fixed, well-mixed 64-bit stream.
+/// SplitMix64 (Steele, Lea & Flood 2014): a tiny, fixed, well-mixed 64-bit stream. Kept on
+/// purpose instead of `rand` (the tests use rand): a scene must give the same bodies under
+/// every version of rand, whose generators and streams may change.
 struct SplitMix64(u64);
 
 impl SplitMix64 {

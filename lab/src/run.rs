@@ -1,6 +1,7 @@
 //! Running a scene: build the system and the integrator, integrate, and tabulate the states,
 //! invariants and (where an exact solution exists) errors. This is what `gvi run` does.
 
+use crate::distance::max_norm_diff;
 use crate::error::LabError;
 use crate::error::Result;
 use crate::plot::{Chart, Series};
@@ -416,13 +417,6 @@ fn truncate(traj: &mut Trajectory, states: usize) {
     traj.step_n.truncate(steps);
 }
 
-fn max_norm_diff(a: &[f64], b: &[f64]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| (x - y).abs())
-        .fold(0.0, f64::max)
-}
-
 /// Orbit (2-D) or q(t) (1-D) chart: Galerkin curves, step ends and, if known, the exact
 /// solution.
 fn run_chart<S: System>(
@@ -457,30 +451,29 @@ fn run_chart<S: System>(
 }
 
 impl RunResult {
-    /// The table as CSV text (header line, then one row per step end).
-    pub fn to_csv(&self) -> String {
-        let mut out = self.columns.join(",");
-        out.push('\n');
-        for row in &self.rows {
-            let cells: Vec<String> = row
+    /// The table as CSV text (header line, then one row per step end): `step` and `n` as
+    /// integers, the other columns in `{:e}` form, NaN as an empty cell.
+    pub fn to_csv(&self) -> Result<String> {
+        let integer: Vec<bool> = self
+            .columns
+            .iter()
+            .map(|c| matches!(c.as_str(), "step" | "n"))
+            .collect();
+        let cell = |(x, &integer): (&f64, &bool)| {
+            if x.is_nan() {
+                String::new()
+            } else if integer {
+                format!("{}", *x as u64)
+            } else {
+                format!("{x:e}")
+            }
+        };
+        crate::table::csv_records(
+            &self.columns,
+            self.rows
                 .iter()
-                .enumerate()
-                .map(|(i, x)| {
-                    let integer =
-                        matches!(self.columns.get(i).map(String::as_str), Some("step" | "n"));
-                    if x.is_nan() {
-                        String::new()
-                    } else if integer {
-                        format!("{}", *x as u64)
-                    } else {
-                        format!("{x:e}")
-                    }
-                })
-                .collect();
-            out.push_str(&cells.join(","));
-            out.push('\n');
-        }
-        out
+                .map(|row| row.iter().zip(&integer).map(cell)),
+        )
     }
 
     /// The whole result as JSON (scene, columns, rows, summary, trajectory with coefficients).

@@ -8,18 +8,9 @@ use galerkin_vi::prelude::*;
 #[path = "../../tests/common/counting.rs"]
 mod counting;
 use counting::allocations;
-
-/// Charged particle in a magnetic field with a potential: not separable, AD derivatives.
-struct Magnetic;
-impl Lagrangian for Magnetic {
-    fn dim(&self) -> usize {
-        2
-    }
-    fn lagrangian<T: DualNum<Primitive = f64> + Copy>(&self, q: &[T], v: &[T]) -> T {
-        (v[0] * v[0] + v[1] * v[1]) * 0.5 + (q[0] * v[1] - q[1] * v[0]) * 0.5
-            - (q[0] * q[0] + q[1] * q[1] * 2.0) * 0.5
-    }
-}
+#[path = "common/systems.rs"]
+mod systems;
+use systems::Magnetic;
 
 fn allocations_in_steps<L: Lagrangian>(
     lag: &L,

@@ -53,7 +53,7 @@ fn kepler_paths_and_cheapest() {
         }
     }
     assert_eq!(
-        study.csv().lines().count(),
+        study.csv().unwrap().lines().count(),
         1 + BasisKind::ALL.len() * (2 * 4 + 2 * 4)
     );
 }

@@ -3,7 +3,9 @@
 
 use galerkin_vi::prelude::*;
 use galerkin_vi_lab::scene::Scene;
-use std::process::Command;
+#[path = "common/cli.rs"]
+mod cli;
+use cli::gvi;
 
 fn kepler() -> Kepler {
     Kepler::new(1.0).unwrap()
@@ -138,18 +140,6 @@ fn dense_output_outside_the_time_span_is_an_error() {
         traj.position_at(f64::NAN),
         Err(GviError::InvalidInput { .. })
     ));
-}
-
-fn gvi(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_gvi"))
-        .args(args)
-        .output()
-        .expect("gvi runs");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
 }
 
 fn assert_clean_failure(args: &[&str], needle: &str) {

@@ -8,7 +8,9 @@ use galerkin_vi::systems::ExpressionLagrangian;
 use galerkin_vi::systems::expression::ExpressionError;
 use galerkin_vi_lab::run::{RunOptions, run_scene};
 use galerkin_vi_lab::scene::Scene;
-use std::process::Command;
+#[path = "common/cli.rs"]
+mod cli;
+use cli::gvi;
 
 /// The exact motion of the `magnetic` scene, derived here independently of the scene's
 /// `exact` strings: ẍ = B ẏ, ÿ = −B ẋ from L = |q̇|²/2 + (B/2)(x ẏ − y ẋ); from q = (1.5, 0.2)
@@ -254,18 +256,6 @@ fn library_errors_are_typed() {
     let l = ExpressionLagrangian::parse("x^2*x_dot^2/2 - x^2/2", &["x"], &[]).unwrap();
     assert!(l.check_state(&[0.5], &[0.1]).is_ok());
     assert!(l.check_state(&[0.0], &[0.1]).is_err());
-}
-
-fn gvi(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_gvi"))
-        .args(args)
-        .output()
-        .expect("gvi runs");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
 }
 
 fn scene_file(dir: &std::path::Path, name: &str, system: &str, q: &str, p: &str) -> String {

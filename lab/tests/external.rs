@@ -10,7 +10,9 @@ use galerkin_vi_lab::studies::work_precision::{
     work_precision,
 };
 use std::path::{Path, PathBuf};
-use std::process::Command;
+#[path = "common/cli.rs"]
+mod cli;
+use cli::gvi;
 
 /// Real REBOUND rows (Kepler, T = 200), committed so that CI needs no Python.
 fn sample() -> PathBuf {
@@ -70,7 +72,7 @@ fn sample_rows_merge_into_table_front_and_chart() {
     assert!(study.fastest.iter().any(|f| f.method == "rebound-whfast"
         && f.target == 1e-9
         && f.best.as_ref().is_some_and(|b| b.0 == "dt = 2")));
-    let csv = study.csv();
+    let csv = study.csv().unwrap();
     assert!(
         csv.lines()
             .next()
@@ -180,17 +182,6 @@ fn malformed_files_are_typed_errors_naming_file_and_line() {
     );
 }
 
-fn gvi(args: &[&str]) -> (i32, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_gvi"))
-        .args(args)
-        .output()
-        .expect("gvi runs");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
-
 #[test]
 fn cli_writes_nothing_when_an_external_file_is_bad() {
     let dir = scratch("cli");
@@ -202,7 +193,7 @@ fn cli_writes_nothing_when_an_external_file_is_bad() {
     .unwrap();
     let out = dir.join("out");
     let sample = sample();
-    let (code, err) = gvi(&[
+    let (code, _, err) = gvi(&[
         "work-precision",
         "kepler",
         "--quick",
@@ -225,7 +216,7 @@ fn cli_writes_nothing_when_an_external_file_is_bad() {
         !out.exists(),
         "output written despite the bad external file"
     );
-    let (code, err) = gvi(&[
+    let (code, _, err) = gvi(&[
         "work-precision",
         "kepler",
         "--external",
@@ -237,7 +228,7 @@ fn cli_writes_nothing_when_an_external_file_is_bad() {
     assert!(err.contains("absent.csv"), "{err}");
     assert!(!out.exists());
     // And a good run merges: the CSV has the four external rows.
-    let (code, err) = gvi(&[
+    let (code, _, err) = gvi(&[
         "work-precision",
         "kepler",
         "--quick",
@@ -289,7 +280,7 @@ fn absurd_horizons_are_refused_up_front_with_the_estimate() {
         other => panic!("expected CostTooHigh, got {other:?}"),
     }
     assert!(start.elapsed().as_secs_f64() < 5.0);
-    let (code, err) = gvi(&["work-precision", "kepler", "--horizon", "1e300"]);
+    let (code, _, err) = gvi(&["work-precision", "kepler", "--horizon", "1e300"]);
     assert_ne!(code, 0);
     assert!(
         err.contains("refusing the sweep") && err.contains("5.000e299"),
@@ -306,7 +297,7 @@ fn reference_file_samples_the_study_grid() {
     assert_eq!(r.t.len(), 11);
     assert_eq!(r.t[10], 20.0);
     assert!((r.q[0][0] - 0.4).abs() < 1e-15 && r.q[0][1].abs() < 1e-15);
-    let csv = r.csv();
+    let csv = r.csv().unwrap();
     let mut lines = csv.lines();
     assert_eq!(lines.next(), Some("k,t,q0,q1"));
     let last: Vec<f64> = lines

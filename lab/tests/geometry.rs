@@ -16,19 +16,9 @@ use galerkin_vi::prelude::*;
 use nalgebra::DMatrix;
 use proptest::prelude::*;
 
-/// Coupled anharmonic 2-DOF system with a non-diagonal constant mass matrix.
-struct Coupled;
-impl Mechanical for Coupled {
-    fn degrees_of_freedom(&self) -> usize {
-        2
-    }
-    fn mass(&self) -> DMatrix<f64> {
-        DMatrix::from_row_slice(2, 2, &[2.0, 0.5, 0.5, 1.0])
-    }
-    fn potential<T: DualNum<Primitive = f64> + Copy>(&self, q: &[T]) -> T {
-        q[0] * q[0] * 0.5 + q[1] * q[1] * 0.5 + q[0].powi(4) * 0.1 + q[0] * q[1].powi(3) * 0.3
-    }
-}
+#[path = "common/systems.rs"]
+mod systems;
+use systems::Coupled;
 
 /// Charged particle in a uniform magnetic field B = 1 with an anisotropic potential
 /// (non-separable: L_qv ≠ 0), written directly as a `Lagrangian`.

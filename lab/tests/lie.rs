@@ -264,7 +264,7 @@ fn rigid_body_scene_reaches_1e_12() {
     let result = run_scene(&scene.build().unwrap(), RunOptions::default()).unwrap();
     let err = result.summary.max_position_error.unwrap();
     assert!(err <= 1e-12, "orientation error {err:e}");
-    let csv = result.to_csv();
+    let csv = result.to_csv().unwrap();
     let header = csv.lines().next().unwrap();
     for col in ["r00", "r12", "r22", "mu0", "w2", "lx", "ly", "lz", "energy"] {
         assert!(

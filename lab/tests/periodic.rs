@@ -276,7 +276,7 @@ fn negative_controls_and_bad_input_are_typed_errors() {
         }
         other => panic!("expected PeriodicUnderResolved, got {other:?}"),
     }
-    // Fewer modes than the guess uses.
+    // Fewer modes than the guess uses (the library's curve refuses it).
     let two = PeriodicRequest {
         modes: vec![2],
         ..few.clone()

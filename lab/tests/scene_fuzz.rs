@@ -155,7 +155,7 @@ proptest! {
         }
         let options = RunOptions { curve_samples_per_step: 4, chart: false };
         if let Ok(result) = run_scene(&parsed, options) && result.failure.is_none() {
-            prop_assert!(finite_csv(&result.to_csv()), "success with non-finite output:\n{text}");
+            prop_assert!(finite_csv(&result.to_csv().unwrap()), "success with non-finite output:\n{text}");
             prop_assert!(result.summary.max_position_error.is_none_or(f64::is_finite));
         }
     }

@@ -17,6 +17,9 @@ use counting::allocations;
 #[path = "common/distance.rs"]
 mod distance;
 use distance::final_state_distance;
+#[path = "common/systems.rs"]
+mod systems;
+use systems::{Coupled, Magnetic};
 
 /// The structured solvers and `Auto`, each compared with `Exact`.
 const SOLVERS: [StageSolver; 4] = [
@@ -25,34 +28,6 @@ const SOLVERS: [StageSolver; 4] = [
     StageSolver::FixedPoint,
     StageSolver::Auto,
 ];
-
-/// Coupled anharmonic 2-DOF system with a non-diagonal constant mass matrix (the Kronecker
-/// solver's M-eigenbasis is then not the coordinate basis).
-struct Coupled;
-impl Mechanical for Coupled {
-    fn degrees_of_freedom(&self) -> usize {
-        2
-    }
-    fn mass(&self) -> DMatrix<f64> {
-        DMatrix::from_row_slice(2, 2, &[2.0, 0.5, 0.5, 1.0])
-    }
-    fn potential<T: DualNum<Primitive = f64> + Copy>(&self, q: &[T]) -> T {
-        q[0] * q[0] * 0.5 + q[1] * q[1] * 0.5 + q[0].powi(4) * 0.1 + q[0] * q[1].powi(3) * 0.3
-    }
-}
-
-/// Charged particle in a magnetic field: not separable, so the structured solvers do not
-/// apply and every choice must run the exact solver (the same map bit for bit).
-struct Magnetic;
-impl Lagrangian for Magnetic {
-    fn dim(&self) -> usize {
-        2
-    }
-    fn lagrangian<T: DualNum<Primitive = f64> + Copy>(&self, q: &[T], v: &[T]) -> T {
-        (v[0] * v[0] + v[1] * v[1]) * 0.5 + (q[0] * v[1] - q[1] * v[0]) * 0.5
-            - (q[0] * q[0] + q[1] * q[1] * 2.0) * 0.5
-    }
-}
 
 fn with_solver(
     basis: BasisKind,

@@ -66,6 +66,6 @@ fn kepler_large_steps_show_solver_failures() {
             assert!(c.message.as_deref().is_some_and(|m| !m.is_empty()), "{c:?}");
         }
     }
-    let csv = study.csv();
+    let csv = study.csv().unwrap();
     assert_eq!(csv.lines().count(), 5);
 }

@@ -133,7 +133,11 @@ fn streamed_and_in_memory_runs_agree() {
         let mut out = Vec::new();
         let streamed = stream_scene(&scene.build().unwrap(), 16, &mut out).unwrap();
         let memory = run_scene(&scene.build().unwrap(), RunOptions::default()).unwrap();
-        assert_eq!(String::from_utf8(out).unwrap(), memory.to_csv(), "{name}");
+        assert_eq!(
+            String::from_utf8(out).unwrap(),
+            memory.to_csv().unwrap(),
+            "{name}"
+        );
         let (a, b) = (&streamed.summary, &memory.summary);
         assert_eq!(a.steps, b.steps);
         assert_eq!(a.max_position_error, b.max_position_error, "{name}");

@@ -71,7 +71,7 @@ fn reduced_kepler_study() {
             .iter()
             .all(|p| p.failure.is_some() || p.force_evaluations > 0)
     );
-    let csv = study.csv();
+    let csv = study.csv().unwrap();
     assert_eq!(csv.lines().count(), study.points.len() + 1);
     assert!(
         study

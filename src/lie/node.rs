@@ -189,18 +189,11 @@ mod tests {
             &mut h2,
         );
         for i in 0..6 {
-            assert!(
-                (g[i] - g2[i]).abs() < 1e-13 * (1.0 + g2[i].abs()),
-                "{tau} grad {i}"
-            );
+            // Absolute near zero, relative elsewhere (about tol·(1 + |AD value|)).
+            approx::assert_relative_eq!(g[i], g2[i], epsilon = 1e-13, max_relative = 1e-13);
         }
         for i in 0..36 {
-            assert!(
-                (h[i] - h2[i]).abs() < 1e-12 * (1.0 + h2[i].abs()),
-                "{tau} hess {i}: {} vs {}",
-                h[i],
-                h2[i]
-            );
+            approx::assert_relative_eq!(h[i], h2[i], epsilon = 1e-12, max_relative = 1e-12);
         }
     }
 

@@ -8,6 +8,7 @@ mod scaling;
 mod study;
 mod study2;
 mod tolerance;
+pub mod values;
 
 use crate::error::LabError;
 use clap::{Parser, Subcommand};
@@ -86,11 +87,27 @@ pub fn main_with(cli: Cli) -> Result<(), LabError> {
     }
 }
 
-/// Refuse the flags a command would ignore because it sweeps or sets those values itself;
-/// `flags` pairs each flag with whether it was given.
-pub fn refuse_ignored(command: &str, flags: &[(&str, bool)], why: &str) -> Result<(), LabError> {
-    match flags.iter().find(|(_, given)| *given) {
-        Some((name, _)) => Err(LabError::InvalidArgument {
+/// Refuse the method flags (`--n`, `--h`, `--basis`, `--quadrature`, `--quad-points`,
+/// `--economical`, `--solver`) among `flags` that a command would ignore because it sweeps or
+/// sets those values itself.
+pub fn refuse_ignored(
+    command: &str,
+    run: &run::SceneArgs,
+    flags: &[&str],
+    why: &str,
+) -> Result<(), LabError> {
+    let given = |flag: &str| match flag {
+        "--n" => run.n.is_some(),
+        "--h" => run.h.is_some(),
+        "--basis" => run.basis.is_some(),
+        "--quadrature" => run.quadrature.is_some(),
+        "--quad-points" => run.quad_points.is_some(),
+        "--economical" => run.economical,
+        "--solver" => run.solver.is_some(),
+        _ => false,
+    };
+    match flags.iter().find(|f| given(f)) {
+        Some(name) => Err(LabError::InvalidArgument {
             name: (*name).to_string(),
             reason: format!("`gvi {command}` does not use {name}: {why}"),
         }),
@@ -98,17 +115,18 @@ pub fn refuse_ignored(command: &str, flags: &[(&str, bool)], why: &str) -> Resul
     }
 }
 
-/// Parse a comma-separated list of numbers, e.g. `--q0 0.4,0`.
-pub fn parse_vector(name: &str, text: &str) -> Result<Vec<f64>, LabError> {
-    text.split(',')
-        .map(|s| {
-            let s = s.trim();
-            s.parse::<f64>().map_err(|_| LabError::InvalidArgument {
-                name: name.to_string(),
-                reason: format!("'{s}' is not a number (expected a comma-separated list)"),
-            })
-        })
-        .collect()
+/// Name the flag behind a study setting in the study's error: the studies name their
+/// settings (`sweep values`, `horizon`), the command line adds the flag (`--range`).
+pub fn with_flag(e: LabError, setting: &str, flag: &str) -> LabError {
+    match e {
+        LabError::InvalidArgument { name, reason } if name == setting => {
+            LabError::InvalidArgument {
+                name: format!("{setting} ({flag})"),
+                reason,
+            }
+        }
+        other => other,
+    }
 }
 
 pub use crate::output::write_output;

@@ -1,7 +1,8 @@
 //! `gvi periodic SCENE`: find a periodic orbit by periodic Galerkin and analyse it.
 
 use super::run::Format;
-use super::{parse_vector, write_output};
+use super::values;
+use super::write_output;
 use crate::error::LabError;
 use crate::periodic::{PeriodicRequest, analyse_scene};
 use crate::scene::Scene;
@@ -14,8 +15,8 @@ pub struct PeriodicArgs {
     pub scene: String,
     /// Fourier modes K (default: the scene's). A comma-separated list refines in K: the
     /// largest is the main solve, and the Euler–Lagrange residual against K is fitted.
-    #[arg(long)]
-    pub modes: Option<String>,
+    #[arg(long, value_delimiter = ',', value_parser = values::modes)]
+    pub modes: Option<Vec<usize>>,
     /// Output format of --output (or stdout).
     #[arg(long, value_enum, default_value = "json")]
     pub format: Format,
@@ -39,22 +40,13 @@ pub fn run_periodic(args: PeriodicArgs) -> Result<(), LabError> {
         periods: args.periods,
         ..PeriodicRequest::default()
     };
-    if let Some(text) = &args.modes {
-        let values = parse_vector("--modes", text)?;
-        for v in values {
-            if !(v.is_finite() && v >= 1.0 && v.fract() == 0.0 && v <= 4096.0) {
-                return Err(LabError::InvalidArgument {
-                    name: "--modes".into(),
-                    reason: format!("K must be an integer in 1..=4096, got {v}"),
-                });
-            }
-            request.modes.push(v as usize);
-        }
+    if let Some(modes) = &args.modes {
+        request.modes.extend(modes);
     }
     let report = analyse_scene(&scene, &request)?;
     let text = match args.format {
         Format::Json => report.to_json()?,
-        Format::Csv => report.to_csv(),
+        Format::Csv => report.to_csv()?,
     };
     write_output(args.output.as_deref(), &text)?;
     let summary = report.summary();

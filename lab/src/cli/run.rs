@@ -1,6 +1,7 @@
 //! `gvi run SCENE`.
 
-use super::{parse_vector, write_output};
+use super::values;
+use super::write_output;
 use crate::error::LabError;
 use crate::output::{AtomicFile, check_output_path, ensure_distinct};
 use crate::run::stream::{bytes_per_step, stream_scene};
@@ -51,11 +52,11 @@ pub struct SceneArgs {
     #[arg(long)]
     pub retraction: Option<String>,
     /// Initial position, comma-separated (e.g. 0.4,0).
-    #[arg(long, allow_hyphen_values = true)]
-    pub q0: Option<String>,
+    #[arg(long, allow_hyphen_values = true, value_delimiter = ',', value_parser = values::number)]
+    pub q0: Option<Vec<f64>>,
     /// Initial momentum, comma-separated.
-    #[arg(long, allow_hyphen_values = true)]
-    pub p0: Option<String>,
+    #[arg(long, allow_hyphen_values = true, value_delimiter = ',', value_parser = values::number)]
+    pub p0: Option<Vec<f64>>,
 }
 
 /// `gvi run`: the scene and method, and what only a run uses (tolerance, outputs).
@@ -63,17 +64,18 @@ pub struct SceneArgs {
 pub struct RunArgs {
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// Tolerance on the max position error: choose n per step (adds the CSV columns `n` and
-    /// `indicator`; with --plot also writes STEM-n.svg).
+    /// Tolerance on the max position error: choose n per step (adds the CSV columns `n`,
+    /// `indicator` and `estimate`; with --plot also writes STEM-n.svg).
     #[arg(long, allow_hyphen_values = true)]
     pub tol: Option<f64>,
     /// Error control of a --tol run: embedded (default; every step also solved at the next n,
-    /// CSV column `estimate`), indicator, or calibrated (experimental).
+    /// whose difference fills the CSV column `estimate`, empty otherwise), indicator, or
+    /// calibrated (experimental).
     #[arg(long, requires = "tol")]
     pub control: Option<String>,
-    /// Values of n a --tol run may use, comma-separated (default 4,6,…,64).
-    #[arg(long, requires = "tol")]
-    pub ladder: Option<String>,
+    /// Values of n a --tol run may use, comma-separated, increasing (default 4,6,…,64).
+    #[arg(long, requires = "tol", value_delimiter = ',', value_parser = values::basis_count)]
+    pub ladder: Option<Vec<usize>>,
     /// With --tol: choose one h for the run (same horizon h·steps) from the tolerance and the
     /// system's time scale by short pilot runs; the choice is reported.
     #[arg(long, requires = "tol")]
@@ -109,16 +111,8 @@ impl SceneArgs {
             solver: self.solver.as_deref().map(str::parse).transpose()?,
             steps: self.steps,
             retraction: self.retraction.as_deref().map(str::parse).transpose()?,
-            q0: self
-                .q0
-                .as_deref()
-                .map(|q| parse_vector("--q0", q))
-                .transpose()?,
-            p0: self
-                .p0
-                .as_deref()
-                .map(|p| parse_vector("--p0", p))
-                .transpose()?,
+            q0: self.q0.clone(),
+            p0: self.p0.clone(),
             ..Overrides::default()
         })
     }
@@ -131,20 +125,7 @@ impl RunArgs {
         o.tol = self.tol;
         o.control = self.control.as_deref().map(str::parse).transpose()?;
         o.auto_h = self.auto_h;
-        if let Some(l) = &self.ladder {
-            let values = parse_vector("--ladder", l)?;
-            let mut ladder = Vec::with_capacity(values.len());
-            for v in values {
-                if !(v.is_finite() && v >= 2.0 && v.fract() == 0.0) {
-                    return Err(LabError::InvalidArgument {
-                        name: "--ladder".into(),
-                        reason: format!("{v} is not a whole number of basis functions ≥ 2"),
-                    });
-                }
-                ladder.push(v as usize);
-            }
-            o.ladder = Some(ladder);
-        }
+        o.ladder = self.ladder.clone();
         Ok(o)
     }
 }
@@ -270,7 +251,7 @@ fn run_in_memory(
     };
     let result = run_scene(scene, options)?;
     let text = match args.format {
-        Format::Csv => result.to_csv(),
+        Format::Csv => result.to_csv()?,
         Format::Json => result.to_json()?,
     };
     write_output(args.output.as_deref(), &text)?;

@@ -1,10 +1,12 @@
 //! `gvi refine` and `gvi reproduce`.
 
 use super::run::{SceneArgs, load_scene};
+use super::values::Range;
 use crate::error::LabError;
-use crate::studies::refine::{Vary, parse_range, refine};
+use crate::studies::refine::{Vary, refine};
 use crate::studies::reproduce::{Size, reproduce};
 use clap::{Args, ValueEnum};
+use galerkin_vi::quadrature::QuadratureKind;
 use std::path::PathBuf;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -20,7 +22,7 @@ pub struct RefineArgs {
     pub vary: VaryArg,
     /// Values: A:B:STEP (arithmetic) or A:B:xFACTOR (geometric), e.g. 4:44:2 or 0.01:0.5:x1.5.
     #[arg(long)]
-    pub range: String,
+    pub range: Range,
     /// For h-sweeps, keep the scene's number of steps (the paper's protocol) instead of its
     /// time horizon.
     #[arg(long)]
@@ -36,25 +38,21 @@ pub fn run_refine(args: RefineArgs) -> Result<(), LabError> {
     let dir = args.out.unwrap_or_else(|| PathBuf::from("out/refine"));
     let r = &args.run;
     match args.vary {
-        VaryArg::N => super::refuse_ignored(
-            "refine --vary n",
-            &[("--n", r.n.is_some())],
-            "n is swept (--range)",
-        )?,
-        VaryArg::H => super::refuse_ignored(
-            "refine --vary h",
-            &[("--h", r.h.is_some())],
-            "h is swept (--range)",
-        )?,
+        VaryArg::N => {
+            super::refuse_ignored("refine --vary n", r, &["--n"], "n is swept (--range)")?
+        }
+        VaryArg::H => {
+            super::refuse_ignored("refine --vary h", r, &["--h"], "h is swept (--range)")?
+        }
     }
     crate::output::check_output_dir(&dir)?;
     let scene = load_scene(&args.run)?;
-    let values = parse_range(&args.range)?;
     let vary = match args.vary {
         VaryArg::N => Vary::N,
         VaryArg::H => Vary::H,
     };
-    let study = refine(&scene, vary, &values, args.fixed_steps)?;
+    let study = refine(&scene, vary, args.range.values(), args.fixed_steps)
+        .map_err(|e| super::with_flag(e, "sweep values", "--range"))?;
     crate::studies::ensure_some_succeeded(&study.points)?;
     let files = study.write(&dir)?;
     eprintln!(
@@ -94,13 +92,19 @@ pub fn run_reproduce(args: ReproduceArgs) -> Result<(), LabError> {
 }
 
 #[derive(Debug, Args)]
+// The method flags it sweeps are refused (run_compare_bases): not listed in --help.
+#[command(mut_arg("n", |a| a.hide(true)))]
+#[command(mut_arg("basis", |a| a.hide(true)))]
+#[command(mut_arg("quadrature", |a| a.hide(true)))]
+#[command(mut_arg("quad_points", |a| a.hide(true)))]
+#[command(mut_arg("economical", |a| a.hide(true)))]
 pub struct CompareBasesArgs {
-    /// Values of n: A:B:STEP (default 4:48:4).
+    /// Values of n: A:B:STEP (arithmetic) or A:B:xFACTOR (geometric), rounded to whole n.
     #[arg(long, default_value = "4:48:4")]
-    pub range: String,
+    pub range: Range,
     /// Quadratures to pair with every basis, comma-separated (default: all).
-    #[arg(long)]
-    pub quadratures: Option<String>,
+    #[arg(long, value_delimiter = ',', value_parser = super::values::parsed::<QuadratureKind>)]
+    pub quadratures: Option<Vec<QuadratureKind>>,
     /// Output directory (default ./out/compare-bases).
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -115,28 +119,31 @@ pub fn run_compare_bases(args: CompareBasesArgs) -> Result<(), LabError> {
     let r = &args.run;
     super::refuse_ignored(
         "compare-bases",
+        r,
         &[
-            ("--n", r.n.is_some()),
-            ("--basis", r.basis.is_some()),
-            ("--quadrature", r.quadrature.is_some()),
-            ("--quad-points", r.quad_points.is_some()),
-            ("--economical", r.economical),
+            "--n",
+            "--basis",
+            "--quadrature",
+            "--quad-points",
+            "--economical",
         ],
         "it sweeps every basis and quadrature over n (set n with --range and the quadratures \
          with --quadratures)",
     )?;
     crate::output::check_output_dir(&dir)?;
-    use galerkin_vi::quadrature::QuadratureKind;
     let scene = load_scene(&args.run)?;
-    let ns: Vec<usize> = parse_range(&args.range)?
-        .into_iter()
+    let ns: Vec<usize> = args
+        .range
+        .values()
+        .iter()
         .map(|x| x.round() as usize)
         .collect();
     let quads: Vec<QuadratureKind> = match &args.quadratures {
         None => QuadratureKind::ALL.to_vec(),
-        Some(list) => list.split(',').map(str::parse).collect::<Result<_, _>>()?,
+        Some(list) => list.clone(),
     };
-    let cmp = crate::studies::compare_bases::compare_bases(&scene, &ns, &quads)?;
+    let cmp = crate::studies::compare_bases::compare_bases(&scene, &ns, &quads)
+        .map_err(|e| super::with_flag(e, "values of n", "--range"))?;
     let measurements: Vec<_> = cmp.points.iter().map(|p| p.measurement.clone()).collect();
     crate::studies::ensure_some_succeeded(&measurements)?;
     let files = cmp.write(&dir)?;

@@ -9,9 +9,17 @@ use crate::studies::work_precision::{
 };
 use crate::studies::write_file;
 use clap::Args;
+use galerkin_vi::basis::BasisKind;
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
+// The method flags it sweeps or fixes are refused (run_work_precision): not listed in --help.
+#[command(mut_arg("n", |a| a.hide(true)))]
+#[command(mut_arg("basis", |a| a.hide(true)))]
+#[command(mut_arg("quadrature", |a| a.hide(true)))]
+#[command(mut_arg("quad_points", |a| a.hide(true)))]
+#[command(mut_arg("economical", |a| a.hide(true)))]
+#[command(mut_arg("solver", |a| a.hide(true)))]
 pub struct WorkPrecisionArgs {
     /// Time span (default: the scene's h · steps). Samples every scene h.
     #[arg(long)]
@@ -43,47 +51,30 @@ pub struct WorkPrecisionArgs {
     pub write_reference: Option<PathBuf>,
     /// Galerkin bases to sweep, comma-separated (default: the preset's; e.g.
     /// chebyshev,legendre).
-    #[arg(long)]
-    pub bases: Option<String>,
+    #[arg(long, value_delimiter = ',', value_parser = super::values::parsed::<BasisKind>)]
+    pub bases: Option<Vec<BasisKind>>,
     /// Galerkin numbers of basis functions, comma-separated (default: the preset's).
-    #[arg(long)]
-    pub ns: Option<String>,
+    #[arg(long, value_delimiter = ',', value_parser = super::values::count)]
+    pub ns: Option<Vec<usize>>,
     /// Galerkin steps per sample interval, comma-separated (h = Δ/m; default: the preset's).
-    #[arg(long)]
-    pub divisors: Option<String>,
+    #[arg(long, value_delimiter = ',', value_parser = super::values::count)]
+    pub divisors: Option<Vec<usize>>,
     #[command(flatten)]
     pub run: SceneArgs,
-}
-
-/// A comma-separated list of whole numbers ≥ 1.
-fn parse_counts(name: &str, text: &str) -> Result<Vec<usize>, LabError> {
-    text.split(',')
-        .map(|s| {
-            let s = s.trim();
-            s.parse::<usize>()
-                .ok()
-                .filter(|&v| v >= 1)
-                .ok_or_else(|| LabError::InvalidArgument {
-                    name: name.to_string(),
-                    reason: format!(
-                        "'{s}' is not a whole number ≥ 1 (expected a comma-separated list)"
-                    ),
-                })
-        })
-        .collect()
 }
 
 pub fn run_work_precision(args: WorkPrecisionArgs) -> Result<(), LabError> {
     let r = &args.run;
     super::refuse_ignored(
         "work-precision",
+        r,
         &[
-            ("--n", r.n.is_some()),
-            ("--basis", r.basis.is_some()),
-            ("--quadrature", r.quadrature.is_some()),
-            ("--quad-points", r.quad_points.is_some()),
-            ("--economical", r.economical),
-            ("--solver", r.solver.is_some()),
+            "--n",
+            "--basis",
+            "--quadrature",
+            "--quad-points",
+            "--economical",
+            "--solver",
         ],
         "it sweeps the bases and n (--bases, --ns) with the default Gauss–Legendre rule and \
          the auto stage solver",
@@ -109,20 +100,18 @@ pub fn run_work_precision(args: WorkPrecisionArgs) -> Result<(), LabError> {
     }
     config.repeats = args.repeats.unwrap_or(if args.long { 1 } else { 5 }).max(1);
     if let Some(b) = &args.bases {
-        config.bases = b
-            .split(',')
-            .map(str::parse)
-            .collect::<Result<Vec<_>, _>>()?;
+        config.bases = b.clone();
     }
     if let Some(n) = &args.ns {
-        config.ns = parse_counts("--ns", n)?;
+        config.ns = n.clone();
     }
     if let Some(m) = &args.divisors {
-        config.galerkin_divisors = parse_counts("--divisors", m)?;
+        config.galerkin_divisors = m.clone();
     }
     if let Some(path) = &args.write_reference {
-        let reference = reference_csv(&scene, &config)?;
-        write_file(path, &reference.csv())?;
+        let reference = reference_csv(&scene, &config)
+            .map_err(|e| super::with_flag(e, "horizon", "--horizon"))?;
+        write_file(path, &reference.csv()?)?;
         eprintln!(
             "{}: {} samples of the {} at t = {} … {}\n  wrote {}",
             reference.scene,
@@ -140,7 +129,8 @@ pub fn run_work_precision(args: WorkPrecisionArgs) -> Result<(), LabError> {
         .iter()
         .map(|path| read_external_csv(path).map(|points| (path, points)))
         .collect::<Result<Vec<_>, _>>()?;
-    let mut study = work_precision(&scene, &config)?;
+    let mut study =
+        work_precision(&scene, &config).map_err(|e| super::with_flag(e, "horizon", "--horizon"))?;
     for (path, points) in external {
         study.merge_external(&path.display().to_string(), points);
     }
@@ -245,6 +235,11 @@ pub fn run_stability(args: StabilityArgs) -> Result<(), LabError> {
 }
 
 #[derive(Debug, Args)]
+// The method flags it sweeps are refused (run_compare_refinement): not listed in --help.
+#[command(mut_arg("n", |a| a.hide(true)))]
+#[command(mut_arg("basis", |a| a.hide(true)))]
+#[command(mut_arg("quad_points", |a| a.hide(true)))]
+#[command(mut_arg("economical", |a| a.hide(true)))]
 pub struct CompareRefinementArgs {
     /// A reduced sweep, for smoke tests.
     #[arg(long)]
@@ -263,12 +258,8 @@ pub fn run_compare_refinement(args: CompareRefinementArgs) -> Result<(), LabErro
     let r = &args.run;
     super::refuse_ignored(
         "compare-refinement",
-        &[
-            ("--n", r.n.is_some()),
-            ("--basis", r.basis.is_some()),
-            ("--quad-points", r.quad_points.is_some()),
-            ("--economical", r.economical),
-        ],
+        r,
+        &["--n", "--basis", "--quad-points", "--economical"],
         "it sweeps the bases and n with the quadrature's default number of points",
     )?;
     crate::output::check_output_dir(&dir)?;

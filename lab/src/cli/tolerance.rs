@@ -1,6 +1,6 @@
 //! `gvi tolerance-study SCENE`.
 
-use super::parse_vector;
+use super::values::{self, Tolerances};
 use crate::error::LabError;
 use crate::scene::{Overrides, Scene};
 use crate::studies::tolerance::{ToleranceConfig, tolerance_study};
@@ -14,13 +14,18 @@ pub struct ToleranceArgs {
     pub scene: String,
     /// Tolerances: `A:B` for every decade from A to B (e.g. 1e-6:1e-12), or a comma list.
     #[arg(long, default_value = "1e-6:1e-12")]
-    pub tols: String,
+    pub tols: Tolerances,
     /// Error controls to compare, comma-separated (indicator, embedded, calibrated).
-    #[arg(long, default_value = "calibrated,embedded")]
-    pub controls: String,
+    #[arg(
+        long,
+        default_value = "calibrated,embedded",
+        value_delimiter = ',',
+        value_parser = values::parsed::<ErrorControl>
+    )]
+    pub controls: Vec<ErrorControl>,
     /// Ladder of n, comma-separated (default 4,6,…,64); fixed n runs scan its range.
-    #[arg(long)]
-    pub ladder: Option<String>,
+    #[arg(long, value_delimiter = ',', value_parser = values::basis_count)]
+    pub ladder: Option<Vec<usize>>,
     /// Basis (default: the scene's).
     #[arg(long)]
     pub basis: Option<String>,
@@ -37,34 +42,6 @@ pub struct ToleranceArgs {
     /// Output directory for CSV, Markdown and SVG (default: print the table only).
     #[arg(long)]
     pub out: Option<PathBuf>,
-}
-
-fn parse_tols(text: &str) -> Result<Vec<f64>, LabError> {
-    let bad = |reason: String| LabError::InvalidArgument {
-        name: "--tols".into(),
-        reason,
-    };
-    let tols = match text.split_once(':') {
-        Some((a, b)) => {
-            let (a, b) = (
-                a.trim().parse::<f64>().map_err(|_| bad(format!("'{a}'")))?,
-                b.trim().parse::<f64>().map_err(|_| bad(format!("'{b}'")))?,
-            );
-            if !(a > 0.0 && b > 0.0 && a.is_finite() && b.is_finite()) {
-                return Err(bad("the range ends must be positive".into()));
-            }
-            let (hi, lo) = (
-                a.max(b).log10().round() as i32,
-                a.min(b).log10().round() as i32,
-            );
-            (lo..=hi).rev().map(|e| 10f64.powi(e)).collect()
-        }
-        None => parse_vector("--tols", text)?,
-    };
-    if tols.is_empty() || tols.iter().any(|t| !(t.is_finite() && *t > 0.0)) {
-        return Err(bad("tolerances must be finite and positive".into()));
-    }
-    Ok(tols)
 }
 
 pub fn run_tolerance_study(args: ToleranceArgs) -> Result<(), LabError> {
@@ -91,26 +68,12 @@ pub fn run_tolerance_study(args: ToleranceArgs) -> Result<(), LabError> {
     }
     let scene = scene.with_overrides(&overrides).build()?;
     let mut config = ToleranceConfig {
-        tols: parse_tols(&args.tols)?,
+        tols: args.tols.values().to_vec(),
         ..ToleranceConfig::default()
     };
-    config.controls = args
-        .controls
-        .split(',')
-        .map(|s| s.trim().parse::<ErrorControl>())
-        .collect::<Result<_, _>>()?;
+    config.controls = args.controls.clone();
     if let Some(l) = &args.ladder {
-        let mut ladder = Vec::new();
-        for v in parse_vector("--ladder", l)? {
-            if !(v.is_finite() && v >= 2.0 && v.fract() == 0.0) {
-                return Err(LabError::InvalidArgument {
-                    name: "--ladder".into(),
-                    reason: format!("{v} is not a whole number of basis functions ≥ 2"),
-                });
-            }
-            ladder.push(v as usize);
-        }
-        config.ladder = ladder;
+        config.ladder = l.clone();
     }
     let study = tolerance_study(&scene, &config)?;
     println!("{}", study.to_markdown());

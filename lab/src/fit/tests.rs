@@ -1,14 +1,16 @@
 //! Tests of the rate fits: recovered rates and floors on synthetic data.
 use super::*;
 
-/// Deterministic multiplicative noise factors in `[1 - amp, 1 + amp)` (64-bit LCG).
-fn noise(len: usize, amp: f64, mut s: u64) -> Vec<f64> {
-    let mut draw = || {
-        s = s.wrapping_mul(6364136223846793005);
-        s = s.wrapping_add(1442695040888963407);
-        1.0 + amp * (2.0 * (s >> 11) as f64 / (1u64 << 53) as f64 - 1.0)
-    };
-    (0..len).map(|_| draw()).collect()
+/// Deterministic (seeded) multiplicative noise factors in `[1 - amp, 1 + amp)`.
+fn noise(len: usize, amp: f64, seed: u64) -> Vec<f64> {
+    use rand::{RngExt, SeedableRng};
+    if amp == 0.0 {
+        return vec![1.0; len];
+    }
+    let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
+    (0..len)
+        .map(|_| rng.random_range(1.0 - amp..1.0 + amp))
+        .collect()
 }
 
 fn near(a: f64, b: f64, tol: f64) -> bool {

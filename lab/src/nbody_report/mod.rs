@@ -318,7 +318,7 @@ impl NBodyReport {
 
     /// The per-step table as CSV: `step,t,err_<body>…,<invariant>_error…` and, with Mercury,
     /// `mercury_varpi_galerkin,mercury_varpi_reference,mercury_varpi_difference` (radians).
-    pub fn to_csv(&self) -> String {
+    pub fn to_csv(&self) -> Result<String> {
         let mut cols = vec!["step".to_string(), "t".to_string()];
         cols.extend(
             self.body_names
@@ -331,8 +331,7 @@ impl NBodyReport {
                 ["galerkin", "reference", "difference"].map(|s| format!("mercury_varpi_{s}")),
             );
         }
-        let mut out = cols.join(",") + "\n";
-        for (k, t) in self.times.iter().enumerate() {
+        let rows = self.times.iter().enumerate().map(|(k, t)| {
             let mut row = vec![k.to_string(), format!("{t:e}")];
             row.extend(self.position_errors[k].iter().map(|x| format!("{x:e}")));
             row.extend(self.invariant_errors[k].iter().map(|x| format!("{x:e}")));
@@ -340,9 +339,9 @@ impl NBodyReport {
                 let (a, b) = (m.galerkin[k], m.reference[k]);
                 row.extend([a, b, wrap(a - b)].map(|x| format!("{x:e}")));
             }
-            out += &(row.join(",") + "\n");
-        }
-        out
+            row
+        });
+        crate::table::csv_records(&cols, rows)
     }
 
     /// Chart of each body's position error against time (log scale; t = 0 is omitted).
@@ -379,7 +378,7 @@ impl NBodyReport {
             files.push(name);
             Ok(())
         };
-        text(format!("{stem}-errors.csv"), self.to_csv())?;
+        text(format!("{stem}-errors.csv"), self.to_csv()?)?;
         text(format!("{stem}-summary.txt"), self.to_string())?;
         let mut charts = vec![(format!("{stem}-errors.svg"), self.error_chart())];
         charts.push((format!("{stem}-orbits.svg"), self.orbit_charts.0.clone()));

@@ -109,7 +109,7 @@ impl PeriodicReport {
     }
 
     /// The orbit table as CSV (`t, q…, p…`), preceded by `# name = value` summary lines.
-    pub fn to_csv(&self) -> String {
+    pub fn to_csv(&self) -> Result<String> {
         let mut s = String::new();
         let _ = writeln!(s, "# scene = {}", self.scene);
         let _ = writeln!(s, "# modes = {}", self.modes);
@@ -130,14 +130,14 @@ impl PeriodicReport {
         let mut head = vec!["t".to_string()];
         head.extend((0..d).map(|i| format!("q{i}")));
         head.extend((0..d).map(|i| format!("p{i}")));
-        let _ = writeln!(s, "{}", head.join(","));
-        for (k, t) in self.t.iter().enumerate() {
-            let mut row = vec![format!("{t:.17e}")];
-            row.extend(self.q[k].iter().map(|x| format!("{x:.17e}")));
-            row.extend(self.p[k].iter().map(|x| format!("{x:.17e}")));
-            let _ = writeln!(s, "{}", row.join(","));
-        }
-        s
+        let rows = self.t.iter().enumerate().map(|(k, t)| {
+            std::iter::once(t)
+                .chain(&self.q[k])
+                .chain(&self.p[k])
+                .map(|x| format!("{x:.17e}"))
+        });
+        s.push_str(&crate::table::csv_records(&head, rows)?);
+        Ok(s)
     }
 
     /// The report as pretty JSON.

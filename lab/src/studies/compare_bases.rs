@@ -7,7 +7,7 @@
 //! Pairings whose quadrature is too weak for the basis are recorded as failures (the typed
 //! `QuadratureTooWeak` error), not silently skipped.
 
-use super::{Measurement, Reference, measure, measurements_csv, write_file};
+use super::{Measurement, MeasurementRow, Reference, measure, write_file};
 use crate::error::LabError;
 use crate::error::Result;
 use crate::plot::{Chart, Series};
@@ -50,7 +50,7 @@ pub fn compare_bases(
 ) -> Result<BasisComparison> {
     if ns.is_empty() {
         return Err(LabError::InvalidArgument {
-            name: "--range".into(),
+            name: "values of n".into(),
             reason: "no values of n".into(),
         });
     }
@@ -182,18 +182,11 @@ impl BasisComparison {
 
     /// Write `compare-bases.csv`, `.json`, `-error.svg`, `-condition.svg` into `dir`.
     pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>> {
-        let ms: Vec<Measurement> = self.points.iter().map(|p| p.measurement.clone()).collect();
-        let mut csv = String::new();
-        for (line, p) in measurements_csv(&ms)
-            .lines()
-            .zip(std::iter::once(None).chain(self.points.iter().map(Some)))
-        {
-            csv.push_str(line);
-            match p {
-                None => csv.push_str(",kinetic_condition\n"),
-                Some(p) => csv.push_str(&format!(",{:e}\n", p.kinetic_condition)),
-            }
-        }
+        let csv = crate::table::csv_text(
+            self.points
+                .iter()
+                .map(|p| MeasurementRow::new(&p.measurement, Some(p.kinetic_condition))),
+        )?;
         let files = [
             dir.join("compare-bases.csv"),
             dir.join("compare-bases.json"),

@@ -21,6 +21,7 @@ use crate::error::LabError;
 use crate::error::Result;
 use crate::plot::{Chart, Series};
 use crate::scene::BuiltScene;
+use crate::table;
 use galerkin_vi::basis::BasisKind;
 use galerkin_vi::systems::System;
 use serde::Serialize;
@@ -273,39 +274,49 @@ impl CompareStudy {
     }
 
     /// CSV: one row per run with its path.
-    pub fn csv(&self) -> String {
-        let mut out = String::from(
-            "basis,vary,fixed,n,h,steps,map_error,gradient_evaluations,newton_iterations,seconds,failure\n",
-        );
-        for p in &self.paths {
-            for m in &p.points {
-                out.push_str(&format!(
-                    "{},{:?},{},{},{:e},{},{:e},{},{},{:e},{}\n",
-                    p.basis,
-                    p.vary,
-                    p.fixed,
-                    m.n,
-                    m.h,
-                    m.steps,
-                    m.map_error,
-                    m.gradient_evaluations,
-                    m.newton_iterations,
-                    m.seconds,
-                    m.failure
-                        .as_deref()
-                        .map(|f| format!("\"{}\"", f.replace('"', "'")))
-                        .unwrap_or_default()
-                ));
-            }
+    pub fn csv(&self) -> Result<String> {
+        /// One CSV line: the path, then the run.
+        #[derive(Serialize)]
+        struct Row<'a> {
+            basis: String,
+            vary: String,
+            #[serde(serialize_with = "table::plain")]
+            fixed: f64,
+            n: usize,
+            #[serde(serialize_with = "table::sci")]
+            h: f64,
+            steps: usize,
+            #[serde(serialize_with = "table::sci")]
+            map_error: f64,
+            gradient_evaluations: usize,
+            newton_iterations: usize,
+            #[serde(serialize_with = "table::sci")]
+            seconds: f64,
+            #[serde(serialize_with = "table::quoted")]
+            failure: Option<&'a str>,
         }
-        out
+        table::csv_text(self.paths.iter().flat_map(|p| {
+            p.points.iter().map(move |m| Row {
+                basis: p.basis.to_string(),
+                vary: format!("{:?}", p.vary),
+                fixed: p.fixed,
+                n: m.n,
+                h: m.h,
+                steps: m.steps,
+                map_error: m.map_error,
+                gradient_evaluations: m.gradient_evaluations,
+                newton_iterations: m.newton_iterations,
+                seconds: m.seconds,
+                failure: m.failure.as_deref(),
+            })
+        }))
     }
 
     /// Write `compare_refinement.{csv,json}`, `compare_refinement_evaluations.svg` and
     /// `compare_refinement_seconds.svg` into `dir`.
     pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>> {
         let csv = dir.join("compare_refinement.csv");
-        write_file(&csv, &self.csv())?;
+        write_file(&csv, &self.csv()?)?;
         let json = dir.join("compare_refinement.json");
         let text =
             serde_json::to_string_pretty(self).map_err(|e| LabError::Serialize(e.to_string()))?;

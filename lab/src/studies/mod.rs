@@ -19,6 +19,7 @@ pub mod work_precision;
 
 use crate::error::{GviError, LabError, Result};
 use crate::scene::{InitialState, MethodSpec};
+use crate::table;
 use galerkin_vi::baselines::GaussCollocationBaseline;
 use galerkin_vi::integrator::GalerkinIntegrator;
 use galerkin_vi::systems::{ExactSolution, System};
@@ -295,23 +296,7 @@ fn fill_errors<S: System>(
     Ok(())
 }
 
-/// max(a, b), but NaN if either is NaN (`f64::max` drops a NaN, which turns a run that blew
-/// up into a perfect-looking error of 0).
-pub(crate) fn nan_max(a: f64, b: f64) -> f64 {
-    if a.is_nan() || b.is_nan() {
-        f64::NAN
-    } else {
-        a.max(b)
-    }
-}
-
-/// Max-norm of a − b; NaN if any difference is NaN.
-pub(crate) fn max_norm_diff(a: &[f64], b: &[f64]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| (x - y).abs())
-        .fold(0.0, nan_max)
-}
+pub(crate) use crate::distance::{max_norm_diff, nan_max};
 
 /// Memory above which a study is refused before it starts.
 pub const MAX_STUDY_BYTES: f64 = 4e9;
@@ -347,36 +332,62 @@ pub fn ensure_some_succeeded(ms: &[Measurement]) -> Result<()> {
     Ok(())
 }
 
-/// Measurements as CSV.
-pub fn measurements_csv(ms: &[Measurement]) -> String {
-    let mut out = String::from(
-        "basis,quadrature,n,h,steps,map_error,curve_error,energy_error,momentum_error,\
-         newton_iterations,gradient_evaluations,seconds,failure\n",
-    );
-    for m in ms {
-        out.push_str(&format!(
-            "{},{},{},{:e},{},{:e},{:e},{:e},{},{},{},{:e},{}\n",
-            m.basis,
-            m.quadrature,
-            m.n,
-            m.h,
-            m.steps,
-            m.map_error,
-            m.curve_error,
-            m.energy_error,
-            m.momentum_error
-                .map(|x| format!("{x:e}"))
-                .unwrap_or_default(),
-            m.newton_iterations,
-            m.gradient_evaluations,
-            m.seconds,
-            m.failure
-                .as_deref()
-                .map(|f| format!("\"{}\"", f.replace('"', "'")))
-                .unwrap_or_default()
-        ));
+/// One CSV line of a [`Measurement`] (the formats of `docs/studies/`, see [`crate::table`]);
+/// `kinetic_condition` is a column only when given (`compare-bases`).
+#[derive(Serialize)]
+pub(crate) struct MeasurementRow<'a> {
+    basis: &'a str,
+    quadrature: &'a str,
+    n: usize,
+    #[serde(serialize_with = "table::sci")]
+    h: f64,
+    steps: usize,
+    #[serde(serialize_with = "table::sci")]
+    map_error: f64,
+    #[serde(serialize_with = "table::sci")]
+    curve_error: f64,
+    #[serde(serialize_with = "table::sci")]
+    energy_error: f64,
+    #[serde(serialize_with = "table::sci_opt")]
+    momentum_error: Option<f64>,
+    newton_iterations: usize,
+    gradient_evaluations: usize,
+    #[serde(serialize_with = "table::sci")]
+    seconds: f64,
+    #[serde(serialize_with = "table::quoted")]
+    failure: Option<&'a str>,
+    #[serde(
+        serialize_with = "table::sci_opt",
+        skip_serializing_if = "Option::is_none"
+    )]
+    kinetic_condition: Option<f64>,
+}
+
+impl<'a> MeasurementRow<'a> {
+    /// The row of `m`, with an optional kinetic-matrix condition number column.
+    pub(crate) fn new(m: &'a Measurement, kinetic_condition: Option<f64>) -> Self {
+        Self {
+            basis: &m.basis,
+            quadrature: &m.quadrature,
+            n: m.n,
+            h: m.h,
+            steps: m.steps,
+            map_error: m.map_error,
+            curve_error: m.curve_error,
+            energy_error: m.energy_error,
+            momentum_error: m.momentum_error,
+            newton_iterations: m.newton_iterations,
+            gradient_evaluations: m.gradient_evaluations,
+            seconds: m.seconds,
+            failure: m.failure.as_deref(),
+            kinetic_condition,
+        }
     }
-    out
+}
+
+/// Measurements as CSV.
+pub fn measurements_csv(ms: &[Measurement]) -> Result<String> {
+    table::csv_text(ms.iter().map(|m| MeasurementRow::new(m, None)))
 }
 
 pub use crate::output::write_file;

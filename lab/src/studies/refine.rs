@@ -78,47 +78,6 @@ impl std::fmt::Display for RateFit {
     }
 }
 
-/// Parse `A:B:STEP` (arithmetic) or `A:B:xF` (geometric, factor F) into the sweep values.
-pub fn parse_range(text: &str) -> Result<Vec<f64>> {
-    let bad = |reason: &str| LabError::InvalidArgument {
-        name: "--range".into(),
-        reason: format!("'{text}': {reason} (expected A:B:STEP or A:B:xFACTOR)"),
-    };
-    let parts: Vec<&str> = text.split(':').map(str::trim).collect();
-    if parts.len() != 3 {
-        return Err(bad("three fields needed"));
-    }
-    let num = |s: &str| s.parse::<f64>().map_err(|_| bad("not a number"));
-    let (a, b) = (num(parts[0])?, num(parts[1])?);
-    if !(a.is_finite() && b.is_finite() && a > 0.0 && b > 0.0) {
-        return Err(bad("bounds must be positive and finite"));
-    }
-    let (lo, hi) = (a.min(b), a.max(b));
-    let mut out = Vec::new();
-    if let Some(f) = parts[2].strip_prefix('x') {
-        let f = num(f)?;
-        if !(f.is_finite() && f > 1.0) {
-            return Err(bad("the factor must exceed 1"));
-        }
-        let mut x = lo;
-        while x <= hi * (1.0 + 1e-12) && out.len() < 10_000 {
-            out.push(x);
-            x *= f;
-        }
-    } else {
-        let step = num(parts[2])?;
-        if !(step.is_finite() && step > 0.0) {
-            return Err(bad("the step must be positive"));
-        }
-        let count = ((hi - lo) / step + 1e-9).floor() as usize + 1;
-        if count > 10_000 {
-            return Err(bad("more than 10000 values"));
-        }
-        out.extend((0..count).map(|i| lo + step * i as f64));
-    }
-    Ok(out)
-}
-
 /// The result of a refinement sweep.
 #[derive(Debug, Clone, Serialize)]
 pub struct RefineStudy {
@@ -151,7 +110,7 @@ pub fn refine(
 ) -> Result<RefineStudy> {
     if values.is_empty() {
         return Err(LabError::InvalidArgument {
-            name: "--range".into(),
+            name: "sweep values".into(),
             reason: "no values to sweep".into(),
         });
     }
@@ -256,7 +215,7 @@ fn check_values(
     fixed_steps: bool,
 ) -> Result<()> {
     let bad = |reason: String| LabError::InvalidArgument {
-        name: "--range".into(),
+        name: "sweep values".into(),
         reason,
     };
     let horizon = base.h * base.steps as f64;
@@ -367,7 +326,7 @@ impl RefineStudy {
     /// Write `refine.csv`, `refine.json` and `refine.svg` into `dir`; returns the paths.
     pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>> {
         let csv = dir.join("refine.csv");
-        write_file(&csv, &measurements_csv(&self.points))?;
+        write_file(&csv, &measurements_csv(&self.points)?)?;
         let json = dir.join("refine.json");
         let text =
             serde_json::to_string_pretty(self).map_err(|e| LabError::Serialize(e.to_string()))?;
@@ -377,21 +336,5 @@ impl RefineStudy {
             .save_svg(&svg)
             .map_err(|e| LabError::Plot(e.to_string()))?;
         Ok(vec![csv, json, svg])
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn ranges_parse() {
-        assert_eq!(parse_range("4:10:2").unwrap(), vec![4.0, 6.0, 8.0, 10.0]);
-        let g = parse_range("0.1:1:x2").unwrap();
-        assert_eq!(g.len(), 4);
-        assert!((g[3] - 0.8).abs() < 1e-12);
-        for bad in ["4:10", "a:b:c", "4:10:0", "0:10:1", "1:2:x1", "1:1e9:1e-9"] {
-            assert!(parse_range(bad).is_err(), "{bad}");
-        }
     }
 }

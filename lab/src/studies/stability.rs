@@ -31,6 +31,7 @@ use crate::error::LabError;
 use crate::error::Result;
 use crate::plot::HeatMap;
 use crate::scene::BuiltScene;
+use crate::table;
 use galerkin_vi::baselines::CompositionScheme;
 use galerkin_vi::integrator::GalerkinIntegrator;
 use galerkin_vi::systems::System;
@@ -421,46 +422,56 @@ impl StabilityStudy {
         }
     }
 
-    /// CSV of the cells, then the baselines' limits.
-    pub fn csv(&self) -> String {
-        let mut out = String::from("h,n,class,energy_error,position_error,message\n");
-        for c in &self.cells {
-            out.push_str(&format!(
-                "{:e},{},{},{:e},{},{}\n",
-                c.h,
-                c.n,
-                c.class.as_str(),
-                c.energy_error,
-                c.position_error
-                    .map(|e| format!("{e:e}"))
-                    .unwrap_or_default(),
-                c.message
-                    .as_deref()
-                    .map(|m| format!("\"{}\"", m.replace('"', "'")))
-                    .unwrap_or_default()
-            ));
+    /// CSV of the cells.
+    pub fn csv(&self) -> Result<String> {
+        /// One CSV line of a cell.
+        #[derive(Serialize)]
+        struct Row<'a> {
+            #[serde(serialize_with = "table::sci")]
+            h: f64,
+            n: usize,
+            class: &'a str,
+            #[serde(serialize_with = "table::sci")]
+            energy_error: f64,
+            #[serde(serialize_with = "table::sci_opt")]
+            position_error: Option<f64>,
+            #[serde(serialize_with = "table::quoted")]
+            message: Option<&'a str>,
         }
-        out
+        table::csv_text(self.cells.iter().map(|c| Row {
+            h: c.h,
+            n: c.n,
+            class: c.class.as_str(),
+            energy_error: c.energy_error,
+            position_error: c.position_error,
+            message: c.message.as_deref(),
+        }))
     }
 
     /// The baselines' limits as CSV.
-    pub fn baselines_csv(&self) -> String {
-        let mut out = String::from("method,largest_stable_h,smallest_unstable_h\n");
-        for b in &self.baselines {
-            out.push_str(&format!(
-                "{},{:e},{:e}\n",
-                b.method, b.largest_stable_h, b.smallest_unstable_h
-            ));
+    pub fn baselines_csv(&self) -> Result<String> {
+        /// One CSV line of a baseline's limits.
+        #[derive(Serialize)]
+        struct Row<'a> {
+            method: &'a str,
+            #[serde(serialize_with = "table::sci")]
+            largest_stable_h: f64,
+            #[serde(serialize_with = "table::sci")]
+            smallest_unstable_h: f64,
         }
-        out
+        table::csv_text(self.baselines.iter().map(|b| Row {
+            method: &b.method,
+            largest_stable_h: b.largest_stable_h,
+            smallest_unstable_h: b.smallest_unstable_h,
+        }))
     }
 
     /// Write `stability.{csv,json,svg}` and `stability_baselines.csv` into `dir`.
     pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>> {
         let csv = dir.join("stability.csv");
-        write_file(&csv, &self.csv())?;
+        write_file(&csv, &self.csv()?)?;
         let base = dir.join("stability_baselines.csv");
-        write_file(&base, &self.baselines_csv())?;
+        write_file(&base, &self.baselines_csv()?)?;
         let json = dir.join("stability.json");
         let text =
             serde_json::to_string_pretty(self).map_err(|e| LabError::Serialize(e.to_string()))?;

@@ -21,6 +21,7 @@ use super::{Reference, max_norm_diff, write_file};
 use crate::error::Result;
 use crate::plot::{Chart, Series};
 use crate::scene::BuiltScene;
+use crate::table;
 use galerkin_vi::adaptive::{AdaptiveOptions, DEFAULT_LADDER, ErrorControl, integrate_adaptive};
 use galerkin_vi::baselines::GaussCollocationBaseline;
 use galerkin_vi::integrator::GalerkinIntegrator;
@@ -82,6 +83,38 @@ pub struct ToleranceRow {
     pub oracle: Option<Allocation>,
     /// The oracle's budget: the summed one-step error of the cheapest fixed n.
     pub oracle_budget: Option<f64>,
+}
+
+/// One CSV line of the tolerance study (empty cells where a row has no fixed or oracle run).
+#[derive(Serialize)]
+struct ToleranceCsvRow<'a> {
+    scene: &'a str,
+    #[serde(serialize_with = "table::sci")]
+    tol: f64,
+    control: String,
+    #[serde(serialize_with = "table::sci")]
+    error: f64,
+    #[serde(serialize_with = "table::fixed::<3, _>")]
+    factor: f64,
+    cost: usize,
+    n_min: usize,
+    n_max: usize,
+    checks: usize,
+    warnings: usize,
+    fixed_n: Option<usize>,
+    #[serde(serialize_with = "table::sci_opt")]
+    fixed_error: Option<f64>,
+    fixed_cost: Option<usize>,
+    #[serde(serialize_with = "table::fixed_opt::<3, _>")]
+    saving: Option<f64>,
+    #[serde(serialize_with = "table::fixed::<4, _>")]
+    seconds: f64,
+    #[serde(serialize_with = "table::fixed_opt::<4, _>")]
+    fixed_seconds: Option<f64>,
+    #[serde(serialize_with = "table::fixed_opt::<0, _>")]
+    oracle_cost: Option<f64>,
+    oracle_n_min: Option<usize>,
+    oracle_n_max: Option<usize>,
 }
 
 /// The study of one scene.
@@ -304,66 +337,36 @@ fn study_system<S: System>(
 
 impl ToleranceStudy {
     /// The rows as CSV.
-    pub fn to_csv(&self) -> String {
-        let mut out = String::from(
-            "scene,tol,control,error,factor,cost,n_min,n_max,checks,warnings,fixed_n,\
-             fixed_error,fixed_cost,saving,seconds,fixed_seconds,oracle_cost,oracle_n_min,\
-             oracle_n_max\n",
-        );
-        for r in &self.rows {
-            let (fname, ferr, fcost) = match r.fixed {
-                Some((n, e, c)) => (n.to_string(), format!("{e:e}"), c.to_string()),
-                None => Default::default(),
-            };
-            let (ocost, olo, ohi) = match r.oracle {
-                Some(a) => (
-                    format!("{:.0}", a.cost),
-                    a.n_range.0.to_string(),
-                    a.n_range.1.to_string(),
-                ),
-                None => Default::default(),
-            };
-            out.push_str(&format!(
-                "{},{:e},{},{:e},{:.3},{},{},{},{},{},{},{},{},{},{:.4},{},{},{},{}\n",
-                self.scene,
-                r.tol,
-                r.control,
-                r.error,
-                r.factor,
-                r.cost,
-                r.n_range.0,
-                r.n_range.1,
-                r.checks,
-                r.warnings,
-                fname,
-                ferr,
-                fcost,
-                r.saving.map(|s| format!("{s:.3}")).unwrap_or_default(),
-                r.seconds,
-                r.fixed_seconds
-                    .map(|s| format!("{s:.4}"))
-                    .unwrap_or_default(),
-                ocost,
-                olo,
-                ohi
-            ));
-        }
-        out
+    pub fn to_csv(&self) -> Result<String> {
+        table::csv_text(self.rows.iter().map(|r| ToleranceCsvRow {
+            scene: &self.scene,
+            tol: r.tol,
+            control: r.control.to_string(),
+            error: r.error,
+            factor: r.factor,
+            cost: r.cost,
+            n_min: r.n_range.0,
+            n_max: r.n_range.1,
+            checks: r.checks,
+            warnings: r.warnings,
+            fixed_n: r.fixed.map(|f| f.0),
+            fixed_error: r.fixed.map(|f| f.1),
+            fixed_cost: r.fixed.map(|f| f.2),
+            saving: r.saving,
+            seconds: r.seconds,
+            fixed_seconds: r.fixed_seconds,
+            oracle_cost: r.oracle.map(|a| a.cost),
+            oracle_n_min: r.oracle.map(|a| a.n_range.0),
+            oracle_n_max: r.oracle.map(|a| a.n_range.1),
+        }))
     }
 
     /// The rows as a Markdown table.
     pub fn to_markdown(&self) -> String {
-        let mut out = format!(
-            "{} (h = {}, {} steps; reference: {})\n\n| tol | control | achieved | ×tol | cost | n | \
-             checks | cheapest fixed n | its error | its cost | saving | time (ms) | fixed time (ms) | \
-             oracle per-step n: cost (n) | oracle saving |\n\
-             |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
-            self.scene, self.h, self.steps, self.reference
-        );
-        for r in &self.rows {
-            let fixed = match r.fixed {
-                Some((n, e, c)) => format!("{n} | {e:.1e} | {c}"),
-                None => "none ≤ ladder max | – | –".into(),
+        let rows = self.rows.iter().map(|r| {
+            let (fixed_n, fixed_error, fixed_cost) = match r.fixed {
+                Some((n, e, c)) => (n.to_string(), format!("{e:.1e}"), c.to_string()),
+                None => ("none ≤ ladder max".into(), "–".into(), "–".into()),
             };
             let (oracle, oracle_saving) = match (r.oracle, r.fixed) {
                 (Some(a), Some(f)) => (
@@ -372,27 +375,52 @@ impl ToleranceStudy {
                 ),
                 _ => ("–".into(), "–".into()),
             };
-            out.push_str(&format!(
-                "| {:.0e} | {} | {:.1e} | {:.2} | {} | {}–{} | {} | {} |{} | {:.1} | {} | {} | {} |\n",
-                r.tol,
-                r.control,
-                r.error,
-                r.factor,
-                r.cost,
-                r.n_range.0,
-                r.n_range.1,
-                r.checks,
-                fixed,
-                r.saving.map(|s| format!(" {s:.2}×")).unwrap_or(" –".into()),
-                1e3 * r.seconds,
+            [
+                format!("{:.0e}", r.tol),
+                r.control.to_string(),
+                format!("{:.1e}", r.error),
+                format!("{:.2}", r.factor),
+                r.cost.to_string(),
+                format!("{}–{}", r.n_range.0, r.n_range.1),
+                r.checks.to_string(),
+                fixed_n,
+                fixed_error,
+                fixed_cost,
+                r.saving.map_or("–".into(), |s| format!("{s:.2}×")),
+                format!("{:.1}", 1e3 * r.seconds),
                 r.fixed_seconds
-                    .map(|s| format!("{:.1}", 1e3 * s))
-                    .unwrap_or("–".into()),
+                    .map_or("–".into(), |s| format!("{:.1}", 1e3 * s)),
                 oracle,
                 oracle_saving,
-            ));
-        }
-        out
+            ]
+        });
+        format!(
+            "{} (h = {}, {} steps; reference: {})\n\n{}",
+            self.scene,
+            self.h,
+            self.steps,
+            self.reference,
+            table::markdown(
+                &[
+                    "tol",
+                    "control",
+                    "achieved",
+                    "×tol",
+                    "cost",
+                    "n",
+                    "checks",
+                    "cheapest fixed n",
+                    "its error",
+                    "its cost",
+                    "saving",
+                    "time (ms)",
+                    "fixed time (ms)",
+                    "oracle per-step n: cost (n)",
+                    "oracle saving",
+                ],
+                rows
+            )
+        )
     }
 
     /// Achieved error and cost against tol: adaptive (per control) and cheapest fixed n.
@@ -449,7 +477,7 @@ impl ToleranceStudy {
         let stem = format!("{}-tolerance", self.scene);
         let csv = dir.join(format!("{stem}.csv"));
         let md = dir.join(format!("{stem}.md"));
-        write_file(&csv, &self.to_csv())?;
+        write_file(&csv, &self.to_csv()?)?;
         write_file(&md, &self.to_markdown())?;
         let (e, c) = self.charts();
         let (es, cs) = (

@@ -5,51 +5,67 @@ use crate::error::LabError;
 use crate::error::Result;
 use crate::plot::{Chart, Series};
 use crate::studies::write_file;
+use crate::table;
 use galerkin_vi::integrator::StageSolver;
+use serde::Serialize;
 use std::path::{Path, PathBuf};
 
-fn opt(x: Option<f64>) -> String {
-    x.map(|v| format!("{v:e}")).unwrap_or_default()
+/// One CSV line of a scaling point.
+#[derive(Serialize)]
+struct Row<'a> {
+    family: &'a str,
+    solver: &'a str,
+    n: usize,
+    bodies: usize,
+    dim: usize,
+    #[serde(serialize_with = "table::sci")]
+    h: f64,
+    steps: usize,
+    samples: usize,
+    batch: usize,
+    #[serde(serialize_with = "table::sci")]
+    seconds_per_step: f64,
+    #[serde(serialize_with = "table::sci")]
+    min_seconds_per_step: f64,
+    #[serde(serialize_with = "table::plain")]
+    iterations: f64,
+    #[serde(serialize_with = "table::plain")]
+    inner_iterations: f64,
+    #[serde(serialize_with = "table::plain")]
+    factorizations: f64,
+    #[serde(serialize_with = "table::plain")]
+    fallbacks: f64,
+    #[serde(serialize_with = "table::sci_opt")]
+    map_difference: Option<f64>,
+    #[serde(serialize_with = "table::quoted")]
+    skipped: Option<&'a str>,
+    #[serde(serialize_with = "table::quoted")]
+    failure: Option<&'a str>,
 }
 
 impl ScalingStudy {
     /// Every point as CSV.
-    pub fn csv(&self) -> String {
-        let mut s = String::from(
-            "family,solver,n,bodies,dim,h,steps,samples,batch,seconds_per_step,\
-             min_seconds_per_step,\
-             iterations,\
-             inner_iterations,factorizations,fallbacks,map_difference,skipped,failure\n",
-        );
-        let quote = |x: &Option<String>| {
-            x.as_deref()
-                .map(|f| format!("\"{}\"", f.replace('"', "'")))
-                .unwrap_or_default()
-        };
-        for p in &self.points {
-            s.push_str(&format!(
-                "{},{},{},{},{},{:e},{},{},{},{:e},{:e},{},{},{},{},{},{},{}\n",
-                p.family,
-                p.solver,
-                p.n,
-                p.bodies,
-                p.dim,
-                p.h,
-                p.steps,
-                p.samples,
-                p.batch,
-                p.seconds_per_step,
-                p.min_seconds_per_step,
-                p.iterations,
-                p.inner_iterations,
-                p.factorizations,
-                p.fallbacks,
-                opt(p.map_difference),
-                quote(&p.skipped),
-                quote(&p.failure)
-            ));
-        }
-        s
+    pub fn csv(&self) -> Result<String> {
+        table::csv_text(self.points.iter().map(|p| Row {
+            family: &p.family,
+            solver: &p.solver,
+            n: p.n,
+            bodies: p.bodies,
+            dim: p.dim,
+            h: p.h,
+            steps: p.steps,
+            samples: p.samples,
+            batch: p.batch,
+            seconds_per_step: p.seconds_per_step,
+            min_seconds_per_step: p.min_seconds_per_step,
+            iterations: p.iterations,
+            inner_iterations: p.inner_iterations,
+            factorizations: p.factorizations,
+            fallbacks: p.fallbacks,
+            map_difference: p.map_difference,
+            skipped: p.skipped.as_deref(),
+            failure: p.failure.as_deref(),
+        }))
     }
 
     /// Largest relative map difference from exact over all points.
@@ -62,27 +78,30 @@ impl ScalingStudy {
 
     /// Markdown summary: exponents, auto / best, the point table.
     pub fn summary(&self) -> String {
+        let dash = || "—".to_string();
         let mut s = String::from(
             "# Stage-solver scaling\n\n## Fitted exponents (seconds per step ∝ xᵖ)\n\n",
         );
-        s.push_str(
-            "| family | x | solver | p | points | rms residual (decades) |\n\
-             |---|---|---|---|---|---|\n",
-        );
-        for f in &self.fits {
-            let p = f
-                .exponent
-                .map(|v| format!("{v:.2}"))
-                .unwrap_or_else(|| "—".into());
-            let r = f
-                .residual
-                .map(|v| format!("{v:.3}"))
-                .unwrap_or_else(|| "—".into());
-            s.push_str(&format!(
-                "| {} | {} | {} | {p} | {} | {r} |\n",
-                f.family, f.variable, f.solver, f.points
-            ));
-        }
+        s.push_str(&table::markdown(
+            &[
+                "family",
+                "x",
+                "solver",
+                "p",
+                "points",
+                "rms residual (decades)",
+            ],
+            self.fits.iter().map(|f| {
+                [
+                    f.family.clone(),
+                    f.variable.clone(),
+                    f.solver.clone(),
+                    f.exponent.map_or_else(dash, |v| format!("{v:.2}")),
+                    f.points.to_string(),
+                    f.residual.map_or_else(dash, |v| format!("{v:.3}")),
+                ]
+            }),
+        ));
         let within = self.ratios.iter().filter(|r| r.ratio <= 1.2).count();
         let within_min = self
             .ratios
@@ -91,50 +110,72 @@ impl ScalingStudy {
             .count();
         s.push_str(&format!(
             "\n## auto against the fastest explicit solver\n\nWithin 1.2× by the medians: \
-             {within} of {} points; by the fastest samples: {within_min}.\n\n\
-             | family | n | N | best | best s/step | auto s/step | auto / best | of minima |\n\
-             |---|---|---|---|---|---|---|---|\n",
+             {within} of {} points; by the fastest samples: {within_min}.\n\n",
             self.ratios.len()
         ));
-        for r in &self.ratios {
-            let flag = if r.ratio > 1.2 { " **>1.2**" } else { "" };
-            s.push_str(&format!(
-                "| {} | {} | {} | {} | {:.3e} | {:.3e} | {:.2}{flag} | {:.2} |\n",
-                r.family,
-                r.n,
-                r.bodies,
-                r.best,
-                r.best_seconds,
-                r.auto_seconds,
-                r.ratio,
-                r.ratio_of_minima
-            ));
-        }
+        s.push_str(&table::markdown(
+            &[
+                "family",
+                "n",
+                "N",
+                "best",
+                "best s/step",
+                "auto s/step",
+                "auto / best",
+                "of minima",
+            ],
+            self.ratios.iter().map(|r| {
+                let flag = if r.ratio > 1.2 { " **>1.2**" } else { "" };
+                [
+                    r.family.clone(),
+                    r.n.to_string(),
+                    r.bodies.to_string(),
+                    r.best.to_string(),
+                    format!("{:.3e}", r.best_seconds),
+                    format!("{:.3e}", r.auto_seconds),
+                    format!("{:.2}{flag}", r.ratio),
+                    format!("{:.2}", r.ratio_of_minima),
+                ]
+            }),
+        ));
         s.push_str(&format!(
-            "\n## Points\n\nLargest final-state difference from exact (relative): {:.2e}.\n\n\
-             | family | solver | n | N | s/step | Newton it/step | inner it/step | \
-             factorisations/step | fallbacks/step | Δ vs exact | note |\n\
-             |---|---|---|---|---|---|---|---|---|---|---|\n",
+            "\n## Points\n\nLargest final-state difference from exact (relative): {:.2e}.\n\n",
             self.max_map_difference()
         ));
-        for p in &self.points {
-            let note = p.skipped.as_deref().or(p.failure.as_deref()).unwrap_or("");
-            s.push_str(&format!(
-                "| {} | {} | {} | {} | {:.3e} | {:.2} | {:.1} | {:.2} | {:.2} | {} | {note} |\n",
-                p.family,
-                p.solver,
-                p.n,
-                p.bodies,
-                p.seconds_per_step,
-                p.iterations,
-                p.inner_iterations,
-                p.factorizations,
-                p.fallbacks,
-                p.map_difference
-                    .map(|v| format!("{v:.1e}"))
-                    .unwrap_or_else(|| "—".into())
-            ));
-        }
+        s.push_str(&table::markdown(
+            &[
+                "family",
+                "solver",
+                "n",
+                "N",
+                "s/step",
+                "Newton it/step",
+                "inner it/step",
+                "factorisations/step",
+                "fallbacks/step",
+                "Δ vs exact",
+                "note",
+            ],
+            self.points.iter().map(|p| {
+                [
+                    p.family.clone(),
+                    p.solver.clone(),
+                    p.n.to_string(),
+                    p.bodies.to_string(),
+                    format!("{:.3e}", p.seconds_per_step),
+                    format!("{:.2}", p.iterations),
+                    format!("{:.1}", p.inner_iterations),
+                    format!("{:.2}", p.factorizations),
+                    format!("{:.2}", p.fallbacks),
+                    p.map_difference.map_or_else(dash, |v| format!("{v:.1e}")),
+                    p.skipped
+                        .as_deref()
+                        .or(p.failure.as_deref())
+                        .unwrap_or("")
+                        .to_string(),
+                ]
+            }),
+        ));
         s
     }
 
@@ -194,7 +235,7 @@ impl ScalingStudy {
             "scaling_bodies.svg",
         ];
         let paths: Vec<PathBuf> = names.iter().map(|n| dir.join(n)).collect();
-        write_file(&paths[0], &self.csv())?;
+        write_file(&paths[0], &self.csv()?)?;
         let json =
             serde_json::to_string_pretty(self).map_err(|e| LabError::Serialize(e.to_string()))?;
         write_file(&paths[1], &json)?;

@@ -206,7 +206,7 @@ fn sample_grid(scene: &BuiltScene, config: &WorkPrecisionConfig) -> Result<(f64,
         .unwrap_or(scene.method.h * scene.method.steps as f64);
     if !(horizon.is_finite() && horizon >= dt) {
         return Err(LabError::InvalidArgument {
-            name: "--horizon".into(),
+            name: "horizon".into(),
             reason: format!("{horizon}: must be finite and at least the scene's h = {dt}"),
         });
     }
@@ -252,21 +252,16 @@ pub struct ReferenceSamples {
 impl ReferenceSamples {
     /// CSV: a header `k,t,q0,q1,…`, then one line per sample; numbers in Rust's shortest
     /// round-trip form.
-    pub fn csv(&self) -> String {
+    pub fn csv(&self) -> Result<String> {
         let dim = self.q.first().map_or(0, Vec::len);
-        let mut out = String::from("k,t");
-        for i in 0..dim {
-            out.push_str(&format!(",q{i}"));
-        }
-        out.push('\n');
-        for (k, (t, q)) in self.t.iter().zip(&self.q).enumerate() {
-            out.push_str(&format!("{k},{t:e}"));
-            for x in q {
-                out.push_str(&format!(",{x:e}"));
-            }
-            out.push('\n');
-        }
-        out
+        let mut head = vec!["k".to_string(), "t".to_string()];
+        head.extend((0..dim).map(|i| format!("q{i}")));
+        let rows = self.t.iter().zip(&self.q).enumerate().map(|(k, (t, q))| {
+            let mut row = vec![k.to_string(), format!("{t:e}")];
+            row.extend(q.iter().map(|x| format!("{x:e}")));
+            row
+        });
+        crate::table::csv_records(&head, rows)
     }
 }
 
@@ -538,7 +533,7 @@ impl WorkPrecisionStudy {
     /// Write `work_precision.{csv,json,svg}` and `work_precision.md` into `dir`.
     pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>> {
         let csv = dir.join("work_precision.csv");
-        write_file(&csv, &self.csv())?;
+        write_file(&csv, &self.csv()?)?;
         let json = dir.join("work_precision.json");
         let text =
             serde_json::to_string_pretty(self).map_err(|e| LabError::Serialize(e.to_string()))?;

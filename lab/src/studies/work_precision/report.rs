@@ -1,7 +1,32 @@
 //! The study's chart, CSV table and Markdown summary.
 
 use super::WorkPrecisionStudy;
+use crate::error::Result;
 use crate::plot::{Chart, Series};
+use crate::table;
+use serde::Serialize;
+
+/// One CSV line of a work–precision point.
+#[derive(Serialize)]
+struct WorkRow<'a> {
+    method: &'a str,
+    #[serde(serialize_with = "table::quoted")]
+    parameters: Option<&'a str>,
+    #[serde(serialize_with = "table::sci_opt")]
+    h: Option<f64>,
+    n: Option<usize>,
+    #[serde(serialize_with = "table::sci_opt")]
+    tolerance: Option<f64>,
+    #[serde(serialize_with = "table::sci")]
+    error: f64,
+    #[serde(serialize_with = "table::sci")]
+    seconds: f64,
+    force_evaluations: usize,
+    pareto: bool,
+    #[serde(serialize_with = "table::quoted")]
+    failure: Option<&'a str>,
+    external: bool,
+}
 
 impl WorkPrecisionStudy {
     /// Log-log chart of error against seconds: one series per method (Galerkin per h), and
@@ -56,40 +81,25 @@ impl WorkPrecisionStudy {
     }
 
     /// CSV of every point.
-    pub fn csv(&self) -> String {
-        let mut out = String::from(
-            "method,parameters,h,n,tolerance,error,seconds,force_evaluations,pareto,failure,external\n",
-        );
-        let opt = |x: Option<f64>| x.map(|v| format!("{v:e}")).unwrap_or_default();
-        for p in &self.points {
-            out.push_str(&format!(
-                "{},\"{}\",{},{},{},{:e},{:e},{},{},{},{}\n",
-                p.method,
-                p.parameters,
-                opt(p.h),
-                p.n.map(|n| n.to_string()).unwrap_or_default(),
-                opt(p.tolerance),
-                p.error,
-                p.seconds,
-                p.force_evaluations,
-                p.pareto,
-                p.failure
-                    .as_deref()
-                    .map(|f| format!("\"{}\"", f.replace('"', "'")))
-                    .unwrap_or_default(),
-                p.external
-            ));
-        }
-        out
+    pub fn csv(&self) -> Result<String> {
+        table::csv_text(self.points.iter().map(|p| WorkRow {
+            method: &p.method,
+            parameters: Some(&p.parameters),
+            h: p.h,
+            n: p.n,
+            tolerance: p.tolerance,
+            error: p.error,
+            seconds: p.seconds,
+            force_evaluations: p.force_evaluations,
+            pareto: p.pareto,
+            failure: p.failure.as_deref(),
+            external: p.external,
+        }))
     }
 
     /// Markdown table of the fastest configurations per method and target.
     pub fn summary(&self) -> String {
-        let mut out = format!(
-            "{}: T = {}, errors against the {}\n\n| method | target | fastest | seconds | error |\n|---|---|---|---|---|\n",
-            self.scene, self.horizon, self.reference
-        );
-        for f in &self.fastest {
+        let rows = self.fastest.iter().map(|f| {
             let method = if self
                 .points
                 .iter()
@@ -99,17 +109,31 @@ impl WorkPrecisionStudy {
             } else {
                 f.method.clone()
             };
+            let target = format!("{:.0e}", f.target);
             match &f.best {
-                Some((params, s, e)) => out.push_str(&format!(
-                    "| {method} | {:.0e} | {params} | {s:.3e} | {e:.2e} |\n",
-                    f.target
-                )),
-                None => out.push_str(&format!(
-                    "| {method} | {:.0e} | not reached | | |\n",
-                    f.target
-                )),
+                Some((params, s, e)) => [
+                    method,
+                    target,
+                    params.clone(),
+                    format!("{s:.3e}"),
+                    format!("{e:.2e}"),
+                ],
+                None => [
+                    method,
+                    target,
+                    "not reached".into(),
+                    String::new(),
+                    String::new(),
+                ],
             }
-        }
+        });
+        let mut out = format!(
+            "{}: T = {}, errors against the {}\n\n{}",
+            self.scene,
+            self.horizon,
+            self.reference,
+            table::markdown(&["method", "target", "fastest", "seconds", "error"], rows)
+        );
         if let (Some(g), Some(d)) = (
             self.fastest_time("galerkin", 1e-9),
             self.fastest_time("dop853", 1e-9),
