@@ -25,6 +25,7 @@
 pub mod cli;
 #[cfg(feature = "dop853")]
 pub mod dop853;
+pub mod ensemble;
 pub mod error;
 pub mod fit;
 pub mod lie_run;
