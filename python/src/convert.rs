@@ -38,10 +38,9 @@ fn check_finite(name: &str, values: &[f64], columns: usize) -> PyResult<()> {
     match values.iter().position(|v| !v.is_finite()) {
         None => Ok(()),
         Some(i) => {
-            let at = if columns == 0 {
-                format!("[{i}]")
-            } else {
-                format!("[{}, {}]", i / columns, i % columns)
+            let at = match i.checked_div(columns) {
+                None => format!("[{i}]"),
+                Some(row) => format!("[{row}, {}]", i % columns),
             };
             Err(NonFiniteError::new_err(format!(
                 "{name}{at} = {} is not finite",
@@ -92,6 +91,8 @@ pub fn finite(name: &str, x: f64) -> PyResult<f64> {
     if x.is_finite() {
         Ok(x)
     } else {
-        Err(NonFiniteError::new_err(format!("{name} = {x} is not finite")))
+        Err(NonFiniteError::new_err(format!(
+            "{name} = {x} is not finite"
+        )))
     }
 }

@@ -84,11 +84,17 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("ShapeError", py.get_type::<ShapeError>())?;
     m.add("NonFiniteError", py.get_type::<NonFiniteError>())?;
     m.add("InvalidMethodError", py.get_type::<InvalidMethodError>())?;
-    m.add("InvalidParameterError", py.get_type::<InvalidParameterError>())?;
+    m.add(
+        "InvalidParameterError",
+        py.get_type::<InvalidParameterError>(),
+    )?;
     m.add("ExpressionError", py.get_type::<ExpressionError>())?;
     m.add("SceneError", py.get_type::<SceneError>())?;
     m.add("SolverError", py.get_type::<SolverError>())?;
-    m.add("NonFiniteResultError", py.get_type::<NonFiniteResultError>())?;
+    m.add(
+        "NonFiniteResultError",
+        py.get_type::<NonFiniteResultError>(),
+    )?;
     m.add("UnsupportedError", py.get_type::<UnsupportedError>())?;
     Ok(())
 }

@@ -10,7 +10,7 @@ mod systems;
 mod trajectory;
 
 use convert::{finite, matrix, vector};
-use errors::{InvalidInputError, IntoPy, SolverError};
+use errors::{IntoPy, InvalidInputError, SolverError};
 use galerkin_vi_lab::run::{RunOptions, run_system};
 use galerkin_vi_lab::scene::Scene;
 use pyo3::prelude::*;
@@ -39,7 +39,9 @@ fn apply_overrides(scene: &mut Scene, overrides: &Bound<'_, PyDict>, dim: usize)
             }
             "quadrature" => {
                 let s: String = value.extract().map_err(|_| bad("a quadrature name"))?;
-                m.quadrature = s.parse::<galerkin_vi::quadrature::QuadratureKind>().py_err()?;
+                m.quadrature = s
+                    .parse::<galerkin_vi::quadrature::QuadratureKind>()
+                    .py_err()?;
             }
             "solver" => {
                 let s: String = value.extract().map_err(|_| bad("a stage solver name"))?;

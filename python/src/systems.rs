@@ -5,8 +5,8 @@ use crate::convert::{finite, vector};
 use crate::errors::{IntoPy, UnsupportedError};
 use galerkin_vi::Lagrangian as _;
 use galerkin_vi::systems::{self as sys, ExpressionLagrangian, System as _};
-use pyo3::PyClassInitializer;
 use galerkin_vi_lab::scene::SystemSpec;
+use pyo3::PyClassInitializer;
 use pyo3::prelude::*;
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -153,7 +153,8 @@ impl HarmonicOscillator {
     fn new(mass: f64, stiffness: f64) -> PyResult<PyClassInitializer<Self>> {
         let (m, k) = (finite("mass", mass)?, finite("stiffness", stiffness)?);
         let s = sys::HarmonicOscillator::new(m, k).py_err()?;
-        Ok(PyClassInitializer::from(System::new(SysKind::Harmonic(s))).add_subclass(HarmonicOscillator))
+        Ok(PyClassInitializer::from(System::new(SysKind::Harmonic(s)))
+            .add_subclass(HarmonicOscillator))
     }
 }
 

@@ -50,8 +50,12 @@ impl Integrator {
     ) -> PyResult<Self> {
         let mut method = MethodSpec::spectral(n, finite("h", h)?, 1);
         method.basis = basis.parse::<galerkin_vi::basis::BasisKind>().py_err()?;
-        method.quadrature = quadrature.parse::<galerkin_vi::quadrature::QuadratureKind>().py_err()?;
-        method.solver = solver.parse::<galerkin_vi::integrator::StageSolver>().py_err()?;
+        method.quadrature = quadrature
+            .parse::<galerkin_vi::quadrature::QuadratureKind>()
+            .py_err()?;
+        method.solver = solver
+            .parse::<galerkin_vi::integrator::StageSolver>()
+            .py_err()?;
         method.quad_points = quad_points;
         // Build once now so that a bad n, h or quadrature is an error here, not later.
         method.integrator().py_err()?;
