@@ -12,6 +12,7 @@
 //!   studies, and the paper's experiments.
 //! - [`nbody_report`], [`periodic`], [`lie_run`]: N-body accuracy reports, periodic orbits of
 //!   scenes, rigid-body runs.
+//! - [`ensemble`]: perturbed members of a scene in parallel (`gvi ensemble`).
 //! - [`fit`], [`plot`], [`output`], [`progress`]: rate fits, SVG charts, atomic file output and
 //!   progress bars.
 //! - [`cli`]: the `gvi` command line.
