@@ -314,13 +314,15 @@ impl Statistic {
         } else {
             0.0
         };
+        // With no finite value every statistic is NaN (not ±∞ from an empty fold).
+        let extreme = |f: fn(f64, f64) -> f64| v.iter().copied().reduce(f).unwrap_or(f64::NAN);
         Statistic {
             quantity: quantity.to_string(),
             count: n,
             mean,
             std: var.sqrt(),
-            min: v.iter().copied().fold(f64::INFINITY, f64::min),
-            max: v.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            min: extreme(f64::min),
+            max: extreme(f64::max),
         }
     }
 }

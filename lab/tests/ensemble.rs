@@ -94,6 +94,17 @@ fn perturbations_are_standard_normal_times_sigma() {
 }
 
 #[test]
+fn statistics_of_values() {
+    use galerkin_vi_lab::ensemble::Statistic;
+    let s = Statistic::of("x", [1.0, 2.0, f64::NAN, 3.0, 6.0]);
+    assert_eq!((s.count, s.mean, s.min, s.max), (4, 3.0, 1.0, 6.0));
+    assert!((s.std - (14.0f64 / 3.0).sqrt()).abs() < 1e-15);
+    let empty = Statistic::of("y", [f64::NAN]);
+    assert_eq!(empty.count, 0);
+    assert!(empty.mean.is_nan() && empty.min.is_nan() && empty.max.is_nan());
+}
+
+#[test]
 fn zero_perturbation_gives_identical_members() {
     let s = scene("kepler", 12, 0.5, 20);
     let e = run_ensemble(&s, &options(4, 0.0, 5), None).unwrap();
