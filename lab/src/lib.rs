@@ -13,6 +13,7 @@
 //!   studies, and the paper's experiments.
 //! - [`nbody_report`], [`periodic`], [`run::rigid_body`]: N-body accuracy reports, periodic orbits of
 //!   scenes, rigid-body runs.
+//! - [`ensemble`]: perturbed members of a scene in parallel (`gvi ensemble`).
 //! - [`fit`], [`plot`], [`output`], [`progress`]: rate fits, SVG charts, atomic file output and
 //!   progress bars.
 //! - [`cli`]: the `gvi` command line.
@@ -27,6 +28,7 @@ pub mod cli;
 mod distance;
 #[cfg(feature = "dop853")]
 pub mod dop853;
+pub mod ensemble;
 pub mod error;
 pub mod fit;
 pub mod nbody_report;

@@ -1,6 +1,7 @@
 //! The `gvi` command-line tool.
 
 mod check;
+mod ensemble;
 mod nbody;
 mod periodic;
 mod run;
@@ -58,6 +59,10 @@ enum Command {
     /// Find a periodic orbit (choreography) of a scene's `[periodic]` table by periodic Galerkin
     /// (Fourier basis, Newton on the action), with its Floquet multipliers and a closing run.
     Periodic(Box<periodic::PeriodicArgs>),
+    /// Many runs from Gaussian perturbations of a scene's initial state, in parallel: one CSV
+    /// row per member (final state, invariant errors, Lyapunov estimate), summary statistics
+    /// and the throughput on all threads against one.
+    Ensemble(Box<ensemble::EnsembleArgs>),
     /// List the built-in scenes.
     Scenes,
 }
@@ -77,6 +82,7 @@ pub fn main_with(cli: Cli) -> Result<(), LabError> {
         Command::ToleranceStudy(args) => tolerance::run_tolerance_study(*args),
         Command::SolverScaling(args) => scaling::run_solver_scaling(*args),
         Command::Periodic(args) => periodic::run_periodic(*args),
+        Command::Ensemble(args) => ensemble::run_ensemble_command(*args),
         Command::Scenes => {
             for name in crate::scene::Scene::builtin_names() {
                 let scene = crate::scene::Scene::load(name)?;

@@ -142,7 +142,10 @@ fn dop853<S: System>(
     _tolerance: f64,
     _samples: usize,
 ) -> Result<SampledRun> {
-    Err(GviError::Unsupported("DOP853 needs the cargo feature `dop853`".into()).into())
+    Err(
+        crate::error::GviError::Unsupported("DOP853 needs the cargo feature `dop853`".into())
+            .into(),
+    )
 }
 
 /// The generic loop (monomorphised per method, so timings compare like with like).

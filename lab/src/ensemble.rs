@@ -1,0 +1,520 @@
+//! Ensembles: many runs of one scene from Gaussian perturbations of its initial state, in
+//! parallel over cores (`gvi ensemble`).
+//!
+//! Member i starts at (q₀ + σ ξ_q, p₀ + σ ξ_p) with ξ standard normal, drawn from a
+//! [`StdRng`] seeded by [`member_seed`]`(seed, i)`: every member's draw depends only on the
+//! ensemble seed and its index, never on which thread runs it, so an ensemble is reproducible
+//! bit for bit whatever the number of threads. Each member is integrated step by step with the
+//! exact step Jacobian ([`GalerkinIntegrator::step_jacobian_in`]), which gives at once
+//!
+//! - the final state, the maximum relative energy error max_k |E_k − E_0| / |E_0| and the
+//!   maximum error max_k |J_k − J_0| of every momentum map of the system's symmetries
+//!   (discrete Noether: conserved to round-off at step ends), and
+//! - a largest-Lyapunov-exponent estimate from the tangent map Φ_k = J_{k−1} ⋯ J_0: with
+//!   M_0 = I / ‖I‖_F, M_{k+1} = J_k M_k, renormalised M ← M / ‖M‖_F every
+//!   [`RENORMALISE_EVERY`] steps (so that ‖Φ‖ never overflows), the estimate is
+//!   λ = (Σ ln ‖M‖_F at each renormalisation + ln ‖M_final‖_F) / T = ln(‖Φ_N‖_F / ‖I‖_F) / T.
+//!   For a map conjugate to a rotation (a symplectic integrator of the harmonic oscillator)
+//!   ‖Φ_N‖_F stays bounded, so λ = O(1/T); for a chaotic orbit it tends to the largest
+//!   exponent.
+//!
+//! ```
+//! use galerkin_vi_lab::ensemble::{EnsembleOptions, run_ensemble};
+//! use galerkin_vi_lab::scene::Scene;
+//!
+//! let mut scene = Scene::load("harmonic")?;
+//! scene.method.n = 8;
+//! scene.method.h = 1.0;
+//! scene.method.steps = 20;
+//! let options = EnsembleOptions { count: 4, sigma: 1e-3, seed: 7, ..Default::default() };
+//! let ensemble = run_ensemble(&scene.build()?, &options, None)?;
+//! assert_eq!(ensemble.members.len(), 4);
+//! assert!(ensemble.members.iter().all(|m| m.max_relative_energy_error < 1e-10));
+//! # Ok::<(), galerkin_vi_lab::error::LabError>(())
+//! ```
+
+use crate::error::{LabError, Result};
+use crate::scene::BuiltScene;
+use galerkin_vi::GalerkinIntegrator;
+use galerkin_vi::Lagrangian;
+use galerkin_vi::basis::Basis;
+use galerkin_vi::geometry::NamedMomentumMap;
+use galerkin_vi::quadrature::Quadrature;
+use galerkin_vi::systems::System;
+use indicatif::ProgressBar;
+use nalgebra::DMatrix;
+use rand::rngs::StdRng;
+use rand::{RngExt, SeedableRng};
+use rayon::prelude::*;
+use std::fmt::Write as _;
+
+/// Steps between two renormalisations of the tangent map. ‖J_k‖ ≤ e^{λ_max h} per step, so
+/// ten steps keep ‖M‖ far from overflow for any physical λ h < 70.
+pub const RENORMALISE_EVERY: usize = 10;
+
+/// Largest ensemble accepted (members are held in memory with their results).
+pub const MAX_MEMBERS: usize = 10_000_000;
+
+/// What an ensemble is: how many members, the perturbation size and the seed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EnsembleOptions {
+    /// Number of members (≥ 1).
+    pub count: usize,
+    /// Standard deviation σ of the Gaussian perturbation of every component of q and p
+    /// (absolute, ≥ 0; 0 gives identical members).
+    pub sigma: f64,
+    /// Ensemble seed.
+    pub seed: u64,
+}
+
+impl Default for EnsembleOptions {
+    fn default() -> Self {
+        EnsembleOptions {
+            count: 16,
+            sigma: 1e-6,
+            seed: 0,
+        }
+    }
+}
+
+impl EnsembleOptions {
+    /// Check the count and σ (a typed error naming the flag).
+    pub fn validate(&self) -> Result<()> {
+        if self.count == 0 || self.count > MAX_MEMBERS {
+            return Err(LabError::InvalidArgument {
+                name: "--count".into(),
+                reason: format!(
+                    "{} members: an ensemble needs 1 ≤ count ≤ {MAX_MEMBERS}",
+                    self.count
+                ),
+            });
+        }
+        if !(self.sigma.is_finite() && self.sigma >= 0.0) {
+            return Err(LabError::InvalidArgument {
+                name: "--perturb".into(),
+                reason: format!(
+                    "σ = {}: the perturbation's standard deviation must be finite and ≥ 0",
+                    self.sigma
+                ),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// One member's initial state.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Member {
+    /// Index in the ensemble.
+    pub member: usize,
+    /// The seed of its perturbation ([`member_seed`]).
+    pub seed: u64,
+    /// Initial position.
+    pub q0: Vec<f64>,
+    /// Initial momentum.
+    pub p0: Vec<f64>,
+    /// Euclidean norm of the perturbation (δq, δp).
+    pub perturbation_norm: f64,
+}
+
+/// SplitMix64's finaliser: a bijective mixing of 64 bits (Steele, Lea & Flood 2014).
+fn splitmix64(mut z: u64) -> u64 {
+    z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// The seed of member `member` of an ensemble seeded by `seed`: a hash of both, so members'
+/// streams are unrelated and each depends only on (seed, member).
+pub fn member_seed(seed: u64, member: usize) -> u64 {
+    splitmix64(seed ^ splitmix64(member as u64))
+}
+
+/// One standard normal deviate by the Box–Muller transform (two uniforms give
+/// √(−2 ln u₁) cos 2πu₂); u₁ ∈ (0, 1] so the logarithm is finite. Written out rather than
+/// taken from `rand_distr` to keep the dependency list short.
+fn standard_normal(rng: &mut StdRng) -> f64 {
+    let u1 = 1.0 - rng.random::<f64>(); // (0, 1]
+    let u2 = rng.random::<f64>();
+    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+}
+
+/// The members' initial states: (q0, p0) plus σ times standard normal deviates.
+pub fn perturbed_members(q0: &[f64], p0: &[f64], options: &EnsembleOptions) -> Result<Vec<Member>> {
+    options.validate()?;
+    galerkin_vi::error::ensure_finite("initial position q0", q0)?;
+    galerkin_vi::error::ensure_finite("initial momentum p0", p0)?;
+    Ok((0..options.count)
+        .map(|i| {
+            let seed = member_seed(options.seed, i);
+            let mut rng = StdRng::seed_from_u64(seed);
+            let mut norm2 = 0.0;
+            let mut perturb = |x: &[f64]| -> Vec<f64> {
+                x.iter()
+                    .map(|&v| {
+                        let d = options.sigma * standard_normal(&mut rng);
+                        norm2 += d * d;
+                        v + d
+                    })
+                    .collect()
+            };
+            let q = perturb(q0);
+            let p = perturb(p0);
+            Member {
+                member: i,
+                seed,
+                q0: q,
+                p0: p,
+                perturbation_norm: norm2.sqrt(),
+            }
+        })
+        .collect())
+}
+
+/// What one member's run measured.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MemberResult {
+    /// Index in the ensemble.
+    pub member: usize,
+    /// The seed of its perturbation.
+    pub seed: u64,
+    /// Norm of its initial perturbation.
+    pub perturbation_norm: f64,
+    /// Steps completed (the requested number unless the run failed).
+    pub steps_completed: usize,
+    /// Final position.
+    pub q: Vec<f64>,
+    /// Final momentum.
+    pub p: Vec<f64>,
+    /// max_k |E_k − E_0| / |E_0| (NaN when the system has no energy invariant or E_0 = 0).
+    pub max_relative_energy_error: f64,
+    /// max_k |J_k − J_0| for each momentum map of the system's symmetries.
+    pub momentum_errors: Vec<f64>,
+    /// Largest-Lyapunov-exponent estimate ln(‖Φ_N‖_F / ‖I‖_F) / T.
+    pub lyapunov: f64,
+    /// The error that stopped the run early, if any.
+    pub failure: Option<String>,
+}
+
+/// Integrate one member for `steps` steps, measuring invariants and the tangent map.
+/// A Newton failure is recorded in [`MemberResult::failure`] with the figures of the steps
+/// before it; invalid input (a wrong dimension) is an `Err`.
+pub fn run_member<S: System, B: Basis, Q: Quadrature>(
+    gvi: &GalerkinIntegrator<B, Q>,
+    system: &S,
+    symmetries: &[NamedMomentumMap],
+    member: &Member,
+    steps: usize,
+) -> Result<MemberResult> {
+    let d = system.dim();
+    galerkin_vi::error::ensure_len("initial position q0", d, member.q0.len())?;
+    galerkin_vi::error::ensure_len("initial momentum p0", d, member.p0.len())?;
+    let mut ws = gvi.workspace(system)?;
+    let energy_index = system.invariant_names().iter().position(|n| *n == "energy");
+    // Every buffer of the loop is allocated here; the step Jacobian itself is returned owned
+    // by the library (`StepJacobian`).
+    let mut inv = vec![0.0; system.invariant_names().len()];
+    let mut xi = vec![0.0; d];
+    let momentum = |map: &NamedMomentumMap, q: &[f64], p: &[f64], xi: &mut [f64]| {
+        map.map.generator(q, xi);
+        p.iter().zip(xi.iter()).map(|(a, b)| a * b).sum::<f64>()
+    };
+    let (mut q, mut p) = (member.q0.clone(), member.p0.clone());
+    system.invariants(&q, &p, &mut inv);
+    let e0 = energy_index.map(|i| inv[i]);
+    let j0: Vec<f64> = symmetries
+        .iter()
+        .map(|s| momentum(s, &q, &p, &mut xi))
+        .collect();
+    let mut energy_error = 0.0f64;
+    let mut momentum_errors = vec![0.0f64; symmetries.len()];
+    let d2 = 2 * d;
+    let mut tangent = DMatrix::<f64>::identity(d2, d2) / (d2 as f64).sqrt();
+    let mut product = DMatrix::<f64>::zeros(d2, d2);
+    let mut log_growth = 0.0;
+    let mut failure = None;
+    let mut completed = 0;
+    for k in 0..steps {
+        let sj = match gvi.step_jacobian_in(system, &mut ws, &q, &p, k) {
+            Ok(sj) => sj,
+            Err(e) => {
+                failure = Some(e.to_string());
+                break;
+            }
+        };
+        product.gemm(1.0, &sj.matrix, &tangent, 0.0);
+        std::mem::swap(&mut tangent, &mut product);
+        q.copy_from_slice(&sj.q_next);
+        p.copy_from_slice(&sj.p_next);
+        completed = k + 1;
+        if completed % RENORMALISE_EVERY == 0 {
+            let s = tangent.norm();
+            log_growth += s.ln();
+            tangent /= s;
+        }
+        system.invariants(&q, &p, &mut inv);
+        if let (Some(i), Some(e0)) = (energy_index, e0) {
+            energy_error = energy_error.max(((inv[i] - e0) / e0).abs());
+        }
+        for ((err, s), j0) in momentum_errors.iter_mut().zip(symmetries).zip(&j0) {
+            *err = err.max((momentum(s, &q, &p, &mut xi) - j0).abs());
+        }
+    }
+    let time = completed as f64 * gvi.step_size();
+    let lyapunov = if completed == 0 {
+        f64::NAN
+    } else {
+        (log_growth + tangent.norm().ln()) / time
+    };
+    let max_relative_energy_error = match e0 {
+        Some(e0) if e0 != 0.0 => energy_error,
+        _ => f64::NAN,
+    };
+    Ok(MemberResult {
+        member: member.member,
+        seed: member.seed,
+        perturbation_norm: member.perturbation_norm,
+        steps_completed: completed,
+        q,
+        p,
+        max_relative_energy_error,
+        momentum_errors,
+        lyapunov,
+        failure,
+    })
+}
+
+/// Mean, standard deviation (n − 1), minimum and maximum of one quantity over the members
+/// that completed their run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Statistic {
+    /// The quantity (a CSV column name).
+    pub quantity: String,
+    /// Members counted (finite values of completed runs).
+    pub count: usize,
+    /// Mean.
+    pub mean: f64,
+    /// Sample standard deviation (0 for one member).
+    pub std: f64,
+    /// Minimum.
+    pub min: f64,
+    /// Maximum.
+    pub max: f64,
+}
+
+impl Statistic {
+    /// The statistics of `values` (non-finite values are left out).
+    pub fn of(quantity: &str, values: impl IntoIterator<Item = f64>) -> Statistic {
+        let v: Vec<f64> = values.into_iter().filter(|x| x.is_finite()).collect();
+        let n = v.len();
+        let mean = v.iter().sum::<f64>() / n as f64;
+        let var = if n > 1 {
+            v.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1) as f64
+        } else {
+            0.0
+        };
+        // With no finite value every statistic is NaN (not ±∞ from an empty fold).
+        let extreme = |f: fn(f64, f64) -> f64| v.iter().copied().reduce(f).unwrap_or(f64::NAN);
+        Statistic {
+            quantity: quantity.to_string(),
+            count: n,
+            mean,
+            std: var.sqrt(),
+            min: extreme(f64::min),
+            max: extreme(f64::max),
+        }
+    }
+}
+
+/// An ensemble's results: one [`MemberResult`] per member, in member order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Ensemble {
+    /// System name.
+    pub system: String,
+    /// Method description.
+    pub method: String,
+    /// Steps per member.
+    pub steps: usize,
+    /// Step size.
+    pub h: f64,
+    /// Configuration dimension D.
+    pub dim: usize,
+    /// Names of the momentum maps, in the order of [`MemberResult::momentum_errors`].
+    pub momentum_names: Vec<String>,
+    /// The members' results.
+    pub members: Vec<MemberResult>,
+}
+
+impl Ensemble {
+    /// The CSV header: member, seed, perturbation norm, steps completed, final q and p, the
+    /// invariant errors and the Lyapunov estimate.
+    pub fn columns(&self) -> Vec<String> {
+        let mut c: Vec<String> = ["member", "seed", "perturbation_norm", "steps_completed"]
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+        c.extend((0..self.dim).map(|i| format!("q{i}")));
+        c.extend((0..self.dim).map(|i| format!("p{i}")));
+        c.push("max_rel_energy_error".into());
+        c.extend(self.momentum_names.iter().map(|n| format!("max_{n}_error")));
+        c.push("lyapunov".into());
+        c
+    }
+
+    /// One row per member (final q and p at full precision: the file is reproducible byte
+    /// for byte from the seed).
+    pub fn to_csv(&self) -> String {
+        let mut out = self.columns().join(",");
+        out.push('\n');
+        for m in &self.members {
+            let _ = write!(
+                out,
+                "{},{},{:e},{}",
+                m.member, m.seed, m.perturbation_norm, m.steps_completed
+            );
+            for x in
+                m.q.iter()
+                    .chain(&m.p)
+                    .chain(std::iter::once(&m.max_relative_energy_error))
+                    .chain(&m.momentum_errors)
+                    .chain(std::iter::once(&m.lyapunov))
+            {
+                let _ = write!(out, ",{x:e}");
+            }
+            out.push('\n');
+        }
+        out
+    }
+
+    /// The members whose run completed.
+    pub fn completed(&self) -> impl Iterator<Item = &MemberResult> {
+        self.members.iter().filter(|m| m.failure.is_none())
+    }
+
+    /// Statistics of the invariant errors and of the Lyapunov estimates over the completed
+    /// members.
+    pub fn summary(&self) -> Vec<Statistic> {
+        let mut s = vec![Statistic::of(
+            "max_rel_energy_error",
+            self.completed().map(|m| m.max_relative_energy_error),
+        )];
+        for (i, name) in self.momentum_names.iter().enumerate() {
+            s.push(Statistic::of(
+                &format!("max_{name}_error"),
+                self.completed().map(|m| m.momentum_errors[i]),
+            ));
+        }
+        s.push(Statistic::of(
+            "lyapunov",
+            self.completed().map(|m| m.lyapunov),
+        ));
+        s
+    }
+
+    /// [`summary`](Self::summary) as CSV (quantity, count, mean, std, min, max).
+    pub fn summary_csv(&self) -> String {
+        let mut out = String::from("quantity,count,mean,std,min,max\n");
+        for s in self.summary() {
+            let _ = writeln!(
+                out,
+                "{},{},{:e},{:e},{:e},{:e}",
+                s.quantity, s.count, s.mean, s.std, s.min, s.max
+            );
+        }
+        out
+    }
+}
+
+impl std::fmt::Display for Ensemble {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let failed = self.members.len() - self.completed().count();
+        writeln!(
+            f,
+            "{}: {}, {} members × {} steps (T = {}), {failed} failed",
+            self.system,
+            self.method,
+            self.members.len(),
+            self.steps,
+            self.steps as f64 * self.h
+        )?;
+        writeln!(
+            f,
+            "  {:<28} {:>10} {:>10} {:>10} {:>10}",
+            "quantity", "mean", "std", "min", "max"
+        )?;
+        for s in self.summary() {
+            writeln!(
+                f,
+                "  {:<28} {:>10.3e} {:>10.3e} {:>10.3e} {:>10.3e}",
+                s.quantity, s.mean, s.std, s.min, s.max
+            )?;
+        }
+        if let Some(m) = self.members.iter().find(|m| m.failure.is_some()) {
+            write!(
+                f,
+                "  first failure (member {}): {}",
+                m.member,
+                m.failure.as_deref().unwrap_or("")
+            )?;
+        }
+        Ok(())
+    }
+}
+
+/// Run every member of an ensemble of `scene` in parallel on the current rayon pool (call it
+/// inside [`rayon::ThreadPool::install`] to choose the threads), advancing `progress` by one
+/// per member. The results are in member order and do not depend on the number of threads.
+pub fn run_ensemble(
+    scene: &BuiltScene,
+    options: &EnsembleOptions,
+    progress: Option<&ProgressBar>,
+) -> Result<Ensemble> {
+    let members = perturbed_members(&scene.initial.q, &scene.initial.p, options)?;
+    run_members(scene, &members, progress)
+}
+
+/// Run the given members (e.g. a subset of [`perturbed_members`]) in parallel.
+pub fn run_members(
+    scene: &BuiltScene,
+    members: &[Member],
+    progress: Option<&ProgressBar>,
+) -> Result<Ensemble> {
+    let m = &scene.method;
+    if m.tol.is_some() {
+        return Err(LabError::InvalidArgument {
+            name: "tol".into(),
+            reason: "ensembles run at fixed n (the tangent map is that of the fixed-n method); \
+                     remove the scene's tol"
+                .into(),
+        });
+    }
+    let system = scene.euclidean()?;
+    let gvi = m.integrator()?;
+    let symmetries = system.symmetries();
+    let results = members
+        .par_iter()
+        .map(|member| {
+            let r = run_member(&gvi, system, &symmetries, member, m.steps);
+            if let Some(pb) = progress {
+                pb.inc(1);
+            }
+            r
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Ok(Ensemble {
+        system: system.name().to_string(),
+        method: format!(
+            "{} basis, n = {}, {}, h = {}",
+            gvi.basis().name(),
+            gvi.n(),
+            gvi.quadrature().name(),
+            gvi.step_size()
+        ),
+        steps: m.steps,
+        h: m.h,
+        dim: system.dim(),
+        momentum_names: symmetries.iter().map(|s| s.name.clone()).collect(),
+        members: results,
+    })
+}

@@ -1,0 +1,16 @@
+"""Mechanical systems: the built-ins and Lagrangians written as expressions.
+
+Every class derives from :class:`System` (``dim``, ``name``, ``invariant_names``,
+``invariants(q, p)``).
+
+- ``Kepler(mu=1.0)``: planar Kepler problem, D = 2;
+- ``HarmonicOscillator(mass=1.0, stiffness=1.0)``: D = 1;
+- ``Pendulum(length=1.0, gravity=1.0, mass=1.0)``: D = 1;
+- ``NBody(masses, dim=2, g=1.0)``: point masses, body-major coordinates, p = m v;
+- ``Expression(lagrangian, coordinates, parameters=None)``: L(q, q̇) as an expression, e.g.
+  ``Expression("x_dot^2/2 - x^2/2", ["x"])``.
+"""
+
+from ._native import Expression, HarmonicOscillator, Kepler, NBody, Pendulum, System
+
+__all__ = ["Expression", "HarmonicOscillator", "Kepler", "NBody", "Pendulum", "System"]

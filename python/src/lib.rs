@@ -1,0 +1,150 @@
+//! Python bindings of galerkin-vi (module `galerkin_vi._native`, re-exported by the Python
+//! package `galerkin_vi`): `run_scene`, `Integrator`, the systems of `galerkin_vi.systems`,
+//! `Trajectory` with numpy arrays and dense output, `integrate_many` (rayon, GIL released) and
+//! typed exceptions. Every input is checked before it reaches the library; no panic crosses
+//! the boundary.
+
+mod convert;
+mod errors;
+mod systems;
+mod trajectory;
+
+use convert::{finite, matrix, vector};
+use errors::{IntoPy, InvalidInputError, SolverError};
+use galerkin_vi::Lagrangian as _;
+use galerkin_vi_lab::run::RunOptions;
+use galerkin_vi_lab::scene::Scene;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use rayon::prelude::*;
+use systems::System;
+use trajectory::{Integrator, Trajectory};
+
+/// Apply `run_scene`'s keyword overrides to a scene, naming any unknown key.
+fn apply_overrides(scene: &mut Scene, overrides: &Bound<'_, PyDict>, dim: usize) -> PyResult<()> {
+    for (key, value) in overrides.iter() {
+        let key: String = key.extract()?;
+        let m = &mut scene.method;
+        let bad = |what: &str| InvalidInputError::new_err(format!("{key}: expected {what}"));
+        match key.as_str() {
+            "n" => m.n = value.extract().map_err(|_| bad("a whole number ≥ 2"))?,
+            "steps" => m.steps = value.extract().map_err(|_| bad("a whole number ≥ 1"))?,
+            "h" => m.h = finite("h", value.extract().map_err(|_| bad("a number"))?)?,
+            "tol" => {
+                let tol: Option<f64> = value.extract().map_err(|_| bad("a number or None"))?;
+                m.tol = tol.map(|t| finite("tol", t)).transpose()?;
+            }
+            "basis" => {
+                let s: String = value.extract().map_err(|_| bad("a basis name"))?;
+                m.basis = s.parse::<galerkin_vi::basis::BasisKind>().py_err()?;
+            }
+            "quadrature" => {
+                let s: String = value.extract().map_err(|_| bad("a quadrature name"))?;
+                m.quadrature = s
+                    .parse::<galerkin_vi::quadrature::QuadratureKind>()
+                    .py_err()?;
+            }
+            "solver" => {
+                let s: String = value.extract().map_err(|_| bad("a stage solver name"))?;
+                m.solver = s.parse::<galerkin_vi::integrator::StageSolver>().py_err()?;
+            }
+            "q0" => scene.initial.q = vector(&value, "q0", Some(dim))?,
+            "p0" => scene.initial.p = vector(&value, "p0", Some(dim))?,
+            other => {
+                return Err(InvalidInputError::new_err(format!(
+                    "unknown override '{other}' (expected n, h, steps, basis, quadrature, \
+                     solver, tol, q0 or p0)"
+                )));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Run a scene (a built-in name such as "kepler", or the path of a TOML scene file) with
+/// optional overrides of its method and initial state: n, h, steps, basis, quadrature,
+/// solver, tol, q0, p0. Returns the `Trajectory`.
+#[pyfunction]
+#[pyo3(signature = (name_or_path, **overrides))]
+fn run_scene(
+    py: Python<'_>,
+    name_or_path: &str,
+    overrides: Option<&Bound<'_, PyDict>>,
+) -> PyResult<Trajectory> {
+    let mut scene = Scene::load(name_or_path).py_err()?;
+    if let Some(o) = overrides {
+        let dim = systems::system_of(&scene.build().py_err()?)?.dim();
+        apply_overrides(&mut scene, o, dim)?;
+    }
+    let scene = scene.build().py_err()?;
+    let kind = std::sync::Arc::new(systems::system_of(&scene)?);
+    let options = RunOptions {
+        curve_samples_per_step: 0,
+        chart: false,
+    };
+    let result = py
+        .detach(|| galerkin_vi_lab::run::run_scene(&scene, options))
+        .py_err()?;
+    if let Some(failure) = result.failure {
+        return Err(errors::lab_error(failure));
+    }
+    match result.trajectory {
+        Some(traj) => Ok(Trajectory::new(traj, kind, scene.method.clone())),
+        None => Err(SolverError::new_err("the run produced no trajectory")),
+    }
+}
+
+/// Integrate many initial states of one system in parallel (rayon over members, the GIL
+/// released): `q0s`, `p0s` of shape (members, D). Returns a list of `Trajectory`, in order;
+/// equal to a loop of `integrator.integrate`. `integrator` defaults to `Integrator()`.
+#[pyfunction]
+#[pyo3(signature = (system, q0s, p0s, steps, integrator = None))]
+fn integrate_many(
+    py: Python<'_>,
+    system: &Bound<'_, System>,
+    q0s: &Bound<'_, PyAny>,
+    p0s: &Bound<'_, PyAny>,
+    steps: usize,
+    integrator: Option<&Bound<'_, Integrator>>,
+) -> PyResult<Vec<Trajectory>> {
+    let kind = system.get().kind.clone();
+    let d = kind.dim();
+    let q0s = matrix(q0s, "q0s", d)?;
+    let p0s = matrix(p0s, "p0s", d)?;
+    if q0s.len() != p0s.len() {
+        return Err(errors::ShapeError::new_err(format!(
+            "q0s and p0s: {} and {} members (rows) must agree",
+            q0s.len(),
+            p0s.len()
+        )));
+    }
+    let method = match integrator {
+        Some(i) => i.get().method.clone(),
+        None => galerkin_vi::method::MethodSpec::spectral(16, 1.0, 1),
+    };
+    let results = py.detach(|| {
+        q0s.par_iter()
+            .zip(&p0s)
+            .map(|(q, p)| Integrator::run(&method, &kind, q, p, steps))
+            .collect::<Vec<_>>()
+    });
+    results
+        .into_iter()
+        .map(|r| {
+            r.py_err()
+                .map(|t| Trajectory::new(t, kind.clone(), method.clone()))
+        })
+        .collect()
+}
+
+/// The extension module.
+#[pymodule]
+fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    errors::register(m)?;
+    systems::register(m)?;
+    m.add_class::<Integrator>()?;
+    m.add_class::<Trajectory>()?;
+    m.add_function(wrap_pyfunction!(run_scene, m)?)?;
+    m.add_function(wrap_pyfunction!(integrate_many, m)?)?;
+    Ok(())
+}

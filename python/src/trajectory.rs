@@ -1,0 +1,325 @@
+//! `Integrator` (a method: basis, n, quadrature, h, stage solver) and `Trajectory` (states,
+//! Galerkin coefficients, dense output, invariants and the geometric check).
+
+use crate::convert::{finite, vector};
+use crate::errors::{IntoPy, NonFiniteError};
+use crate::systems::{SysKind, System};
+use crate::with_system;
+use galerkin_vi::Lagrangian as _;
+use galerkin_vi::geometry::{relative_symplecticity_defect, symplecticity_defect};
+use galerkin_vi::method::MethodSpec;
+use galerkin_vi::systems::System as _;
+use numpy::ndarray::{Array1, Array2, Array3};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::sync::Arc;
+
+/// A Galerkin variational integrator: `Integrator(basis="chebyshev", n=16,
+/// quadrature="gauss-legendre", h=1.0, solver="auto", quad_points=None)`.
+#[pyclass(frozen, module = "galerkin_vi")]
+pub struct Integrator {
+    pub(crate) method: MethodSpec,
+}
+
+impl Integrator {
+    /// Integrate one member without the GIL's help (pure Rust).
+    pub(crate) fn run(
+        method: &MethodSpec,
+        kind: &SysKind,
+        q0: &[f64],
+        p0: &[f64],
+        steps: usize,
+    ) -> Result<galerkin_vi::Trajectory, galerkin_vi::GviError> {
+        let gvi = method.integrator()?;
+        with_system!(kind, s => gvi.integrate(s, 0.0, q0, p0, steps)).map_err(Into::into)
+    }
+}
+
+#[pymethods]
+impl Integrator {
+    #[new]
+    #[pyo3(signature = (basis = "chebyshev", n = 16, quadrature = "gauss-legendre", h = 1.0,
+                        solver = "auto", quad_points = None))]
+    fn new(
+        basis: &str,
+        n: usize,
+        quadrature: &str,
+        h: f64,
+        solver: &str,
+        quad_points: Option<usize>,
+    ) -> PyResult<Self> {
+        let mut method = MethodSpec::spectral(n, finite("h", h)?, 1);
+        method.basis = basis.parse::<galerkin_vi::basis::BasisKind>().py_err()?;
+        method.quadrature = quadrature
+            .parse::<galerkin_vi::quadrature::QuadratureKind>()
+            .py_err()?;
+        method.solver = solver
+            .parse::<galerkin_vi::integrator::StageSolver>()
+            .py_err()?;
+        method.quad_points = quad_points;
+        // Build once now so that a bad n, h or quadrature is an error here, not later.
+        method.integrator().py_err()?;
+        Ok(Integrator { method })
+    }
+
+    /// Integrate `steps` steps of `system` from (q0, p0) at t = 0.
+    fn integrate(
+        &self,
+        py: Python<'_>,
+        system: &Bound<'_, System>,
+        q0: &Bound<'_, PyAny>,
+        p0: &Bound<'_, PyAny>,
+        steps: usize,
+    ) -> PyResult<Trajectory> {
+        let kind = system.get().kind.clone();
+        let d = kind.dim();
+        let q0 = vector(q0, "q0", Some(d))?;
+        let p0 = vector(p0, "p0", Some(d))?;
+        let method = self.method.clone();
+        let traj = py
+            .detach(|| Integrator::run(&method, &kind, &q0, &p0, steps))
+            .py_err()?;
+        Ok(Trajectory::new(traj, kind, method))
+    }
+
+    /// Number of basis functions n.
+    #[getter]
+    fn n(&self) -> usize {
+        self.method.n
+    }
+
+    /// Step size h.
+    #[getter]
+    fn h(&self) -> f64 {
+        self.method.h
+    }
+
+    fn __repr__(&self) -> String {
+        let m = &self.method;
+        format!(
+            "Integrator(basis='{}', n={}, quadrature='{}', h={}, solver='{}')",
+            m.basis.as_str(),
+            m.n,
+            m.quadrature.as_str(),
+            m.h,
+            m.solver.as_str()
+        )
+    }
+}
+
+/// The result of an integration: `t`, `q`, `p` (numpy arrays, steps + 1 rows), the Galerkin
+/// `coefficients` of every step (steps × n × D), dense output along the Galerkin curves and the
+/// invariants.
+#[pyclass(frozen, module = "galerkin_vi")]
+pub struct Trajectory {
+    pub(crate) inner: galerkin_vi::Trajectory,
+    kind: Arc<SysKind>,
+    method: MethodSpec,
+}
+
+impl Trajectory {
+    pub(crate) fn new(
+        inner: galerkin_vi::Trajectory,
+        kind: Arc<SysKind>,
+        method: MethodSpec,
+    ) -> Self {
+        Trajectory {
+            inner,
+            kind,
+            method,
+        }
+    }
+
+    fn rows<'py>(py: Python<'py>, rows: &[Vec<f64>], d: usize) -> Bound<'py, PyArray2<f64>> {
+        let flat: Vec<f64> = rows.iter().flatten().copied().collect();
+        Array2::from_shape_vec((rows.len(), d), flat)
+            .unwrap_or_else(|_| Array2::zeros((0, d)))
+            .into_pyarray(py)
+    }
+
+    /// Evaluate `f` at a scalar t (1-D result) or at every entry of an array of times (2-D).
+    fn dense<'py>(
+        &self,
+        t: &Bound<'py, PyAny>,
+        f: impl Fn(f64) -> PyResult<Vec<f64>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let py = t.py();
+        if let Ok(x) = t.extract::<f64>() {
+            let x = finite("t", x)?;
+            return Ok(f(x)?.into_pyarray(py).into_any());
+        }
+        let times = vector(t, "t", None)?;
+        let d = self.inner.dim;
+        let mut out = Vec::with_capacity(times.len() * d);
+        for &x in &times {
+            out.extend(f(x)?);
+        }
+        let a = Array2::from_shape_vec((times.len(), d), out)
+            .map_err(|e| NonFiniteError::new_err(e.to_string()))?;
+        Ok(a.into_pyarray(py).into_any())
+    }
+}
+
+#[pymethods]
+impl Trajectory {
+    /// Times t_k = k h (steps + 1 of them).
+    #[getter]
+    fn t<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        Array1::from(self.inner.times()).into_pyarray(py)
+    }
+
+    /// Positions q_k, shape (steps + 1, D).
+    #[getter]
+    fn q<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        Self::rows(py, &self.inner.q, self.inner.dim)
+    }
+
+    /// Momenta p_k, shape (steps + 1, D).
+    #[getter]
+    fn p<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        Self::rows(py, &self.inner.p, self.inner.dim)
+    }
+
+    /// Galerkin coefficients of every step, shape (steps, n, D) (row i = Q_i).
+    #[getter]
+    fn coefficients<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<f64>>> {
+        let (steps, n, d) = (self.inner.steps(), self.inner.n, self.inner.dim);
+        let flat: Vec<f64> = self.inner.coefficients.iter().flatten().copied().collect();
+        let a = Array3::from_shape_vec((steps, n, d), flat).map_err(|_| {
+            crate::errors::UnsupportedError::new_err(
+                "coefficients: steps use different n (tolerance-driven run)",
+            )
+        })?;
+        Ok(a.into_pyarray(py))
+    }
+
+    /// Number of steps.
+    #[getter]
+    fn steps(&self) -> usize {
+        self.inner.steps()
+    }
+
+    /// Step size h.
+    #[getter]
+    fn h(&self) -> f64 {
+        self.inner.h
+    }
+
+    /// Number of basis functions n.
+    #[getter]
+    fn n(&self) -> usize {
+        self.inner.n
+    }
+
+    /// Configuration dimension D.
+    #[getter]
+    fn dim(&self) -> usize {
+        self.inner.dim
+    }
+
+    /// Newton iterations over the run.
+    #[getter]
+    fn newton_iterations(&self) -> usize {
+        self.inner.newton_iterations()
+    }
+
+    /// q(t) on the Galerkin curves: t a number (shape (D,)) or an array (shape (len(t), D)).
+    fn position_at<'py>(&self, t: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+        self.dense(t, |x| self.inner.position_at(x).py_err())
+    }
+
+    /// p(t) = ∂L/∂q̇ on the Galerkin curves: t a number or an array.
+    fn momentum_at<'py>(&self, t: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+        self.dense(t, |x| {
+            with_system!(&*self.kind, s => self.inner.momentum_at(s, x)).py_err()
+        })
+    }
+
+    /// The invariants at every step end, as a dict name → array (steps + 1).
+    #[getter]
+    fn invariants<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let dict = PyDict::new(py);
+        with_system!(&*self.kind, s => {
+            let names = s.invariant_names();
+            let mut columns = vec![Vec::with_capacity(self.inner.q.len()); names.len()];
+            let mut buf = vec![0.0; names.len()];
+            for (q, p) in self.inner.q.iter().zip(&self.inner.p) {
+                s.invariants(q, p, &mut buf);
+                for (c, v) in columns.iter_mut().zip(&buf) {
+                    c.push(*v);
+                }
+            }
+            for (name, c) in names.iter().zip(columns) {
+                dict.set_item(*name, c.into_pyarray(py))?;
+            }
+        });
+        Ok(dict)
+    }
+
+    /// Geometric check of the run: the symplecticity defect ‖JᵀΩJ − Ω‖_F of every step's
+    /// exact Jacobian (max, and relative to ‖J‖_F²), the max energy error and the max error
+    /// of each momentum map of the system's symmetries at step ends (a dict).
+    fn check<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        if !self.inner.step_n.is_empty() {
+            return Err(crate::errors::UnsupportedError::new_err(
+                "check(): the steps of a tolerance-driven run use different n",
+            ));
+        }
+        let method = self.method.clone();
+        let inner = &self.inner;
+        let kind = self.kind.clone();
+        let (defect, relative, energy, momenta) = py
+            .detach(|| -> Result<_, galerkin_vi::GviError> {
+                let mut m = method.clone();
+                m.n = inner.n;
+                let gvi = m.integrator()?;
+                with_system!(&*kind, s => {
+                    let (mut defect, mut relative) = (0.0f64, 0.0f64);
+                    for c in &inner.coefficients {
+                        let j = gvi.step_jacobian_from_coefficients(s, c)?;
+                        defect = defect.max(symplecticity_defect(&j));
+                        relative = relative.max(relative_symplecticity_defect(&j));
+                    }
+                    let energy = galerkin_vi::geometry::energy_at_step_ends(s, inner)
+                        .ok()
+                        .map(|e| e.max_deviation());
+                    let momenta: Vec<(String, f64)> = s
+                        .symmetries()
+                        .iter()
+                        .map(|sym| {
+                            let series =
+                                galerkin_vi::geometry::momentum_at_step_ends(&*sym.map, inner);
+                            (sym.name.clone(), series.max_deviation())
+                        })
+                        .collect();
+                    Ok((defect, relative, energy, momenta))
+                })
+            })
+            .py_err()?;
+        let dict = PyDict::new(py);
+        dict.set_item("max_symplecticity_defect", defect)?;
+        dict.set_item("max_relative_symplecticity_defect", relative)?;
+        dict.set_item("max_energy_error", energy)?;
+        let m = PyDict::new(py);
+        for (name, e) in momenta {
+            m.set_item(name, e)?;
+        }
+        dict.set_item("momentum_errors", m)?;
+        Ok(dict)
+    }
+
+    fn __len__(&self) -> usize {
+        self.inner.q.len()
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "<galerkin_vi Trajectory: {} steps of h = {}, n = {}, D = {}>",
+            self.inner.steps(),
+            self.inner.h,
+            self.inner.n,
+            self.inner.dim
+        )
+    }
+}
