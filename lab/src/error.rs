@@ -1,5 +1,8 @@
 //! The lab's typed error: every library error ([`GviError`]) plus the failures of scenes,
 //! files, charts, studies and command-line arguments. Nothing here panics on user input.
+//!
+//! Library errors pass through unchanged as [`LabError::Core`] (their messages are the
+//! library's), so a caller can match on the [`GviError`] inside with [`LabError::core`].
 
 pub use galerkin_vi::error::{GviError, ensure_finite, ensure_len, fmt_number};
 use std::path::PathBuf;

@@ -1,4 +1,8 @@
 //! Progress bars for long sweeps: on stderr, and only when stderr is a terminal.
+//!
+//! Studies that sweep many runs (`refine`, `compare-bases`, `work-precision`, `stability`,
+//! `tolerance-study`, `solver-scaling`, `ensemble`) advance one bar per finished run; nothing is
+//! drawn when stderr is redirected, so logs and CI output stay clean.
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;

@@ -1,5 +1,14 @@
 //! Running a scene: build the system and the integrator, integrate, and tabulate the states,
 //! invariants and (where an exact solution exists) errors. This is what `gvi run` does.
+//!
+//! A run keeps the whole trajectory (for charts, JSON and `--tol`); the streamed form in
+//! [`stream`] writes CSV rows as the steps complete and holds no history. Both go through the
+//! monitors of `monitor` (non-finite states, collisions, sanity warnings) and give the same rows
+//! byte for byte. A step whose solver fails ends the run with the failure recorded and the rows
+//! before it kept. Rigid bodies on SO(3) run in [`rigid_body`].
+//!
+//! The CSV columns and the summary printed on stderr are described in the guide's command-line
+//! page (docs/guide/command-line.md).
 
 use crate::distance::max_norm_diff;
 use crate::error::LabError;

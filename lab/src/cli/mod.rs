@@ -1,4 +1,18 @@
-//! The `gvi` command-line tool.
+//! The `gvi` command-line tool: clap definitions and the glue from flags to the lab.
+//!
+//! One module per group of subcommands: `run` (`gvi run`, the scene and method flags every
+//! command shares as `SceneArgs`), `check`, `study`/`study2` (refine, compare-bases, reproduce,
+//! work-precision, stability, compare-refinement), `tolerance`, `scaling`, `nbody`, `periodic`
+//! and `ensemble`. [`values`] holds the typed value parsers clap uses (comma lists, ranges,
+//! tolerances), so that the library and the studies receive typed values, never strings.
+//!
+//! The flow of every command: parse the flags, load the scene and apply the flag overrides
+//! (`Scene::with_overrides`), build it once (`Scene::build`: the system, the validated initial
+//! state, the method), run, write through the atomic writer. Errors are [`LabError`]s printed by
+//! `main` with exit status 1 (clap's own usage errors exit with 2).
+//!
+//! Every subcommand and flag is documented in the guide's command-line page
+//! (docs/guide/command-line.md in the repository).
 
 mod check;
 mod ensemble;

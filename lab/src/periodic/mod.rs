@@ -1,6 +1,12 @@
 //! The periodic-orbit analysis of a scene (`gvi periodic`): solve the scene's `[periodic]`
 //! problem with [`galerkin_vi::periodic`], refine in K, compute the Floquet multipliers and run a
 //! closing check, and draws its charts.
+//!
+//! The solver itself (Fourier curves, the action, Newton, Floquet multipliers) is the
+//! library's [`galerkin_vi::periodic`], re-exported here; this module adds what a scene needs:
+//! the problem layout and symmetries from the scene's bodies, refinement in K with its fitted
+//! rate, the closing run over many periods, and the report and charts. The guide's page on
+//! periodic orbits (docs/guide/periodic-orbits.md) has the measured results.
 
 mod report;
 

@@ -5,6 +5,15 @@
 //! — against a [`Reference`] (the exact solution where one is known, otherwise a
 //! high-resolution spectral run), writes CSV/JSON tables and SVG charts, and never aborts on a
 //! solver failure: the failure is recorded in the measurement and shown.
+//!
+//! One module per study: [`refine`], [`compare_bases`], [`reproduce`] (the paper's figures),
+//! [`work_precision`] (with [`peers`], the classical baselines at their best), [`stability`],
+//! [`compare_refinement`], [`tolerance`] (with [`allocation`], the oracle bound) and [`scaling`]
+//! (time per step of every stage solver). Sweeps run in parallel (rayon) with a progress bar;
+//! each study refuses a sweep whose estimated cost or memory is absurd before doing any work.
+//!
+//! The guide's studies page (docs/guide/studies.md) lists the command of each study, and
+//! docs/studies/ holds the committed outputs.
 
 pub mod allocation;
 pub mod compare_bases;
