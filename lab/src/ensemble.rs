@@ -212,8 +212,6 @@ pub fn run_member<S: System, B: Basis, Q: Quadrature>(
     galerkin_vi::error::ensure_len("initial momentum p0", d, member.p0.len())?;
     let mut ws = gvi.workspace(system)?;
     let energy_index = system.invariant_names().iter().position(|n| *n == "energy");
-    // Every buffer of the loop is allocated here; the step Jacobian itself is returned owned
-    // by the library (`StepJacobian`).
     let mut inv = vec![0.0; system.invariant_names().len()];
     let mut xi = vec![0.0; d];
     let momentum = |map: &NamedMomentumMap, q: &[f64], p: &[f64], xi: &mut [f64]| {
@@ -232,21 +230,25 @@ pub fn run_member<S: System, B: Basis, Q: Quadrature>(
     let d2 = 2 * d;
     let mut tangent = DMatrix::<f64>::identity(d2, d2) / (d2 as f64).sqrt();
     let mut product = DMatrix::<f64>::zeros(d2, d2);
+    // Everything the step loop touches is allocated here: the loop allocates nothing
+    // (`the_member_step_loop_allocates_nothing` in lab/tests/ensemble.rs).
+    let mut tws = gvi.tangent_workspace(system)?;
+    let mut jac = DMatrix::<f64>::zeros(d2, d2);
+    let (mut q_next, mut p_next) = (vec![0.0; d], vec![0.0; d]);
     let mut log_growth = 0.0;
     let mut failure = None;
     let mut completed = 0;
     for k in 0..steps {
-        let sj = match gvi.step_jacobian_in(system, &mut ws, &q, &p, k) {
-            Ok(sj) => sj,
-            Err(e) => {
-                failure = Some(e.to_string());
-                break;
-            }
-        };
-        product.gemm(1.0, &sj.matrix, &tangent, 0.0);
+        let next = (&mut q_next[..], &mut p_next[..]);
+        if let Err(e) = gvi.step_jacobian_into(system, &mut ws, &mut tws, &q, &p, next, &mut jac, k)
+        {
+            failure = Some(e.to_string());
+            break;
+        }
+        product.gemm(1.0, &jac, &tangent, 0.0);
         std::mem::swap(&mut tangent, &mut product);
-        q.copy_from_slice(&sj.q_next);
-        p.copy_from_slice(&sj.p_next);
+        std::mem::swap(&mut q, &mut q_next);
+        std::mem::swap(&mut p, &mut p_next);
         completed = k + 1;
         if completed % RENORMALISE_EVERY == 0 {
             let s = tangent.norm();

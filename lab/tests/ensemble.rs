@@ -249,3 +249,44 @@ fn the_command_writes_csv_and_summary_and_reports_throughput() {
         assert!(!stderr.contains("panicked"), "{stderr}");
     }
 }
+
+#[path = "../../tests/common/counting.rs"]
+mod counting;
+
+#[test]
+fn the_member_step_loop_allocates_nothing() {
+    use counting::allocations;
+    use galerkin_vi::systems::System;
+    use galerkin_vi_lab::ensemble::run_member;
+    let s = scene("kepler", 8, 0.5, 1);
+    let system = s.euclidean().unwrap();
+    let gvi = s.method.integrator().unwrap();
+    let symmetries = system.symmetries();
+    let member = perturbed_members(&s.initial.q, &s.initial.p, &options(1, 0.0, 0))
+        .unwrap()
+        .remove(0);
+    // Everything run_member allocates is allocated before its loop: the count does not grow
+    // with the number of steps (step, step Jacobian, tangent product, invariants).
+    let in_member = |steps: usize| {
+        let before = allocations();
+        let r = run_member(&gvi, system, &symmetries, &member, steps).unwrap();
+        assert!(r.failure.is_none());
+        allocations() - before
+    };
+    let (short, long) = (in_member(10), in_member(60));
+    assert_eq!(short, long, "allocations: {short} for 10 steps, {long} for 60");
+    // Negative control: the owning step_jacobian_in allocates on every step.
+    let owning = |steps: usize| {
+        let mut ws = gvi.workspace(system).unwrap();
+        let (mut q, mut p) = (member.q0.clone(), member.p0.clone());
+        let before = allocations();
+        for k in 0..steps {
+            let sj = gvi.step_jacobian_in(system, &mut ws, &q, &p, k).unwrap();
+            q = sj.q_next;
+            p = sj.p_next;
+        }
+        allocations() - before
+    };
+    let (short, long) = (owning(10), owning(60));
+    assert!(long > short, "control: {short} for 10 steps, {long} for 60");
+}

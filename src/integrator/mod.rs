@@ -49,7 +49,7 @@ pub use discrete_action::DiscreteLagrangian;
 pub use equations::{Correction, StageEquations, StageSolve};
 pub use newton::{InitialGuess, NewtonOptions, StepFailure, StepStats};
 pub use solver::StageSolver;
-pub use tangent::StepJacobian;
+pub use tangent::{StepJacobian, TangentWorkspace};
 pub use workspace::{MATRIX_FREE_MIN_DIM, Workspace};
 
 use crate::basis::{AnyBasis, Basis, BasisKind, ChebyshevLagrange, CurveFit};

@@ -18,6 +18,7 @@ use super::{GalerkinIntegrator, MAX_STEPS, Workspace};
 use crate::basis::Basis;
 use crate::error::{GviError, Result, ensure_finite, ensure_len};
 use crate::lagrangian::Lagrangian;
+use crate::linalg::Lu;
 use crate::quadrature::Quadrature;
 use nalgebra::DMatrix;
 
@@ -33,15 +34,41 @@ pub struct StepJacobian {
     pub p_next: Vec<f64>,
 }
 
-/// Second derivatives of L along one Galerkin curve, at every quadrature node.
-struct NodeHessians {
-    /// Curve values and velocities (m×D).
+/// Buffers for the exact step Jacobian of one integrator and one Lagrangian, so that
+/// [`GalerkinIntegrator::step_jacobian_into`] allocates nothing (tangent maps and Lyapunov
+/// estimates along a run). Create with [`GalerkinIntegrator::tangent_workspace`].
+#[derive(Debug, Clone)]
+pub struct TangentWorkspace {
+    d: usize,
+    n: usize,
+    /// The constant mass matrix of a separable Lagrangian (D×D row-major), else `None`.
+    mass: Option<Vec<f64>>,
+    /// Curve values and velocities at the nodes (m×D).
     q: Vec<f64>,
     v: Vec<f64>,
     /// L_qq, L_qv, L_vv per node (m×D×D, row-major blocks).
     qq: Vec<f64>,
     qv: Vec<f64>,
     vv: Vec<f64>,
+    /// The full action Hessian ∂²S/∂Q_a∂Q_b, (nD)×(nD) row-major.
+    hess: Vec<f64>,
+    /// F_X (rows a = 0 … n−2, columns b = 1 … n−1), its LU, one right-hand side and scratch.
+    fx: Vec<f64>,
+    lu: Lu,
+    col: Vec<f64>,
+    scratch: Vec<f64>,
+    /// dQ for all coefficients and the 2D unit directions, (nD)×(2D) row-major.
+    dq_all: Vec<f64>,
+    /// δq and δq̇ at one node for the 2D directions (D×2D).
+    dqj: Vec<f64>,
+    dvj: Vec<f64>,
+}
+
+impl TangentWorkspace {
+    /// Configuration dimension D.
+    pub fn dim(&self) -> usize {
+        self.d
+    }
 }
 
 impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
@@ -81,11 +108,95 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         p: &[f64],
         step_index: usize,
     ) -> Result<StepJacobian> {
-        self.check_state(lag, q, p)?;
-        ensure_len("workspace dimension", lag.dim(), ws.dim())?;
-        let d = ws.d;
+        let d = lag.dim();
+        let mut tws = self.tangent_workspace(lag)?;
         let (mut q_next, mut p_next) = (vec![0.0; d], vec![0.0; d]);
-        self.step(lag, ws, q, p, &mut q_next, &mut p_next)
+        let mut matrix = DMatrix::<f64>::zeros(2 * d, 2 * d);
+        self.step_jacobian_into(
+            lag,
+            ws,
+            &mut tws,
+            q,
+            p,
+            (&mut q_next, &mut p_next),
+            &mut matrix,
+            step_index,
+        )?;
+        Ok(StepJacobian {
+            matrix,
+            q_next,
+            p_next,
+        })
+    }
+
+    /// Buffers for [`step_jacobian_into`](Self::step_jacobian_into) with this integrator and
+    /// Lagrangian.
+    pub fn tangent_workspace<L: Lagrangian>(&self, lag: &L) -> Result<TangentWorkspace> {
+        let t = self.tables();
+        let (n, m, d) = (t.n, t.m, lag.dim());
+        let mass = match lag.mass_matrix() {
+            Some(mass) if mass.shape() != (d, d) => {
+                return Err(GviError::DimensionMismatch {
+                    what: "mass matrix".into(),
+                    expected: d,
+                    got: mass.nrows().max(mass.ncols()),
+                });
+            }
+            Some(mass) => Some((0..d * d).map(|k| mass[(k / d, k % d)]).collect()),
+            None => None,
+        };
+        let (nd, nu) = (n * d, (n - 1) * d);
+        Ok(TangentWorkspace {
+            d,
+            n,
+            mass,
+            q: vec![0.0; m * d],
+            v: vec![0.0; m * d],
+            qq: vec![0.0; m * d * d],
+            qv: vec![0.0; m * d * d],
+            vv: vec![0.0; m * d * d],
+            hess: vec![0.0; nd * nd],
+            fx: vec![0.0; nu * nu],
+            lu: Lu::with_capacity(nu),
+            col: vec![0.0; nu],
+            scratch: vec![0.0; nu],
+            dq_all: vec![0.0; nd * 2 * d],
+            dqj: vec![0.0; d * 2 * d],
+            dvj: vec![0.0; d * 2 * d],
+        })
+    }
+
+    /// [`step_jacobian_in`](Self::step_jacobian_in) without allocation: the step from (q, p)
+    /// writes the new state into `next` and its exact Jacobian (2D×2D, order (q, p)) into
+    /// `jacobian`, using the buffers of `tws` (from
+    /// [`tangent_workspace`](Self::tangent_workspace) for the same Lagrangian).
+    #[allow(clippy::too_many_arguments)]
+    pub fn step_jacobian_into<L: Lagrangian>(
+        &self,
+        lag: &L,
+        ws: &mut Workspace,
+        tws: &mut TangentWorkspace,
+        q: &[f64],
+        p: &[f64],
+        next: (&mut [f64], &mut [f64]),
+        jacobian: &mut DMatrix<f64>,
+        step_index: usize,
+    ) -> Result<()> {
+        self.check_state(lag, q, p)?;
+        let d = lag.dim();
+        ensure_len("workspace dimension", d, ws.dim())?;
+        ensure_len("tangent workspace dimension", d, tws.d)?;
+        ensure_len("tangent workspace basis size", self.n(), tws.n)?;
+        ensure_len("q_next", d, next.0.len())?;
+        ensure_len("p_next", d, next.1.len())?;
+        if jacobian.shape() != (2 * d, 2 * d) {
+            return Err(GviError::DimensionMismatch {
+                what: "step Jacobian".into(),
+                expected: 2 * d,
+                got: jacobian.nrows().max(jacobian.ncols()),
+            });
+        }
+        self.step(lag, ws, q, p, next.0, next.1)
             .map_err(|f| GviError::NewtonFailure {
                 step: step_index,
                 t: step_index as f64 * self.step_size(),
@@ -93,12 +204,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 iterations: f.iterations,
                 reason: f.reason,
             })?;
-        let matrix = self.step_jacobian_from_coefficients(lag, ws.coefficients())?;
-        Ok(StepJacobian {
-            matrix,
-            q_next,
-            p_next,
-        })
+        self.jacobian_from_coefficients_into(lag, ws.coefficients(), tws, jacobian)
     }
 
     /// The step Jacobian at a solved step, from that step's Galerkin coefficients (n×D
@@ -109,46 +215,69 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         lag: &L,
         coefficients: &[f64],
     ) -> Result<DMatrix<f64>> {
+        let d = lag.dim();
+        let mut tws = self.tangent_workspace(lag)?;
+        let mut jac = DMatrix::<f64>::zeros(2 * d, 2 * d);
+        self.jacobian_from_coefficients_into(lag, coefficients, &mut tws, &mut jac)?;
+        Ok(jac)
+    }
+
+    /// The step Jacobian from the coefficients into `jac`, in the buffers of `tws`.
+    fn jacobian_from_coefficients_into<L: Lagrangian>(
+        &self,
+        lag: &L,
+        coefficients: &[f64],
+        tws: &mut TangentWorkspace,
+        jac: &mut DMatrix<f64>,
+    ) -> Result<()> {
         let t = self.tables();
         let (n, m, h, d) = (t.n, t.m, self.step_size(), lag.dim());
         ensure_len("Galerkin coefficients", n * d, coefficients.len())?;
         ensure_finite("Galerkin coefficients", coefficients)?;
-        let nodes = self.node_hessians(lag, coefficients);
-        let hess = self.full_action_hessian(lag, &nodes)?;
-        let nd = n * d;
-        let nu = nd - d;
+        self.node_hessians(lag, coefficients, tws);
+        self.full_action_hessian(tws);
+        let (nd, nu, d2) = (n * d, (n - 1) * d, 2 * d);
         // Solve F_X dX = −(F_q dq + F_p dp) for the 2D unit directions.
-        let fx = hess.view((0, d), (nu, nu)).clone_owned();
-        let mut rhs = DMatrix::<f64>::zeros(nu, 2 * d);
         for r in 0..nu {
-            for s in 0..d {
-                rhs[(r, s)] = -hess[(r, s)];
+            tws.fx[r * nu..(r + 1) * nu].copy_from_slice(&tws.hess[r * nd + d..r * nd + nd]);
+        }
+        tws.lu
+            .refactor(&tws.fx)
+            .map_err(|_| GviError::NewtonFailure {
+                step: 0,
+                t: 0.0,
+                residual: f64::NAN,
+                iterations: 0,
+                reason: "step Jacobian: singular stage matrix".into(),
+            })?;
+        // dQ for all coefficients: dQ_0 = dq, dQ_1 … dQ_{n−1} = dX.
+        tws.dq_all.iter_mut().for_each(|x| *x = 0.0);
+        for r in 0..d {
+            tws.dq_all[r * d2 + r] = 1.0;
+        }
+        for c in 0..d2 {
+            for r in 0..nu {
+                tws.col[r] = if c < d { -tws.hess[r * nd + c] } else { 0.0 };
+            }
+            if c >= d {
+                tws.col[c - d] -= 1.0;
+            }
+            tws.lu.solve_in_place(&mut tws.col, &mut tws.scratch);
+            for r in 0..nu {
+                tws.dq_all[(d + r) * d2 + c] = tws.col[r];
             }
         }
+        jac.fill(0.0);
         for r in 0..d {
-            rhs[(r, d + r)] -= 1.0;
+            for c in 0..d2 {
+                jac[(r, c)] = tws.dq_all[(nu + r) * d2 + c];
+            }
         }
-        let dx = fx.lu().solve(&rhs).ok_or_else(|| GviError::NewtonFailure {
-            step: 0,
-            t: 0.0,
-            residual: f64::NAN,
-            iterations: 0,
-            reason: "step Jacobian: singular stage matrix".into(),
-        })?;
-        // dQ for all coefficients: dQ_0 = dq.
-        let mut dq_all = DMatrix::<f64>::zeros(nd, 2 * d);
-        for r in 0..d {
-            dq_all[(r, r)] = 1.0;
-        }
-        dq_all.view_mut((d, 0), (nu, 2 * d)).copy_from(&dx);
-        let mut jac = DMatrix::<f64>::zeros(2 * d, 2 * d);
-        jac.view_mut((0, 0), (d, 2 * d))
-            .copy_from(&dq_all.view((nu, 0), (d, 2 * d)));
         // dp_{k+1} = dp_k + h Σ_j b_j (L_qq δq_j + L_qv δv_j).
         for r in 0..d {
             jac[(d + r, d + r)] = 1.0;
         }
-        let (mut dqj, mut dvj) = (vec![0.0; d * 2 * d], vec![0.0; d * 2 * d]);
+        let (dqj, dvj) = (&mut tws.dqj, &mut tws.dvj);
         for j in 0..m {
             let (phi, dphi) = (&t.phi[j * n..(j + 1) * n], &t.dphi[j * n..(j + 1) * n]);
             dqj.iter_mut().for_each(|x| *x = 0.0);
@@ -156,24 +285,23 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             for i in 0..n {
                 let (a, b) = (phi[i], dphi[i] / h);
                 for s in 0..d {
-                    for c in 0..2 * d {
-                        let x = dq_all[(i * d + s, c)];
-                        dqj[s * 2 * d + c] += a * x;
-                        dvj[s * 2 * d + c] += b * x;
+                    for c in 0..d2 {
+                        let x = tws.dq_all[(i * d + s) * d2 + c];
+                        dqj[s * d2 + c] += a * x;
+                        dvj[s * d2 + c] += b * x;
                     }
                 }
             }
             let w = h * t.weights[j];
             let (qq, qv) = (
-                &nodes.qq[j * d * d..(j + 1) * d * d],
-                &nodes.qv[j * d * d..(j + 1) * d * d],
+                &tws.qq[j * d * d..(j + 1) * d * d],
+                &tws.qv[j * d * d..(j + 1) * d * d],
             );
             for r in 0..d {
-                for c in 0..2 * d {
+                for c in 0..d2 {
                     let mut acc = 0.0;
                     for s in 0..d {
-                        acc +=
-                            qq[r * d + s] * dqj[s * 2 * d + c] + qv[r * d + s] * dvj[s * 2 * d + c];
+                        acc += qq[r * d + s] * dqj[s * d2 + c] + qv[r * d + s] * dvj[s * d2 + c];
                     }
                     jac[(d + r, c)] += w * acc;
                 }
@@ -185,26 +313,21 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 value: f64::NAN,
             });
         }
-        Ok(jac)
+        Ok(())
     }
 
-    /// Curve and second derivatives of L at every node for the given coefficients.
-    fn node_hessians<L: Lagrangian>(&self, lag: &L, coeffs: &[f64]) -> NodeHessians {
+    /// Curve and second derivatives of L at every node for the given coefficients, into `tws`.
+    fn node_hessians<L: Lagrangian>(&self, lag: &L, coeffs: &[f64], tws: &mut TangentWorkspace) {
         let t = self.tables();
         let (n, m, h, d) = (t.n, t.m, self.step_size(), lag.dim());
-        let mut out = NodeHessians {
-            q: vec![0.0; m * d],
-            v: vec![0.0; m * d],
-            qq: vec![0.0; m * d * d],
-            qv: vec![0.0; m * d * d],
-            vv: vec![0.0; m * d * d],
-        };
-        let separable = lag.mass_matrix().is_some();
+        tws.q.iter_mut().for_each(|x| *x = 0.0);
+        tws.v.iter_mut().for_each(|x| *x = 0.0);
+        let separable = tws.mass.is_some();
         for j in 0..m {
             let (phi, dphi) = (&t.phi[j * n..(j + 1) * n], &t.dphi[j * n..(j + 1) * n]);
             let (qj, vj) = (
-                &mut out.q[j * d..(j + 1) * d],
-                &mut out.v[j * d..(j + 1) * d],
+                &mut tws.q[j * d..(j + 1) * d],
+                &mut tws.v[j * d..(j + 1) * d],
             );
             for i in 0..n {
                 for r in 0..d {
@@ -215,69 +338,54 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             let blk = j * d * d..(j + 1) * d * d;
             if separable {
                 // L_qv = 0; the constant L_vv = M enters through the kinetic matrix.
-                lag.force_jacobian(qj, &mut out.qq[blk]);
+                lag.force_jacobian(qj, &mut tws.qq[blk]);
             } else {
                 lag.hessian(
                     qj,
                     vj,
-                    &mut out.qq[blk.clone()],
-                    &mut out.qv[blk.clone()],
-                    &mut out.vv[blk],
+                    &mut tws.qq[blk.clone()],
+                    &mut tws.qv[blk.clone()],
+                    &mut tws.vv[blk],
                 );
             }
         }
-        out
     }
 
     /// The full (nD)×(nD) Hessian ∂²S/∂Q_a∂Q_b of the discrete action (the same formulas as
-    /// the Newton Jacobian, over all rows and columns).
-    fn full_action_hessian<L: Lagrangian>(
-        &self,
-        lag: &L,
-        nodes: &NodeHessians,
-    ) -> Result<DMatrix<f64>> {
+    /// the Newton Jacobian, over all rows and columns) from the node values in `tws`.
+    fn full_action_hessian(&self, tws: &mut TangentWorkspace) {
         let t = self.tables();
-        let (n, m, h, d) = (t.n, t.m, self.step_size(), lag.dim());
+        let (n, m, h, d) = (t.n, t.m, self.step_size(), tws.d);
         let nd = n * d;
-        let mut hess = DMatrix::<f64>::zeros(nd, nd);
-        let mass = lag.mass_matrix();
-        if let Some(mass) = &mass {
-            if mass.shape() != (d, d) {
-                return Err(GviError::DimensionMismatch {
-                    what: "mass matrix".into(),
-                    expected: d,
-                    got: mass.nrows().max(mass.ncols()),
-                });
-            }
+        let hess = &mut tws.hess;
+        hess.iter_mut().for_each(|x| *x = 0.0);
+        if let Some(mass) = &tws.mass {
             for a in 0..n {
                 for b in 0..n {
                     let k = t.kinetic[a * n + b] / h;
                     for r in 0..d {
                         for s in 0..d {
-                            hess[(a * d + r, b * d + s)] = k * mass[(r, s)];
+                            hess[(a * d + r) * nd + b * d + s] = k * mass[r * d + s];
                         }
                     }
                 }
             }
         }
+        let separable = tws.mass.is_some();
         for j in 0..m {
             let w = t.weights[j];
             let (phi, dphi) = (&t.phi[j * n..(j + 1) * n], &t.dphi[j * n..(j + 1) * n]);
             let blk = j * d * d..(j + 1) * d * d;
-            let (qq, qv, vv) = (
-                &nodes.qq[blk.clone()],
-                &nodes.qv[blk.clone()],
-                &nodes.vv[blk],
-            );
+            let (qq, qv, vv) = (&tws.qq[blk.clone()], &tws.qv[blk.clone()], &tws.vv[blk]);
             for a in 0..n {
                 let (pa, da) = (phi[a], dphi[a]);
                 for b in 0..n {
                     let (pb, db) = (phi[b], dphi[b]);
                     let cqq = w * h * pa * pb;
-                    if mass.is_some() {
+                    if separable {
                         for r in 0..d {
                             for s in 0..d {
-                                hess[(a * d + r, b * d + s)] += cqq * qq[r * d + s];
+                                hess[(a * d + r) * nd + b * d + s] += cqq * qq[r * d + s];
                             }
                         }
                         continue;
@@ -285,7 +393,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                     let (cqv, cvq, cvv) = (w * pa * db, w * da * pb, w * da * db / h);
                     for r in 0..d {
                         for s in 0..d {
-                            hess[(a * d + r, b * d + s)] += cqq * qq[r * d + s]
+                            hess[(a * d + r) * nd + b * d + s] += cqq * qq[r * d + s]
                                 + cqv * qv[r * d + s]
                                 + cvq * qv[s * d + r]
                                 + cvv * vv[r * d + s];
@@ -294,7 +402,6 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 }
             }
         }
-        Ok(hess)
     }
 
     /// The tangent map along a run of `steps` steps from (q0, p0): the cumulative products
@@ -310,16 +417,28 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         check_steps(steps)?;
         self.check_state(lag, q0, p0)?;
         let mut ws = self.workspace(lag)?;
-        let (mut q, mut p) = (q0.to_vec(), p0.to_vec());
+        let mut tws = self.tangent_workspace(lag)?;
         let d = lag.dim();
+        let (mut q, mut p) = (q0.to_vec(), p0.to_vec());
+        let (mut qn, mut pn) = (vec![0.0; d], vec![0.0; d]);
+        let mut jac = DMatrix::<f64>::zeros(2 * d, 2 * d);
         let mut phi = DMatrix::<f64>::identity(2 * d, 2 * d);
         let mut out = Vec::with_capacity(steps.min(1 << 16));
         for k in 0..steps {
-            let sj = self.step_jacobian_in(lag, &mut ws, &q, &p, k)?;
-            phi = &sj.matrix * &phi;
+            self.step_jacobian_into(
+                lag,
+                &mut ws,
+                &mut tws,
+                &q,
+                &p,
+                (&mut qn, &mut pn),
+                &mut jac,
+                k,
+            )?;
+            phi = &jac * &phi;
             out.push(phi.clone());
-            q = sj.q_next;
-            p = sj.p_next;
+            std::mem::swap(&mut q, &mut qn);
+            std::mem::swap(&mut p, &mut pn);
         }
         Ok(out)
     }
@@ -338,20 +457,33 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         check_steps(steps)?;
         self.check_state(lag, q0, p0)?;
         let mut ws = self.workspace(lag)?;
+        let mut tws = self.tangent_workspace(lag)?;
+        let d = lag.dim();
+        let d2 = 2 * d;
         let (mut q, mut p) = (q0.to_vec(), p0.to_vec());
-        let d2 = 2 * lag.dim();
+        let (mut qn, mut pn) = (vec![0.0; d], vec![0.0; d]);
+        let mut jac = DMatrix::<f64>::zeros(d2, d2);
         let mut basis = DMatrix::<f64>::identity(d2, d2);
         let mut sums = vec![0.0; d2];
         for k in 0..steps {
-            let sj = self.step_jacobian_in(lag, &mut ws, &q, &p, k)?;
-            let qr = (&sj.matrix * &basis).qr();
+            self.step_jacobian_into(
+                lag,
+                &mut ws,
+                &mut tws,
+                &q,
+                &p,
+                (&mut qn, &mut pn),
+                &mut jac,
+                k,
+            )?;
+            let qr = (&jac * &basis).qr();
             let r = qr.r();
             for (i, s) in sums.iter_mut().enumerate() {
                 *s += r[(i, i)].abs().ln();
             }
             basis = qr.q();
-            q = sj.q_next;
-            p = sj.p_next;
+            std::mem::swap(&mut q, &mut qn);
+            std::mem::swap(&mut p, &mut pn);
         }
         let time = steps as f64 * self.step_size();
         let mut exps: Vec<f64> = sums.iter().map(|s| s / time).collect();
@@ -384,13 +516,16 @@ mod tests {
         let d = lag.dim();
         let (mut qn, mut pn) = (vec![0.0; d], vec![0.0; d]);
         gvi.step(lag, &mut ws, q, p, &mut qn, &mut pn).unwrap();
-        let nodes = gvi.node_hessians(lag, ws.coefficients());
-        let hess = gvi.full_action_hessian(lag, &nodes).unwrap();
+        let mut tws = gvi.tangent_workspace(lag).unwrap();
+        gvi.node_hessians(lag, ws.coefficients(), &mut tws);
+        gvi.full_action_hessian(&mut tws);
+        let nd = 7 * d;
+        let hess = |r: usize, c: usize| tws.hess[r * nd + c];
         gvi.jacobian_rows(lag, &mut ws, Mode::InitialValue);
         let nu = 6 * d;
         for r in 0..nu {
             for c in 0..nu {
-                let (a, b) = (hess[(r, c + d)], ws.newton.jac[r * nu + c]);
+                let (a, b) = (hess(r, c + d), ws.newton.jac[r * nu + c]);
                 assert!(
                     (a - b).abs() <= 1e-12 * (1.0 + a.abs()),
                     "({r},{c}): {a} vs {b}"
