@@ -4,8 +4,8 @@
 # (docs/studies/work-precision-long/), the outer solar system
 # (docs/studies/work-precision-outer-solar-system/) and the J2000 10-body scene
 # (docs/studies/work-precision-solar-system/). Run it on a quiet machine: every timing is
-# wall-clock, one configuration after another. About 3.5 minutes on a 2-core machine
-# (measured 3 min 18 s, REBOUND runs included).
+# wall-clock, one configuration after another. About 4.5 minutes on a 2-core machine
+# (measured 4 min 16 s, REBOUND runs and the economical families included).
 #
 # Needs the REBOUND venv: python3 -m venv .venv-rebound &&
 #   .venv-rebound/bin/pip install -r scripts/rebound/requirements.txt

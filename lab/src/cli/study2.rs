@@ -3,6 +3,7 @@
 use super::run::{SceneArgs, load_scene};
 use crate::error::LabError;
 use crate::studies::compare_refinement::{CompareConfig, compare_refinement};
+use crate::studies::peers::QuadPoints;
 use crate::studies::stability::{Class, StabilityConfig, stability};
 use crate::studies::work_precision::{
     WorkPrecisionConfig, read_external_csv, reference_csv, work_precision,
@@ -59,6 +60,11 @@ pub struct WorkPrecisionArgs {
     /// Galerkin steps per sample interval, comma-separated (h = Δ/m; default: the preset's).
     #[arg(long, value_delimiter = ',', value_parser = super::values::count)]
     pub divisors: Option<Vec<usize>>,
+    /// Galerkin quadrature point counts, comma-separated: `paper` (2n Gauss–Legendre points,
+    /// families galerkin-BASIS) and `economical` (⌈3n/2⌉ points, families
+    /// galerkin-BASIS-econ). Default: both.
+    #[arg(long, value_delimiter = ',', value_parser = super::values::parsed::<QuadPoints>)]
+    pub quadratures: Option<Vec<QuadPoints>>,
     #[command(flatten)]
     pub run: SceneArgs,
 }
@@ -76,8 +82,8 @@ pub fn run_work_precision(args: WorkPrecisionArgs) -> Result<(), LabError> {
             "--economical",
             "--solver",
         ],
-        "it sweeps the bases and n (--bases, --ns) with the default Gauss–Legendre rule and \
-         the auto stage solver",
+        "it sweeps the bases, n and the quadrature point counts (--bases, --ns, \
+         --quadratures) with the Gauss–Legendre rule and the auto stage solver",
     )?;
     match &args.write_reference {
         Some(path) => crate::output::check_output_path(path)?,
@@ -107,6 +113,12 @@ pub fn run_work_precision(args: WorkPrecisionArgs) -> Result<(), LabError> {
     }
     if let Some(m) = &args.divisors {
         config.galerkin_divisors = m.clone();
+    }
+    if let Some(q) = &args.quadratures {
+        config.quad_points = QuadPoints::ALL
+            .into_iter()
+            .filter(|p| q.contains(p))
+            .collect();
     }
     if let Some(path) = &args.write_reference {
         let reference = reference_csv(&scene, &config)

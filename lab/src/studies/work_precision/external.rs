@@ -6,8 +6,9 @@ use crate::error::LabError;
 use crate::error::Result;
 use std::path::Path;
 
-/// The columns of the study's CSV that an external file must have (any order); an
-/// `external` column may follow (it is ignored: every row read is external).
+/// The columns of the study's CSV that an external file must have (any order); optional
+/// `quad_points` (Galerkin quadrature points, read) and `external` (ignored: every row read
+/// is external) columns may be present too.
 pub const EXTERNAL_COLUMNS: [&str; 10] = [
     "method",
     "parameters",
@@ -95,6 +96,7 @@ pub fn read_external_csv(path: &Path) -> Result<Vec<WorkPoint>> {
         .ok_or_else(|| bad(1, "empty file: no header line".into()))?;
     let names = split_csv_line(header).map_err(|r| bad(header_line, r))?;
     let mut column = [usize::MAX; 10];
+    let mut quad_points_column = None;
     for (i, name) in names.iter().enumerate() {
         let name = name.trim();
         match EXTERNAL_COLUMNS.iter().position(|c| *c == name) {
@@ -103,6 +105,10 @@ pub fn read_external_csv(path: &Path) -> Result<Vec<WorkPoint>> {
             }
             Some(c) => column[c] = i,
             None if name == "external" => {}
+            None if name == "quad_points" && quad_points_column.is_some() => {
+                return Err(bad(header_line, format!("duplicate column '{name}'")));
+            }
+            None if name == "quad_points" => quad_points_column = Some(i),
             None => {
                 return Err(bad(
                     header_line,
@@ -167,6 +173,15 @@ pub fn read_external_csv(path: &Path) -> Result<Vec<WorkPoint>> {
                 )
             })
         };
+        let quad_points = match quad_points_column.map(|i| fields[i].trim()) {
+            None | Some("") => None,
+            Some(v) => Some(v.parse::<usize>().map_err(|_| {
+                bad(
+                    line,
+                    format!("quad_points: not a non-negative integer '{v}'"),
+                )
+            })?),
+        };
         let method = get(0).to_string();
         if method.is_empty() {
             return Err(bad(line, "method: empty".into()));
@@ -202,6 +217,7 @@ pub fn read_external_csv(path: &Path) -> Result<Vec<WorkPoint>> {
             parameters: get(1).to_string(),
             h,
             n: integer(3)?,
+            quad_points,
             tolerance,
             error,
             seconds,

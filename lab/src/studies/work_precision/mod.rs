@@ -31,7 +31,7 @@
 //! assert!(!study.pareto_front().is_empty());
 //! ```
 
-use super::peers::{Peer, run_peer};
+use super::peers::{Peer, QuadPoints, run_peer};
 use super::{Reference, max_norm_diff, write_file};
 use crate::error::LabError;
 use crate::error::Result;
@@ -57,6 +57,9 @@ pub struct WorkPrecisionConfig {
     pub repeats: usize,
     /// Galerkin bases to sweep.
     pub bases: Vec<BasisKind>,
+    /// Galerkin quadrature point counts to sweep: the paper's 2n Gauss–Legendre points
+    /// (families `galerkin-BASIS`) and the economical ⌈3n/2⌉ (families `galerkin-BASIS-econ`).
+    pub quad_points: Vec<QuadPoints>,
     /// Galerkin steps per sample interval (h = Δ/m).
     pub galerkin_divisors: Vec<usize>,
     /// Galerkin numbers of basis functions.
@@ -79,6 +82,7 @@ impl WorkPrecisionConfig {
             horizon: None,
             repeats: 5,
             bases: BasisKind::ALL.to_vec(),
+            quad_points: QuadPoints::ALL.to_vec(),
             galerkin_divisors: vec![1, 2, 4, 8],
             ns: (4..=40).step_by(2).collect(),
             baseline_divisors: (0..=14).map(|k| 1 << k).collect(),
@@ -94,6 +98,7 @@ impl WorkPrecisionConfig {
             horizon: None,
             repeats: 1,
             bases: BasisKind::ALL.to_vec(),
+            quad_points: QuadPoints::ALL.to_vec(),
             galerkin_divisors: vec![1, 2],
             ns: vec![4, 8, 12, 16],
             baseline_divisors: vec![1, 4, 16, 64],
@@ -112,6 +117,7 @@ impl WorkPrecisionConfig {
             horizon: Some(20_000.0),
             repeats: 1,
             bases: vec![BasisKind::Legendre, BasisKind::Chebyshev],
+            quad_points: QuadPoints::ALL.to_vec(),
             galerkin_divisors: vec![2, 4],
             ns: vec![16, 20, 24, 28, 32],
             baseline_divisors: vec![16, 32, 64, 128],
@@ -125,8 +131,8 @@ impl WorkPrecisionConfig {
 /// One configuration's cost and error.
 #[derive(Debug, Clone, Serialize)]
 pub struct WorkPoint {
-    /// Method family (`galerkin-chebyshev`, `stormer-verlet`, `rk4`, `gauss-2`, `yoshida-6`,
-    /// `kahan-li-8`, `dop853`).
+    /// Method family (`galerkin-chebyshev`, `galerkin-chebyshev-econ` for the economical
+    /// quadrature, `stormer-verlet`, `rk4`, `gauss-2`, `yoshida-6`, `kahan-li-8`, `dop853`).
     pub method: String,
     /// Its parameters, e.g. `n = 16, h = 0.5` or `tol = 1e-9`.
     pub parameters: String,
@@ -134,6 +140,8 @@ pub struct WorkPoint {
     pub h: Option<f64>,
     /// Basis functions (Galerkin).
     pub n: Option<usize>,
+    /// Quadrature points per step (Galerkin: 2n for the paper's rule, ⌈3n/2⌉ economical).
+    pub quad_points: Option<usize>,
     /// Tolerance (DOP853).
     pub tolerance: Option<f64>,
     /// Max position error over the samples (∞ on failure).
@@ -304,16 +312,19 @@ fn study_system<S: System>(
 ) -> Result<WorkPrecisionStudy> {
     let (dt, samples) = sample_grid(scene, config)?;
     // (peer, divisor) in sweep order; fixed-step families stop refining once converged.
+    // The paper's quadrature first, so that its rows keep their order in the outputs.
     let mut plan: Vec<Vec<(Peer, usize)>> = Vec::new();
-    for &basis in &config.bases {
-        for &m in &config.galerkin_divisors {
-            plan.push(
-                config
-                    .ns
-                    .iter()
-                    .map(|&n| (Peer::Galerkin { basis, n }, m))
-                    .collect(),
-            );
+    for &points in &config.quad_points {
+        for &basis in &config.bases {
+            for &m in &config.galerkin_divisors {
+                plan.push(
+                    config
+                        .ns
+                        .iter()
+                        .map(|&n| (Peer::Galerkin { basis, n, points }, m))
+                        .collect(),
+                );
+            }
         }
     }
     let mut fixed = vec![Peer::StormerVerlet, Peer::Rk4];
@@ -403,15 +414,34 @@ fn time_point<S: System>(
 ) -> WorkPoint {
     let h = dt / m as f64;
     let (parameters, hv, n, tolerance) = match peer {
-        Peer::Galerkin { n, .. } => (format!("n = {n}, h = {h}"), Some(h), Some(n), None),
+        Peer::Galerkin {
+            n,
+            points: QuadPoints::Paper,
+            ..
+        } => (format!("n = {n}, h = {h}"), Some(h), Some(n), None),
+        Peer::Galerkin {
+            n,
+            points: QuadPoints::Economical,
+            ..
+        } => (
+            format!("n = {n}, h = {h}, m = {}", QuadPoints::Economical.points(n)),
+            Some(h),
+            Some(n),
+            None,
+        ),
         Peer::Dop853 { tolerance } => (format!("tol = {tolerance:e}"), None, None, Some(tolerance)),
         _ => (format!("h = {h}"), Some(h), None, None),
+    };
+    let quad_points = match peer {
+        Peer::Galerkin { n, points, .. } => Some(points.points(n)),
+        _ => None,
     };
     let mut point = WorkPoint {
         method: peer.family(),
         parameters,
         h: hv,
         n,
+        quad_points,
         tolerance,
         error: f64::INFINITY,
         seconds: f64::NAN,

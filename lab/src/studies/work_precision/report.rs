@@ -15,6 +15,7 @@ struct WorkRow<'a> {
     #[serde(serialize_with = "table::sci_opt")]
     h: Option<f64>,
     n: Option<usize>,
+    quad_points: Option<usize>,
     #[serde(serialize_with = "table::sci_opt")]
     tolerance: Option<f64>,
     #[serde(serialize_with = "table::sci")]
@@ -64,6 +65,8 @@ impl WorkPrecisionStudy {
             let external = self.points.iter().any(|p| p.method == k && p.external);
             chart.push(if external {
                 Series::line_markers(format!("{k} (external)"), pts)
+            } else if k.starts_with("galerkin") && k.ends_with("-econ") {
+                Series::markers(format!("{k} (all n, h; ⌈3n/2⌉ Gauss points)"), pts)
             } else if k.starts_with("galerkin") {
                 Series::markers(format!("{k} (all n, h)"), pts)
             } else {
@@ -87,6 +90,7 @@ impl WorkPrecisionStudy {
             parameters: Some(&p.parameters),
             h: p.h,
             n: p.n,
+            quad_points: p.quad_points,
             tolerance: p.tolerance,
             error: p.error,
             seconds: p.seconds,
