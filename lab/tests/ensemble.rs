@@ -274,7 +274,10 @@ fn the_member_step_loop_allocates_nothing() {
         allocations() - before
     };
     let (short, long) = (in_member(10), in_member(60));
-    assert_eq!(short, long, "allocations: {short} for 10 steps, {long} for 60");
+    assert_eq!(
+        short, long,
+        "allocations: {short} for 10 steps, {long} for 60"
+    );
     // Negative control: the owning step_jacobian_in allocates on every step.
     let owning = |steps: usize| {
         let mut ws = gvi.workspace(system).unwrap();
