@@ -15,19 +15,14 @@ use std::sync::Arc;
 /// systems as one enum (rigid bodies, on SO(3), are not available from Python).
 pub use galerkin_vi::systems::AnySystem as SysKind;
 
-/// Run `$body` with `$s` bound to the concrete system (a generic call site per variant, so
-/// the hot loop sees the concrete type).
+/// Run `$body` with `$s` bound to the system. `AnySystem` dispatches every trait method to the
+/// concrete system itself, so this is a plain binding (kept as a macro for the call sites).
 #[macro_export]
 macro_rules! with_system {
-    ($kind:expr, $s:ident => $body:expr) => {
-        match $kind {
-            $crate::systems::SysKind::Kepler($s) => $body,
-            $crate::systems::SysKind::Harmonic($s) => $body,
-            $crate::systems::SysKind::Pendulum($s) => $body,
-            $crate::systems::SysKind::NBody($s) => $body,
-            $crate::systems::SysKind::Expression($s) => $body,
-        }
-    };
+    ($kind:expr, $s:ident => $body:expr) => {{
+        let $s: &$crate::systems::SysKind = $kind;
+        $body
+    }};
 }
 
 /// The system of a built scene, or `UnsupportedError` for rigid bodies.
