@@ -302,7 +302,32 @@ type ThinArgs<'a> = (
 /// scaled. Bounds were checked by [`gemm`].
 fn thin<const D: usize>(args: ThinArgs<'_>, c: &mut [f64], sc: Strided) {
     let (m, k, alpha, a, sa, b, sb, beta) = args;
-    for i in 0..m {
+    // Four rows of C at a time: their sums are independent, so interleaving them hides the
+    // latency of each serial sum (every entry is still summed over k in order: the same bits).
+    let store = |c: &mut [f64], i: usize, acc: &[f64; D]| {
+        for j in 0..D {
+            let ci = sc.offset + i * sc.row_stride + j * sc.col_stride;
+            c[ci] = alpha * acc[j] + if beta == 0.0 { 0.0 } else { beta * c[ci] };
+        }
+    };
+    let blocked = m - m % ROWS;
+    for i in (0..blocked).step_by(ROWS) {
+        let mut acc = [[0.0f64; D]; ROWS];
+        for kk in 0..k {
+            let o = sb.offset + kk * sb.row_stride;
+            let br = &b[o..o + D];
+            for (r, acc) in acc.iter_mut().enumerate() {
+                let x = a[sa.offset + (i + r) * sa.row_stride + kk * sa.col_stride];
+                for j in 0..D {
+                    acc[j] += x * br[j];
+                }
+            }
+        }
+        for (r, acc) in acc.iter().enumerate() {
+            store(c, i + r, acc);
+        }
+    }
+    for i in blocked..m {
         let a0 = sa.offset + i * sa.row_stride;
         let mut acc = [0.0f64; D];
         for kk in 0..k {
@@ -313,18 +338,18 @@ fn thin<const D: usize>(args: ThinArgs<'_>, c: &mut [f64], sc: Strided) {
                 acc[j] += x * br[j];
             }
         }
-        for j in 0..D {
-            let ci = sc.offset + i * sc.row_stride + j * sc.col_stride;
-            c[ci] = alpha * acc[j] + if beta == 0.0 { 0.0 } else { beta * c[ci] };
-        }
+        store(c, i, &acc);
     }
 }
+
+/// Rows of C the few-column kernels accumulate together.
+const ROWS: usize = 4;
 
 /// [`thin`] for A with strided rows (e.g. Φᵀ): C's row is scaled by beta first and
 /// alpha·a_ik·B_k accumulated into it, in the order of the general loop of [`gemm`].
 fn thin_accumulate<const D: usize>(args: ThinArgs<'_>, c: &mut [f64], sc: Strided) {
     let (m, k, alpha, a, sa, b, sb, beta) = args;
-    for i in 0..m {
+    let load = |c: &[f64], i: usize| {
         let c0 = sc.offset + i * sc.row_stride;
         let mut acc = [0.0f64; D];
         for (j, x) in acc.iter_mut().enumerate() {
@@ -337,6 +362,39 @@ fn thin_accumulate<const D: usize>(args: ThinArgs<'_>, c: &mut [f64], sc: Stride
                 cij
             };
         }
+        acc
+    };
+    let store = |c: &mut [f64], i: usize, acc: &[f64; D]| {
+        let c0 = sc.offset + i * sc.row_stride;
+        for (j, x) in acc.iter().enumerate() {
+            c[c0 + j * sc.col_stride] = *x;
+        }
+    };
+    // Four rows at a time, as in `thin`. A zero a_ik is skipped (as the general loop does):
+    // adding its zero product instead would change nothing for finite B, but skip it anyway
+    // so that every entry sees exactly the operations of the unblocked loop.
+    let blocked = m - m % ROWS;
+    for i in (0..blocked).step_by(ROWS) {
+        let mut acc = [load(c, i), load(c, i + 1), load(c, i + 2), load(c, i + 3)];
+        for kk in 0..k {
+            let o = sb.offset + kk * sb.row_stride;
+            let br = &b[o..o + D];
+            for (r, acc) in acc.iter_mut().enumerate() {
+                let aik = alpha * a[sa.offset + (i + r) * sa.row_stride + kk * sa.col_stride];
+                if aik == 0.0 {
+                    continue;
+                }
+                for j in 0..D {
+                    acc[j] += aik * br[j];
+                }
+            }
+        }
+        for (r, acc) in acc.iter().enumerate() {
+            store(c, i + r, acc);
+        }
+    }
+    for i in blocked..m {
+        let mut acc = load(c, i);
         let a0 = sa.offset + i * sa.row_stride;
         for kk in 0..k {
             let aik = alpha * a[a0 + kk * sa.col_stride];
@@ -349,9 +407,7 @@ fn thin_accumulate<const D: usize>(args: ThinArgs<'_>, c: &mut [f64], sc: Stride
                 acc[j] += aik * br[j];
             }
         }
-        for (j, x) in acc.iter().enumerate() {
-            c[c0 + j * sc.col_stride] = *x;
-        }
+        store(c, i, &acc);
     }
 }
 

@@ -22,7 +22,8 @@ mod systems;
 use systems::{Coupled, Magnetic};
 
 /// The structured solvers and `Auto`, each compared with `Exact`.
-const SOLVERS: [StageSolver; 4] = [
+const SOLVERS: [StageSolver; 5] = [
+    StageSolver::Modal,
     StageSolver::Kronecker,
     StageSolver::NewtonKrylov,
     StageSolver::FixedPoint,

@@ -44,7 +44,7 @@ use crate::quadrature::Quadrature;
 ///
 /// ```
 /// use galerkin_vi::prelude::*;
-/// use galerkin_vi::integrator::{StageEquations, StageSolve, StepFailure};
+/// use galerkin_vi::integrator::{StageEquations, StageSolve, StageSolver, StepFailure};
 ///
 /// #[derive(Debug)]
 /// struct PlainNewton;
@@ -71,7 +71,8 @@ use crate::quadrature::Quadrature;
 ///
 /// let kepler = Kepler::new(1.0)?;
 /// let (q0, p0) = Kepler::paper_initial_state();
-/// let builtin = GalerkinIntegrator::spectral(12, 0.5)?;
+/// let exact = NewtonOptions { solver: StageSolver::Exact, ..NewtonOptions::default() };
+/// let builtin = GalerkinIntegrator::spectral(12, 0.5)?.with_options(exact);
 /// let custom = GalerkinIntegrator::spectral(12, 0.5)?.with_stage_solver(PlainNewton);
 /// let (a, b) = (builtin.integrate(&kepler, 0.0, &q0, &p0, 40)?, custom.integrate(&kepler, 0.0, &q0, &p0, 40)?);
 /// assert!((a.q[40][0] - b.q[40][0]).abs() < 1e-13 && (a.p[40][1] - b.p[40][1]).abs() < 1e-13);

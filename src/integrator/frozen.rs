@@ -18,27 +18,44 @@ impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIn
         kinetic_only: bool,
     ) -> Result<usize> {
         let t = self.tables();
-        let (m, d, h) = (t.m, ws.d, self.step_size());
-        let dd = d * d;
+        let (m, h) = (t.m, self.step_size());
         let (Some(kt), Some(kw)) = (t.kron.as_ref(), ws.newton.kron.as_mut()) else {
             return Err(GviError::Unsupported(
                 "the Kronecker solver needs a separable Lagrangian".into(),
             ));
         };
-        kw.hbar.iter_mut().for_each(|x| *x = 0.0);
         if kinetic_only {
+            kw.hbar.iter_mut().for_each(|x| *x = 0.0);
             kw.factor(kt, h)?;
             return Ok(0);
         }
-        if !ws.stage.hblocks.is_empty()
-            && lag.force_jacobian_diagonal_blocks_at_points(&ws.stage.qj, &mut ws.stage.hblocks)
+        self.mean_force_jacobian(lag, &mut ws.stage, kw);
+        kw.factor(kt, h)?;
+        Ok(m)
+    }
+
+    /// H̄ = Σ_j b_j L_qq(q(c_j)) over the nodes in `stage.qj` into `kw.hbar` (only its
+    /// diagonal blocks when the system provides them and the frozen solve uses only those).
+    /// Returns the Hessian evaluations.
+    pub(super) fn mean_force_jacobian<L: crate::lagrangian::Lagrangian>(
+        &self,
+        lag: &L,
+        stage: &mut super::stage_scratch::StageScratch,
+        kw: &mut super::kronecker::KroneckerWork,
+    ) -> usize {
+        let t = self.tables();
+        let d = kw.dim();
+        let dd = d * d;
+        kw.hbar.iter_mut().for_each(|x| *x = 0.0);
+        if !stage.hblocks.is_empty()
+            && lag.force_jacobian_diagonal_blocks_at_points(&stage.qj, &mut stage.hblocks)
         {
             // Only the diagonal blocks of H̄ are used (block-diagonal preconditioner): the
             // same weighted sums of the same entries, without forming the node Jacobians.
-            ws.stage.hall_stale = true;
+            stage.hall_stale = true;
             let b = kw.block();
             let (bb, blocks) = (b * b, d / b);
-            for (j, hj) in ws.stage.hblocks.chunks_exact(d * b).enumerate() {
+            for (j, hj) in stage.hblocks.chunks_exact(d * b).enumerate() {
                 let w = t.weights[j];
                 for c in 0..blocks {
                     for r in 0..b {
@@ -49,17 +66,16 @@ impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIn
                 }
             }
         } else {
-            lag.force_jacobian_at_points(&ws.stage.qj, &mut ws.stage.hall);
-            ws.stage.hall_stale = false;
-            for (j, hj) in ws.stage.hall.chunks_exact(dd).enumerate() {
+            lag.force_jacobian_at_points(&stage.qj, &mut stage.hall);
+            stage.hall_stale = false;
+            for (j, hj) in stage.hall.chunks_exact(dd).enumerate() {
                 let w = t.weights[j];
                 for (x, y) in kw.hbar.iter_mut().zip(hj) {
                     *x += w * y;
                 }
             }
         }
-        kw.factor(kt, h)?;
-        Ok(m)
+        t.m
     }
 }
 
@@ -106,6 +122,23 @@ impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIn
             .map(KroneckerTables::eigenvalues)
     }
 
+    /// Whether the stage equations can be solved in their velocity form (`StageSolver::Modal`,
+    /// chosen by `Auto` for separable Lagrangians): a polynomial basis and a rule that
+    /// integrates the kinetic term exactly (Gauss–Legendre with at least n − 1 points), where
+    /// it is the nodal map written in the Legendre modes of the velocity (docs/solvers.md).
+    ///
+    /// ```
+    /// use galerkin_vi::prelude::*;
+    ///
+    /// assert!(GalerkinIntegrator::spectral(16, 1.0)?.has_velocity_form());
+    /// let fourier = GalerkinIntegrator::from_kinds(BasisKind::Fourier, 9, QuadratureKind::default(), None, 1.0)?;
+    /// assert!(!fourier.has_velocity_form());
+    /// # Ok::<(), galerkin_vi::GviError>(())
+    /// ```
+    pub fn has_velocity_form(&self) -> bool {
+        self.tables().velocity.is_some()
+    }
+
     /// The solver `NewtonOptions::solver` names, with `Auto` resolved for this workspace.
     pub(super) fn resolve_solver(
         &self,
@@ -114,7 +147,7 @@ impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIn
     ) -> super::StageSolver {
         use super::StageSolver;
         match solver {
-            StageSolver::Auto => {
+            StageSolver::Auto | StageSolver::Modal => {
                 if ws.newton.kron.is_none() || (ws.n - 1) * ws.d <= AUTO_DENSE_SIZE {
                     StageSolver::Exact
                 } else {

@@ -73,7 +73,15 @@ impl KroneckerTables {
             x[b] = -t.unit[b];
         }
         lu.solve_columns_in_place(&mut x, k);
-        let cm = nalgebra::DMatrix::from_row_slice(k, k, &c);
+        Self::from_pencil(&c, &x, k)
+    }
+
+    /// The Schur form C = U T Uᵀ of a k×k stage pencil C, with R = Uᵀ X for the map X that
+    /// brings a right-hand side to the form (I ⊗ M/h + h C ⊗ H̄) z = X r. The nodal stage
+    /// equations have C = K_s⁻¹ G_s and X = K_s⁻¹ P⁻¹; the velocity form has
+    /// its own C and X = I.
+    pub(crate) fn from_pencil(c: &[f64], x: &[f64], k: usize) -> Option<Self> {
+        let cm = nalgebra::DMatrix::from_row_slice(k, k, c);
         let schur = nalgebra::linalg::Schur::try_new(cm, f64::EPSILON, 10_000)?;
         let (um, tm) = schur.unpack();
         if um.iter().chain(tm.iter()).any(|v| !v.is_finite()) {
@@ -259,6 +267,11 @@ impl KroneckerWork {
     /// The coordinate block size b of the frozen Hessian (b = D: full).
     pub(crate) fn block(&self) -> usize {
         self.block
+    }
+
+    /// The configuration dimension D.
+    pub(crate) fn dim(&self) -> usize {
+        self.d
     }
 
     pub(crate) fn factor(&mut self, kt: &KroneckerTables, h: f64) -> Result<()> {

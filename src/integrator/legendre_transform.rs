@@ -20,7 +20,7 @@
 //!
 //! Guide: docs/guide/paper-objects.md.
 
-use super::dd::{dd_acc, dd_acc_columns, max_abs, two_sum};
+use super::dd::{dd_acc, max_abs, two_sum};
 use super::{GalerkinIntegrator, Workspace};
 use crate::basis::Basis;
 use crate::curve::GalerkinCurveRef;
@@ -100,20 +100,8 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let (t, h) = (self.tables(), self.step_size());
         let (d, n) = (ws.d, ws.n);
         let last = (n - 1) * d;
-        ws.stage.dd_hi.iter_mut().for_each(|x| *x = 0.0);
-        ws.stage.dd_lo.iter_mut().for_each(|x| *x = 0.0);
-        let weights = &t.weights;
-        dd_acc_columns(
-            t.m,
-            |j| h * weights[j],
-            &ws.stage.lq,
-            d,
-            &mut ws.stage.dd_hi,
-            &mut ws.stage.dd_lo,
-        );
+        self.impulse(ws);
         for r in 0..d {
-            (ws.newton.impulse[r], ws.newton.impulse_lo[r]) =
-                two_sum(ws.stage.dd_hi[r], ws.stage.dd_lo[r]);
             ws.newton.rhs[r] =
                 (p_k[r] - ws.stage.grad[last + r]) + (ws.newton.impulse[r] + ws.newton.p_err[r]);
         }

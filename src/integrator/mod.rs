@@ -43,6 +43,8 @@ mod solver;
 mod stage;
 mod stage_scratch;
 mod tangent;
+mod velocity_form;
+mod velocity_solve;
 mod workspace;
 
 pub use discrete_action::DiscreteLagrangian;
@@ -115,6 +117,9 @@ pub(crate) struct Tables {
     /// The Schur form of the stage matrices for the Kronecker solver (`None` when it could
     /// not be computed; the exact solver is then used).
     pub kron: Option<kronecker::KroneckerTables>,
+    /// The velocity form of the stage equations (`None` when it is not the same map: the
+    /// Fourier basis, or a rule too weak for the kinetic term).
+    pub velocity: Option<velocity_form::VelocityTables>,
 }
 
 impl GalerkinIntegrator<ChebyshevLagrange, GaussLegendre> {
@@ -519,8 +524,10 @@ impl Tables {
             chebyshev: modal::chebyshev_transform(basis, n),
             fit,
             kron: None,
+            velocity: None,
         };
         tables.kron = kronecker::KroneckerTables::build(&tables);
+        tables.velocity = velocity_form::VelocityTables::build(rule, &tables);
         Ok(tables)
     }
 }

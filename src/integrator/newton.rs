@@ -88,7 +88,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             && ws.newton.kron.is_some()
             && ws.newton.krylov.is_some()
             && self.tables().kron.is_some();
-        let auto = solver == StageSolver::Auto;
+        let auto = matches!(solver, StageSolver::Auto | StageSolver::Modal);
         if auto {
             // Try the cheaper rung again once the hold-off has passed.
             if ws.newton.auto_holdoff == 0 && ws.newton.auto_level > 1 {
@@ -445,6 +445,22 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
     ) -> std::result::Result<StepStats, StepFailure> {
         ws.newton.base.copy_from_slice(q);
         let mut stats = StepStats::default();
+        let auto = self.options().solver == StageSolver::Auto;
+        if self.velocity_form_applies(ws)
+            && !(auto && ws.velocity.as_mut().is_some_and(|v| v.holding_off()))
+        {
+            let solved = self.solve_velocity_form(lag, ws, q, p, &mut stats);
+            if let Some(v) = ws.velocity.as_mut() {
+                v.record(solved);
+            }
+            if solved {
+                stats.gradient_evaluations += std::mem::take(&mut ws.guess.guess_force_evaluations);
+                return Ok(stats);
+            }
+            // Not solved (a stall, a non-finite residual): the nodal solvers take the step
+            // from their own guesses.
+            stats.fallbacks += 1;
+        }
         let (guess, evals) = self.initial_guess(lag, ws, q, p);
         stats.guess = guess;
         stats.gradient_evaluations += evals;

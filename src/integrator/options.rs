@@ -54,7 +54,8 @@ pub struct NewtonOptions {
     /// e = 0.6 over T = 20,000 with Chebyshev n = 24, h = 0.5 reaches 1.8e-8 instead of
     /// 1.9e-7; Newton needs 2.61 instead of 2.96 solves per step (n = 32, h = 2). Costs
     /// ≈ n² D TwoProds per residual (≈ 7 % of the step at n = 10, nothing measurable at
-    /// n = 24).
+    /// n = 24). Concerns the nodal stage equations only: the velocity form
+    /// ([`StageSolver::Modal`], `auto`'s choice where it exists) has no kinetic sums.
     #[serde(default = "default_true")]
     pub exact_kinetic: bool,
     /// How the linear systems of the iteration are solved ([`StageSolver`]): the dense exact

@@ -54,16 +54,24 @@ pub enum StageSolver {
     /// h·ω, and a step that does not contract continues with the frozen-Hessian solver
     /// (separable Lagrangians).
     FixedPoint,
+    /// Newton on the stage equations written in the Legendre modes of the velocity, where the
+    /// kinetic matrix is the identity and the Newton matrix is M plus an O(h²) term: no
+    /// kinetic sums in the residual, a factorisation kept across steps (dense up to
+    /// (n − 1)·D = 64, the frozen-Hessian Kronecker solve above). The same map as the nodal
+    /// equations (polynomial bases with a rule exact for the kinetic term; otherwise, and
+    /// for a step it does not solve, the nodal `auto` solvers run).
+    Modal,
 }
 
 impl StageSolver {
     /// All solvers, for sweeps.
-    pub const ALL: [StageSolver; 5] = [
+    pub const ALL: [StageSolver; 6] = [
         StageSolver::Auto,
         StageSolver::Exact,
         StageSolver::Kronecker,
         StageSolver::NewtonKrylov,
         StageSolver::FixedPoint,
+        StageSolver::Modal,
     ];
 
     /// The name used in scene files and on the command line.
@@ -74,6 +82,7 @@ impl StageSolver {
             StageSolver::Kronecker => "kronecker",
             StageSolver::NewtonKrylov => "newton-krylov",
             StageSolver::FixedPoint => "fixed-point",
+            StageSolver::Modal => "modal",
         }
     }
 }

@@ -19,6 +19,7 @@ use super::guess_state::GuessState;
 use super::newton_state::NewtonState;
 use super::separable::Separable;
 use super::stage_scratch::StageScratch;
+use super::velocity_solve::VelocityState;
 use crate::basis::Basis;
 use crate::curve::{GalerkinCurve, GalerkinCurveRef};
 use crate::error::{GviError, Result};
@@ -50,6 +51,9 @@ pub struct Workspace {
     pub(crate) guess: GuessState,
     /// The last completed step's curve (absolute coefficients Q_i, the public meaning).
     pub(crate) last: GalerkinCurve,
+    /// The velocity form's iterate and linear solve (separable Lagrangians with a polynomial
+    /// basis and a rule exact for the kinetic term).
+    pub(crate) velocity: Option<VelocityState>,
 }
 
 /// Configuration dimension from which Newton–Krylov uses a system's matrix-free force-Jacobian
@@ -106,6 +110,12 @@ impl Workspace {
             .is_some()
             .then(|| super::krylov::KrylovWork::new(n - 1, m, d));
         let substeps = gvi.options().predictor_substeps.unwrap_or(n.max(8));
+        let velocity = match (&t.velocity, &separable) {
+            (Some(vt), Some(sep)) => {
+                VelocityState::new(vt, d, &sep.mass, lagrangian.coordinate_blocks())
+            }
+            _ => None,
+        };
         Ok(Workspace {
             d,
             n,
@@ -116,6 +126,7 @@ impl Workspace {
             newton: NewtonState::new(n, d, kron, krylov),
             guess: GuessState::new(n, d, substeps),
             last: GalerkinCurve::with_capacity(n, d, h),
+            velocity,
         })
     }
 
@@ -138,6 +149,9 @@ impl Workspace {
         self.guess.has_warm = false;
         self.newton.residual_ready = None;
         self.newton.lu_valid = false;
+        if let Some(v) = self.velocity.as_mut() {
+            v.has_prev = false;
+        }
     }
 
     /// Start the next step's Newton iteration from the given Galerkin coefficients (n×D, row

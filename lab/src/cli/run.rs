@@ -40,9 +40,9 @@ pub struct SceneArgs {
     /// Step size h.
     #[arg(long, allow_hyphen_values = true)]
     pub h: Option<f64>,
-    /// Stage solver: auto (default; exact for --tol runs), exact, kronecker, newton-krylov or
-    /// fixed-point. Every solver gives the same map to round-off; they differ in cost
-    /// (docs/solvers.md).
+    /// Stage solver: auto (default; the velocity form where it applies, exact for --tol runs),
+    /// modal, exact, kronecker, newton-krylov or fixed-point. Every solver gives the same map to
+    /// round-off; they differ in cost (docs/solvers.md).
     #[arg(long)]
     pub solver: Option<String>,
     /// Number of steps.

@@ -1,0 +1,222 @@
+//! The stage equations in the Legendre modes of the velocity: the same one-step map as the
+//! nodal equations of paper eqs. (3)–(4), written in the representation where the kinetic
+//! matrix is the identity.
+//!
+//! For a polynomial space (every built-in basis but Fourier) the Galerkin curve of a step is
+//!
+//! q(τh) = q_k + h Σ_{a<n−1} c_a I_a(τ),   q̇(τh) = Σ_a c_a P̃_a(τ),   I_a(τ) = ∫_0^τ P̃_a,
+//!
+//! with P̃_a = √(2a+1) P_a(2τ − 1) the Legendre polynomials orthonormal on [0, 1] and the
+//! unknowns c_a (D-vectors, velocity units). The test functions vanishing at τ = 1 are
+//! ψ_0 = τ − 1 = I_0 − 1 and ψ_b = I_b (b ≥ 1, which vanish at both ends). For a separable
+//! Lagrangian L = ½ vᵀMv − V(q), a quadrature exact to degree 2n − 4 (the kinetic integrand;
+//! m ≥ n − 1 Gauss points) makes Σ_j b_j P̃_a(c_j) P̃_b(c_j) = δ_ab, and the stage equations
+//! (the discrete Legendre transform p_k = −D₁L_d, eq. (4), combined with the internal stage
+//! equations, eq. (3)) become
+//!
+//! F_b(c) = M c_b + h Σ_j b_j ψ_b(c_j) f(q(c_j)) − δ_b0 p_k = 0,   f = L_q = −∇V,
+//!
+//! with q_{k+1} = q_k + h c_0 and p_{k+1} = p_k + h Σ_j b_j f_j. There is no kinetic sum at
+//! all — the term whose cancellation the nodal residual has to sum in double-double — and the
+//! Newton matrix J = I ⊗ M + h² Σ_j b_j ψ(c_j) I(c_j)ᵀ ⊗ H_j is the mass matrix plus an
+//! O(h²) term, so a factorisation stays good for many steps and the frozen-Hessian form
+//! I ⊗ M + h² C ⊗ H̄ has the Kronecker structure of `kronecker.rs` with
+//! C = Σ_j b_j ψ(c_j) I(c_j)ᵀ.
+//!
+//! It is the nodal map, not an approximation of it: the space, the quadrature and the test
+//! space are the same, only their bases differ. The tables below are built only when that
+//! can be checked — the rule integrates the kinetic term exactly and the basis reproduces
+//! every I_a — and the converged modes are converted to the basis's coefficients for dense
+//! output and the next step.
+//!
+//! Exactly variational in floating point too: the curve at node j uses the table entries
+//! ι_ja ≈ I_a(c_j) and the test functions use the same numbers (ψ_jb = ι_jb for b ≥ 1,
+//! ψ_j0 = ι_j0 − 1 computed exactly, ι_j0 = c_j being kept on the 2⁻⁵³ grid), so the
+//! equations are the exact stationarity conditions of the discrete Lagrangian
+//! h[½ Σ_a c_aᵀMc_a − Σ_j b_j V(q_k + h Σ_a ι_ja c_a)] that these tables define.
+
+use super::Tables;
+use super::kronecker::KroneckerTables;
+use crate::quadrature::QuadratureRule;
+
+/// The largest deviation from the identity of the quadrature's Gram matrix of the velocity
+/// modes, and from I_a of the basis's interpolant, accepted as "the same map" (the table
+/// entries themselves carry rounding errors of a few ulps times n).
+const REPRODUCTION_TOLERANCE: f64 = 1e-11;
+
+/// The (basis, quadrature, n)-dependent tables of the velocity form (k = n − 1 modes, m
+/// nodes; row-major).
+#[derive(Debug, Clone)]
+pub(crate) struct VelocityTables {
+    /// k = n − 1, the number of velocity modes.
+    pub k: usize,
+    /// ι_ja = I_a(c_j), m×k (column 0: c_j on the 2⁻⁵³ grid).
+    pub iota: Vec<f64>,
+    /// ψ_jb, m×k: ι_jb for b ≥ 1, ι_j0 − 1 (exact) for b = 0.
+    pub psi: Vec<f64>,
+    /// Extrapolation of the velocity to the next step, k×k: c_next = E c (the previous
+    /// step's q̇(τ + 1) projected on the modes, exact for polynomials).
+    pub extrapolate: Vec<f64>,
+    /// The basis coefficients of the curve: ΔQ_i = h Σ_a B_ia c_a, n×k (row 0 is zero and
+    /// row n − 1 is (1, 0, …, 0), both set exactly).
+    pub to_basis: Vec<f64>,
+    /// The modes of a curve given by increments ΔQ (n×D): c = (1/h) F ΔQ, k×n.
+    pub from_basis: Vec<f64>,
+    /// The Schur form of C = Σ_j b_j ψ(c_j) I(c_j)ᵀ for the frozen-Hessian solve (`None`
+    /// when it could not be computed).
+    pub kron: Option<KroneckerTables>,
+}
+
+/// P̃_a(τ) for a < len and I_a(τ) for a < len − 1 (with I_0 = τ), from the Legendre
+/// recurrence at x = 2τ − 1.
+fn legendre_modes(tau: f64, values: &mut [f64], integrals: &mut [f64]) {
+    let len = values.len();
+    let x = 2.0 * tau - 1.0;
+    // P_0 … P_{len−1}
+    let (mut p0, mut p1) = (1.0, x);
+    let mut p = vec![0.0; len + 1];
+    p[0] = 1.0;
+    if len > 0 {
+        p[1] = x;
+    }
+    for a in 1..len {
+        let next = ((2 * a + 1) as f64 * x * p1 - a as f64 * p0) / (a + 1) as f64;
+        p[a + 1] = next;
+        (p0, p1) = (p1, next);
+    }
+    for a in 0..len {
+        values[a] = ((2 * a + 1) as f64).sqrt() * p[a];
+    }
+    for a in 0..integrals.len() {
+        integrals[a] = if a == 0 {
+            tau
+        } else {
+            // ∫_0^τ √(2a+1) P_a(2s − 1) ds = (P_{a+1}(x) − P_{a−1}(x)) / (2√(2a+1)).
+            (p[a + 1] - p[a - 1]) / (2.0 * ((2 * a + 1) as f64).sqrt())
+        };
+    }
+}
+
+impl VelocityTables {
+    /// Build the tables, or `None` when the velocity form is not the nodal map for this
+    /// basis and rule: a rule too weak for the kinetic term, a basis that does not reproduce
+    /// the polynomials of degree n − 1 (Fourier), or tables that are not finite.
+    pub(crate) fn build(rule: &QuadratureRule, t: &Tables) -> Option<Self> {
+        let (n, m) = (t.n, t.m);
+        if n < 2 || m == 0 {
+            return None;
+        }
+        let k = n - 1;
+        let (mut pt, mut it) = (vec![0.0; m * k], vec![0.0; m * k]);
+        for (j, &c) in rule.nodes.iter().enumerate() {
+            legendre_modes(c, &mut pt[j * k..(j + 1) * k], &mut it[j * k..(j + 1) * k]);
+            // Node on the 2⁻⁵³ grid so that ι_j0 − 1 is exact (Sterbenz above ½, the grid
+            // below).
+            let snapped = (c * 2f64.powi(53)).round() / 2f64.powi(53);
+            it[j * k] = snapped;
+        }
+        // The rule must integrate the kinetic term exactly: the modes' Gram matrix is I.
+        for a in 0..k {
+            for b in 0..k {
+                let g: f64 = (0..m)
+                    .map(|j| rule.weights[j] * pt[j * k + a] * pt[j * k + b])
+                    .sum();
+                let target = if a == b { 1.0 } else { 0.0 };
+                if (g - target).abs() > REPRODUCTION_TOLERANCE || !g.is_finite() {
+                    return None;
+                }
+            }
+        }
+        // B: the basis coefficients of I_a, fitted at the basis's interpolation nodes …
+        let nodes = t.fit.nodes();
+        let mut to_basis = vec![0.0; n * k];
+        let mut v = vec![0.0; k];
+        for (i, &x) in nodes.iter().enumerate() {
+            legendre_modes(x, &mut vec![0.0; k], &mut v);
+            to_basis[i * k..(i + 1) * k].copy_from_slice(&v);
+        }
+        t.fit.values_to_coefficients(&mut to_basis, k);
+        // … which must reproduce I_a and P̃_a at the quadrature nodes (a polynomial basis).
+        for j in 0..m {
+            for a in 0..k {
+                let (mut value, mut slope) = (0.0, 0.0);
+                for i in 0..n {
+                    value += t.phi[j * n + i] * to_basis[i * k + a];
+                    slope += t.dphi[j * n + i] * to_basis[i * k + a];
+                }
+                let exact = if a == 0 { rule.nodes[j] } else { it[j * k + a] };
+                let ok = (value - exact).abs() <= REPRODUCTION_TOLERANCE
+                    && (slope - pt[j * k + a]).abs() <= 1e3 * REPRODUCTION_TOLERANCE;
+                if !ok {
+                    return None;
+                }
+            }
+        }
+        // The curve starts at q_k and ends at q_k + h c_0 (Q_0 and Q_{n−1} are its end
+        // values in every built-in basis): checked, then set exactly.
+        for a in 0..k {
+            let end = if a == 0 { 1.0 } else { 0.0 };
+            if to_basis[a].abs() > REPRODUCTION_TOLERANCE
+                || (to_basis[(n - 1) * k + a] - end).abs() > REPRODUCTION_TOLERANCE
+            {
+                return None;
+            }
+            to_basis[a] = 0.0;
+            to_basis[(n - 1) * k + a] = end;
+        }
+        let mut psi = it.clone();
+        for j in 0..m {
+            psi[j * k] = it[j * k] - 1.0;
+        }
+        // C_ba = Σ_j b_j ψ_jb ι_ja, the pencil of the frozen Newton matrix I ⊗ M + h² C ⊗ H̄.
+        let mut c = vec![0.0; k * k];
+        for j in 0..m {
+            let w = rule.weights[j];
+            for b in 0..k {
+                for a in 0..k {
+                    c[b * k + a] += w * psi[j * k + b] * it[j * k + a];
+                }
+            }
+        }
+        // E_ba = Σ_j b_j P̃_b(c_j) P̃_a(c_j + 1).
+        let mut extrapolate = vec![0.0; k * k];
+        let mut shifted = vec![0.0; k];
+        for j in 0..m {
+            legendre_modes(1.0 + rule.nodes[j], &mut shifted, &mut []);
+            for b in 0..k {
+                for a in 0..k {
+                    extrapolate[b * k + a] += rule.weights[j] * pt[j * k + b] * shifted[a];
+                }
+            }
+        }
+        // F_bi = Σ_j b_j P̃_b(c_j) φ_i'(c_j): c = (1/h) F ΔQ.
+        let mut from_basis = vec![0.0; k * n];
+        for j in 0..m {
+            for b in 0..k {
+                let wp = rule.weights[j] * pt[j * k + b];
+                for i in 0..n {
+                    from_basis[b * n + i] += wp * t.dphi[j * n + i];
+                }
+            }
+        }
+        let mut identity = vec![0.0; k * k];
+        for a in 0..k {
+            identity[a * k + a] = 1.0;
+        }
+        let finite = [&it, &psi, &extrapolate, &to_basis, &from_basis]
+            .iter()
+            .all(|v| v.iter().all(|x| x.is_finite()));
+        if !finite {
+            return None;
+        }
+        Some(VelocityTables {
+            k,
+            kron: KroneckerTables::from_pencil(&c, &identity, k),
+            iota: it,
+            psi,
+            extrapolate,
+            to_basis,
+            from_basis,
+        })
+    }
+}

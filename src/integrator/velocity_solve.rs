@@ -1,0 +1,521 @@
+//! Newton's method on the stage equations in the velocity form ([`super::velocity_form`]):
+//! the residual F(c) = M c_b + h Σ_j b_j ψ_b(c_j) f_j − δ_b0 p_k, the Newton matrix
+//! I ⊗ M + h² Σ_j b_j ψ_j ι_jᵀ ⊗ H_j (dense for small systems, frozen at H̄ and solved through
+//! its Kronecker structure for large ones), and the conversion of the converged modes to the
+//! basis coefficients the rest of the integrator reads.
+//!
+//! Because the Newton matrix is the mass matrix plus an O(h²) term, its factorisation is kept
+//! across steps while the iteration contracts by 0.1 per iteration; a step that does not
+//! converge returns a failure, and the step is then solved by the nodal solvers from their own
+//! guesses (the caller's fallback), so the velocity form never loses a step the nodal
+//! equations would have solved.
+
+use super::dd::{dd_acc, dd_acc_columns, max_abs, two_sum};
+use super::kronecker::KroneckerWork;
+use super::velocity_form::VelocityTables;
+use super::{GalerkinIntegrator, InitialGuess, StepStats, Workspace};
+use crate::basis::Basis;
+use crate::lagrangian::Lagrangian;
+use crate::linalg::{Strided, gemm};
+use crate::quadrature::Quadrature;
+
+/// Contraction per iteration above which the frozen Hessian is refrozen at the current
+/// iterate (once per step; a second stall hands the step to the nodal solvers).
+const VELOCITY_STALL: f64 = 0.5;
+
+/// Steps without a failure after which `Auto` forgets the earlier ones …
+const AUTO_CALM: usize = 8;
+
+/// … and the steps it then hands to the nodal solvers directly after a second failure within
+/// them (large h·ω, where the frozen Hessian contracts slowly or stalls; measured on Kepler
+/// at h = 2–4 the fallbacks made the velocity form 10–20 % slower than exact Newton).
+const AUTO_HOLDOFF: usize = 32;
+
+/// Relative residual of the extrapolated guess above which the RK4 predictor is tried too.
+/// Measured on Kepler e = 0.6, T = 200 (Legendre n = 10, h = 0.25; n = 18, h = 0.5;
+/// n = 12, h = 0.5): trusting every extrapolation is fastest but lets periapsis steps start
+/// from residuals of O(10), where the frozen Hessian (taken at that guess) contracts slowly and
+/// one step stopped at its noise floor with an angular-momentum error of 2e-15; 1e-6 tries
+/// the predictor too often (+13 % time); 1e-3 costs +4 % and had no such step.
+const EXTRAPOLATION_TRUST: f64 = 1e-3;
+
+/// Relative increment below which an iteration that stops contracting is at the round-off
+/// floor of its residual (converged, not stalled).
+const VELOCITY_FLOOR: f64 = 1e-13;
+
+/// Per-workspace state of the velocity form: the iterate, the previous step's modes, and the
+/// frozen-Hessian solve.
+#[derive(Debug, Clone)]
+pub(crate) struct VelocityState {
+    /// The iterate: velocity modes c_0 … c_{k−1} (k×D).
+    pub c: Vec<f64>,
+    /// The low part of c_0 (D): Newton's last corrections lie below its ulp, and
+    /// q_{k+1} − q_k = h c_0 is wanted to more than working precision (as the nodal
+    /// solve keeps ΔQ_{n−1}; docs/DESIGN.md §4).
+    pub c0_lo: Vec<f64>,
+    /// The previous step's converged modes, for the extrapolated guess.
+    pub prev: Vec<f64>,
+    /// Whether `prev` holds the step just before this one.
+    pub has_prev: bool,
+    /// −F, then the Newton correction (k×D).
+    pub delta: Vec<f64>,
+    /// The frozen-Hessian Kronecker solve of I ⊗ M + h² C ⊗ H̄.
+    kron: KroneckerWork,
+    /// `Auto`'s memory: recent steps the velocity form gave up, solves since the last one,
+    /// and the steps left to hand to the nodal solvers directly.
+    recent_failures: usize,
+    calm: usize,
+    holdoff: usize,
+}
+
+impl VelocityState {
+    /// `Auto`: whether this step goes to the nodal solvers directly (the velocity form
+    /// failed twice within [`AUTO_CALM`] steps, less than [`AUTO_HOLDOFF`] steps ago).
+    pub(super) fn holding_off(&mut self) -> bool {
+        if self.holdoff > 0 {
+            self.holdoff -= 1;
+            return true;
+        }
+        false
+    }
+
+    /// Record the outcome of a step's velocity-form solve for `Auto`.
+    pub(super) fn record(&mut self, solved: bool) {
+        if solved {
+            self.calm += 1;
+            if self.calm > AUTO_CALM {
+                self.recent_failures = 0;
+            }
+            return;
+        }
+        self.has_prev = false;
+        self.calm = 0;
+        self.recent_failures += 1;
+        if self.recent_failures >= 2 {
+            self.recent_failures = 0;
+            self.holdoff = AUTO_HOLDOFF;
+        }
+    }
+
+    /// One frozen-Hessian correction: δ = J̃⁻¹(−F) from the residual in `delta` (left
+    /// there), c ← c + δ with c_0 compensated (TwoSum into its low part).
+    fn correct(&mut self, kt: &super::kronecker::KroneckerTables, h: f64, d: usize) {
+        // J̃ = h (I ⊗ M/h + h C ⊗ H̄): the Kronecker solve of the bracket.
+        self.delta.iter_mut().for_each(|x| *x /= h);
+        self.kron.solve(kt, h, &mut self.delta);
+        for ((c, lo), &x) in self.c[..d].iter_mut().zip(&mut self.c0_lo).zip(&self.delta) {
+            let (s, e) = two_sum(*c, x);
+            *c = s;
+            *lo += e;
+        }
+        for (c, x) in self.c[d..].iter_mut().zip(&self.delta[d..]) {
+            *c += x;
+        }
+    }
+
+    /// Buffers for `vt`, D coordinates and mass matrix `mass` (coordinate blocks as
+    /// `Lagrangian::coordinate_blocks`); `None` without a Schur form of the velocity pencil or
+    /// with a mass matrix that is not symmetric positive definite.
+    pub(crate) fn new(
+        vt: &VelocityTables,
+        d: usize,
+        mass: &[f64],
+        blocks: Option<usize>,
+    ) -> Option<Self> {
+        let size = vt.k * d;
+        Some(VelocityState {
+            c: vec![0.0; size],
+            c0_lo: vec![0.0; d],
+            prev: vec![0.0; size],
+            has_prev: false,
+            delta: vec![0.0; size],
+            kron: KroneckerWork::new(vt.kron.as_ref()?, d, mass, blocks)?,
+            recent_failures: 0,
+            calm: 0,
+            holdoff: 0,
+        })
+    }
+}
+
+impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
+    /// Whether this step can be solved in the velocity form.
+    pub(super) fn velocity_form_applies(&self, ws: &Workspace) -> bool {
+        ws.velocity.is_some()
+            && self.tables().velocity.is_some()
+            && self.stage_solver.is_none()
+            && !ws.guess.has_warm
+            && matches!(
+                self.options().solver,
+                super::StageSolver::Auto | super::StageSolver::Modal
+            )
+    }
+
+    /// Solve the step from (q_k, p_k) = (`ws.newton.base`, `p`) in the velocity form. On
+    /// success the increments ΔQ (with the low part of ΔQ_{n−1}) and the impulse are in
+    /// `ws.newton`, as the nodal solve leaves them.
+    pub(super) fn solve_velocity_form<L: Lagrangian>(
+        &self,
+        lag: &L,
+        ws: &mut Workspace,
+        q: &[f64],
+        p: &[f64],
+        stats: &mut StepStats,
+    ) -> bool {
+        let (Some(vt), Some(_)) = (self.tables().velocity.as_ref(), ws.velocity.as_ref()) else {
+            return false;
+        };
+        let opts = self.options();
+        let h = self.step_size();
+        stats.guess = self.velocity_guess(lag, ws, vt, q, p, true);
+        if let Some(vs) = ws.velocity.as_mut() {
+            vs.c0_lo.iter_mut().for_each(|x| *x = 0.0);
+        }
+        let mut res = self.velocity_residual(lag, ws, vt, p);
+        stats.gradient_evaluations += self.tables().m;
+        if stats.guess == InitialGuess::Extrapolate
+            && let Some(vs) = ws.velocity.as_mut()
+            && (res > EXTRAPOLATION_TRUST * max_abs(&vs.c) || res.is_nan())
+        {
+            // Continuing a high-degree polynomial a full step ahead amplifies its top modes
+            // (near Kepler's periapsis the extrapolated residual reaches O(1)): try the RK4
+            // predictor and keep the better of the two.
+            vs.prev.copy_from_slice(&vs.c);
+            let predicted = self.velocity_guess(lag, ws, vt, q, p, false);
+            let r = self.velocity_residual(lag, ws, vt, p);
+            stats.gradient_evaluations += self.tables().m;
+            if r < res || !res.is_finite() {
+                (stats.guess, res) = (predicted, r);
+            } else if let Some(vs) = ws.velocity.as_mut() {
+                vs.c.copy_from_slice(&vs.prev);
+                res = self.velocity_residual(lag, ws, vt, p);
+                stats.gradient_evaluations += self.tables().m;
+            }
+        }
+        ws.newton.last_lo.iter_mut().for_each(|x| *x = 0.0);
+        let mut previous = f64::INFINITY;
+        let (mut frozen, mut refrozen) = (false, false);
+        let mut it = 0;
+        loop {
+            if it > 0 {
+                res = self.velocity_residual(lag, ws, vt, p);
+                stats.gradient_evaluations += self.tables().m;
+            }
+            stats.residual = res;
+            if !res.is_finite() {
+                return false;
+            }
+            if it >= opts.max_iterations {
+                return false;
+            }
+            let (Some(vs), Some(kt)) = (ws.velocity.as_mut(), vt.kron.as_ref()) else {
+                return false;
+            };
+            if !frozen {
+                // H̄ at this iterate: the step's guess, or where the iteration stalled.
+                stats.factorizations += 1;
+                stats.hessian_evaluations +=
+                    self.mean_force_jacobian(lag, &mut ws.stage, &mut vs.kron);
+                if vs.kron.factor(kt, h).is_err() {
+                    return false;
+                }
+                frozen = true;
+                previous = f64::INFINITY;
+            }
+            let d = ws.d;
+            vs.correct(kt, h, d);
+            it += 1;
+            stats.iterations += 1;
+            let delta = max_abs(&vs.delta);
+            let scale = max_abs(&vs.c).max(f64::MIN_POSITIVE);
+            if !delta.is_finite() || !scale.is_finite() {
+                return false;
+            }
+            let theta = if previous.is_finite() {
+                delta / previous
+            } else {
+                f64::INFINITY
+            };
+            let tol = opts.tolerance * scale;
+            let converged = delta == 0.0
+                || delta <= tol
+                || (theta < VELOCITY_STALL && theta / (1.0 - theta) * delta <= tol)
+                || (theta.is_finite()
+                    && (theta >= VELOCITY_STALL || delta > previous)
+                    && delta <= VELOCITY_FLOOR * scale);
+            if converged {
+                // The forces at the solution: the impulse and the step's residual. Its
+                // correction costs no force evaluation and is applied too: a linear iteration
+                // stopped on its contraction estimate leaves a remainder of one sign along
+                // the orbit (measured: Kepler, Legendre n = 24, h = 0.5, T = 20 000 drifts to
+                // 1.5e-8 and ΔE = −2.8e-13 without it), the correction shrinks it by the
+                // contraction factor. The impulse keeps the forces before it (they differ
+                // by O(h²|H|) times a correction at the round-off level).
+                stats.residual = self.velocity_residual(lag, ws, vt, p);
+                stats.gradient_evaluations += self.tables().m;
+                if let Some(vs) = ws.velocity.as_mut() {
+                    vs.correct(kt, h, d);
+                }
+                self.finish_velocity_form(ws, vt);
+                return true;
+            }
+            let stalled = theta.is_finite() && theta > VELOCITY_STALL;
+            if stalled && refrozen {
+                return false;
+            }
+            if stalled {
+                frozen = false;
+                refrozen = true;
+            }
+            previous = delta;
+        }
+    }
+
+    /// The initial modes: the previous step's velocity continued (exact for polynomials),
+    /// else the RK4 predictor's curve projected on the modes, else constant velocity M⁻¹p.
+    fn velocity_guess<L: Lagrangian>(
+        &self,
+        lag: &L,
+        ws: &mut Workspace,
+        vt: &VelocityTables,
+        q: &[f64],
+        p: &[f64],
+        extrapolate: bool,
+    ) -> InitialGuess {
+        let (k, d, n, h) = (vt.k, ws.d, self.tables().n, self.step_size());
+        if let Some(vs) = ws.velocity.as_mut()
+            && vs.has_prev
+            && extrapolate
+        {
+            let rk = Strided::rows(0, k);
+            let rd = Strided::rows(0, d);
+            gemm(
+                k,
+                k,
+                d,
+                1.0,
+                &vt.extrapolate,
+                rk,
+                &vs.prev,
+                rd,
+                0.0,
+                &mut vs.c,
+                rd,
+            );
+            return InitialGuess::Extrapolate;
+        }
+        let predicted = self.make_guess(lag, ws, InitialGuess::Predictor, q, p);
+        let Some(vs) = ws.velocity.as_mut() else {
+            return InitialGuess::Constant;
+        };
+        if predicted {
+            let (rn, rd) = (Strided::rows(0, n), Strided::rows(0, d));
+            gemm(
+                k,
+                n,
+                d,
+                1.0 / h,
+                &vt.from_basis,
+                rn,
+                &ws.guess.cand,
+                rd,
+                0.0,
+                &mut vs.c,
+                rd,
+            );
+            if vs.c.iter().all(|x| x.is_finite()) {
+                return InitialGuess::Predictor;
+            }
+        }
+        vs.c.iter_mut().for_each(|x| *x = 0.0);
+        vs.c[..d].copy_from_slice(p);
+        if let Some(sep) = &ws.separable {
+            sep.solve_mass(&mut vs.c[..d], &mut ws.stage.small_scratch);
+        }
+        InitialGuess::Constant
+    }
+
+    /// F(c) at the iterate: the curve at the nodes into `ws.stage.qj`, the forces into
+    /// `ws.stage.lq`, −F into the state's `delta`; returns max |F|.
+    fn velocity_residual<L: Lagrangian>(
+        &self,
+        lag: &L,
+        ws: &mut Workspace,
+        vt: &VelocityTables,
+        p_k: &[f64],
+    ) -> f64 {
+        let t = self.tables();
+        let (m, k, d, h) = (t.m, vt.k, ws.d, self.step_size());
+        let (Some(vs), Some(sep)) = (ws.velocity.as_mut(), ws.separable.as_ref()) else {
+            return f64::NAN;
+        };
+        let (rk, rd) = (Strided::rows(0, k), Strided::rows(0, d));
+        // q_j = q_k + (δq_k + h ι_j0 c_0,lo + h Σ_a ι_ja c_a): the small parts first.
+        for (j, row) in ws.stage.qj.chunks_exact_mut(d).enumerate() {
+            let w = h * vt.iota[j * k];
+            for ((x, &e), &lo) in row.iter_mut().zip(&ws.newton.base_err).zip(&vs.c0_lo) {
+                *x = e + w * lo;
+            }
+        }
+        gemm(
+            m,
+            k,
+            d,
+            h,
+            &vt.iota,
+            rk,
+            &vs.c,
+            rd,
+            1.0,
+            &mut ws.stage.qj,
+            rd,
+        );
+        for row in ws.stage.qj.chunks_exact_mut(d) {
+            for (x, b) in row.iter_mut().zip(&ws.newton.base) {
+                *x += b;
+            }
+        }
+        lag.force_at_points(&ws.stage.qj, &mut ws.stage.lq);
+        for j in 0..m {
+            let w = t.weights[j] * h;
+            for r in 0..d {
+                ws.stage.scaled[j * d + r] = w * ws.stage.lq[j * d + r];
+            }
+        }
+        // Σ_j ψ_jb (h b_j f_j): ψᵀ as a strided view of the table.
+        let psi_t = Strided {
+            offset: 0,
+            row_stride: 1,
+            col_stride: k,
+        };
+        gemm(
+            k,
+            m,
+            d,
+            1.0,
+            &vt.psi,
+            psi_t,
+            &ws.stage.scaled,
+            rd,
+            0.0,
+            &mut vs.delta,
+            rd,
+        );
+        // Row 0, the momentum condition that fixes q_{k+1} = q_k + h c_0, in double-double
+        // (exact products by FMA, TwoSum): M c_0 − p_k cancels to the size of the force term,
+        // and a rounded sum leaves a one-signed error in every step's increment (the nodal
+        // Legendre-transform row is summed the same way, `legendre_transform`).
+        ws.stage.dd_hi.iter_mut().for_each(|x| *x = 0.0);
+        ws.stage.dd_lo.iter_mut().for_each(|x| *x = 0.0);
+        for r in 0..d {
+            let (hi, lo) = (&mut ws.stage.dd_hi[r], &mut ws.stage.dd_lo[r]);
+            match &sep.mass_diagonal {
+                Some(diag) => {
+                    dd_acc(hi, lo, diag[r], vs.c[r]);
+                    *lo += diag[r] * vs.c0_lo[r];
+                }
+                None => {
+                    for s in 0..d {
+                        dd_acc(hi, lo, sep.mass[r * d + s], vs.c[s]);
+                        *lo += sep.mass[r * d + s] * vs.c0_lo[s];
+                    }
+                }
+            }
+            let (s, e) = two_sum(*hi, -p_k[r]);
+            *hi = s;
+            *lo += e - ws.newton.p_err[r];
+        }
+        for j in 0..m {
+            let (w, psi) = (t.weights[j] * h, vt.psi[j * k]);
+            let f = &ws.stage.lq[j * d..(j + 1) * d];
+            for ((hi, lo), &f) in ws
+                .stage
+                .dd_hi
+                .iter_mut()
+                .zip(ws.stage.dd_lo.iter_mut())
+                .zip(f)
+            {
+                let g = w * f;
+                dd_acc(hi, lo, psi, g);
+                *lo += psi * w.mul_add(f, -g);
+            }
+        }
+        let mut norm = 0.0f64;
+        for b in 0..k {
+            for r in 0..d {
+                let i = b * d + r;
+                let f = if b == 0 {
+                    ws.stage.dd_hi[r] + ws.stage.dd_lo[r]
+                } else {
+                    let mc = match &sep.mass_diagonal {
+                        Some(diag) => diag[r] * vs.c[i],
+                        None => (0..d).map(|s| sep.mass[r * d + s] * vs.c[b * d + s]).sum(),
+                    };
+                    mc + vs.delta[i]
+                };
+                vs.delta[i] = -f;
+                norm = norm.max(f.abs());
+                if !f.is_finite() {
+                    norm = f64::INFINITY;
+                }
+            }
+        }
+        norm
+    }
+
+    /// The converged modes as the nodal solve leaves its result: increments ΔQ_i = h Σ_a B_ia
+    /// c_a (ΔQ_{n−1} = h c_0 as hi + lo), the impulse h Σ_j b_j f_j (double-double) from the
+    /// forces of the last residual, and the modes remembered for the next guess.
+    fn finish_velocity_form(&self, ws: &mut Workspace, vt: &VelocityTables) {
+        let t = self.tables();
+        let (n, k, d, h) = (t.n, vt.k, ws.d, self.step_size());
+        let Some(vs) = ws.velocity.as_mut() else {
+            return;
+        };
+        let (rk, rd) = (Strided::rows(0, k), Strided::rows(0, d));
+        gemm(
+            n,
+            k,
+            d,
+            h,
+            &vt.to_basis,
+            rk,
+            &vs.c,
+            rd,
+            0.0,
+            &mut ws.newton.coeffs,
+            rd,
+        );
+        let last = (n - 1) * d;
+        for r in 0..d {
+            let c0 = vs.c[r];
+            let hi = h * c0;
+            ws.newton.coeffs[r] = 0.0;
+            ws.newton.coeffs[last + r] = hi;
+            ws.newton.last_lo[r] = h.mul_add(c0, -hi) + h * vs.c0_lo[r];
+        }
+        vs.prev.copy_from_slice(&vs.c);
+        vs.has_prev = true;
+        self.impulse(ws);
+    }
+
+    /// The total impulse h Σ_j b_j L_q(c_j) of the forces in `ws.stage.lq`, in double-double,
+    /// into `ws.newton.impulse` (hi) and `impulse_lo`.
+    pub(super) fn impulse(&self, ws: &mut Workspace) {
+        let (t, h, d) = (self.tables(), self.step_size(), ws.d);
+        ws.stage.dd_hi.iter_mut().for_each(|x| *x = 0.0);
+        ws.stage.dd_lo.iter_mut().for_each(|x| *x = 0.0);
+        let weights = &t.weights;
+        dd_acc_columns(
+            t.m,
+            |j| h * weights[j],
+            &ws.stage.lq,
+            d,
+            &mut ws.stage.dd_hi,
+            &mut ws.stage.dd_lo,
+        );
+        for r in 0..d {
+            (ws.newton.impulse[r], ws.newton.impulse_lo[r]) =
+                two_sum(ws.stage.dd_hi[r], ws.stage.dd_lo[r]);
+        }
+    }
+}
