@@ -1,4 +1,5 @@
-//! Time of a short integration with each stage solver (exact, kronecker, newton-krylov, auto)
+//! Time of a short integration with each stage solver (exact, kronecker, newton-krylov, modal,
+//! auto)
 //! at a few sizes: 10 steps of Kepler e = 0.6 at h = 1 with n = 16, 32, 64 and of the outer
 //! solar system (h = 1825 days) with n = 12; 2 steps of the synthetic planetesimal ring
 //! (h = 1/8 of the innermost period) with N = 16 and 32 bodies at n = 16 (the exact solver's
@@ -31,6 +32,7 @@ fn bench_case<L: Lagrangian>(
         StageSolver::Exact,
         StageSolver::Kronecker,
         StageSolver::NewtonKrylov,
+        StageSolver::Modal,
         StageSolver::Auto,
     ] {
         let options = NewtonOptions {

@@ -26,10 +26,11 @@ use serde::Serialize;
 use std::time::Instant;
 
 /// Solvers in the order they run (`exact` first: it is the reference of the others).
-pub const SOLVERS: [StageSolver; 4] = [
+pub const SOLVERS: [StageSolver; 5] = [
     StageSolver::Exact,
     StageSolver::Kronecker,
     StageSolver::NewtonKrylov,
+    StageSolver::Modal,
     StageSolver::Auto,
 ];
 
