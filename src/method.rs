@@ -61,8 +61,9 @@ pub struct MethodSpec {
     /// tolerance and the system's time scale by pilot runs ([`crate::adaptive::choose_step`]).
     #[serde(default)]
     pub auto_h: bool,
-    /// How each step's stage equations are solved (`auto`, `exact`, `kronecker`,
-    /// `newton-krylov`; default `auto`). Every solver gives the same map to round-off.
+    /// How each step's stage equations are solved (`auto`, `modal`, `exact`, `kronecker`,
+    /// `newton-krylov`, `fixed-point`; default `auto`). Every solver gives the same map to
+    /// round-off.
     #[serde(default)]
     pub solver: crate::integrator::StageSolver,
     /// Rigid-body scenes: the retraction of the Lie group integrator (`exp` or `cayley`;

@@ -29,7 +29,7 @@ fn quick_study_runs_every_solver_and_agrees_with_exact() {
             }
         }
     }
-    assert_eq!(study.fits.len(), 12);
+    assert_eq!(study.fits.len(), 15); // five solvers, three families
     for f in &study.fits {
         let p = f.exponent.unwrap();
         assert!(p.is_finite() && f.points == 3, "{f:?}");
@@ -46,7 +46,7 @@ fn quick_study_runs_every_solver_and_agrees_with_exact() {
     let files = study.write(&dir).unwrap();
     assert_eq!(files.len(), 5);
     let csv = std::fs::read_to_string(&files[0]).unwrap();
-    assert_eq!(csv.lines().count(), 1 + 36);
+    assert_eq!(csv.lines().count(), 1 + 45); // nine points, five solvers
     std::fs::remove_dir_all(&dir).ok();
 }
 

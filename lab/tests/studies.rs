@@ -59,9 +59,12 @@ fn refine_fits_the_rate_and_records_failures() {
         other => panic!("{other:?}"),
     }
     // A solver failure is recorded in its point, not fatal to the sweep.
+    // (Exact Newton on the nodal equations, which finds no root at h = 10 from step 2 on; the
+    // default's velocity form follows another branch of roots there.)
     let mut pend = Scene::load("pendulum").unwrap();
     pend.method.n = 4;
     pend.method.steps = 40;
+    pend.method.solver = galerkin_vi::integrator::StageSolver::Exact;
     let study_p = refine(&pend.build().unwrap(), Vary::H, &[1.0, 10.0], true).unwrap();
     assert!(study_p.points[0].failure.is_none());
     assert!(

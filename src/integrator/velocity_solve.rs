@@ -16,7 +16,7 @@ use super::velocity_form::VelocityTables;
 use super::{GalerkinIntegrator, InitialGuess, StepStats, Workspace};
 use crate::basis::Basis;
 use crate::lagrangian::Lagrangian;
-use crate::linalg::{Strided, gemm};
+use crate::linalg::{Lu, Strided, gemm};
 use crate::quadrature::Quadrature;
 
 /// Contraction per iteration above which the frozen Hessian is refrozen at the current
@@ -43,6 +43,30 @@ const EXTRAPOLATION_TRUST: f64 = 1e-3;
 /// floor of its residual (converged, not stalled).
 const VELOCITY_FLOOR: f64 = 1e-13;
 
+/// The linear solve of a velocity-form iteration.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Linear {
+    /// The frozen-Hessian Kronecker solve (simplified Newton).
+    Frozen,
+    /// The exact Newton matrix, dense LU (kept while it contracts by 0.1).
+    Dense,
+}
+
+/// The dense exact Newton matrix of the velocity form and its factorisation.
+#[derive(Debug, Clone)]
+struct DenseNewton {
+    jac: Vec<f64>,
+    /// D² partial rows of one row block (D²·k).
+    acc: Vec<f64>,
+    lu: Lu,
+    scratch: Vec<f64>,
+}
+
+/// Unknowns (n − 1)·D up to which a step whose frozen Hessian stalls continues with the dense
+/// exact Newton matrix of the velocity form (Kepler to n = 129; 10-body systems to n = 9)
+/// before it is handed to the nodal solvers.
+const VELOCITY_DENSE_SIZE: usize = 256;
+
 /// Per-workspace state of the velocity form: the iterate, the previous step's modes, and the
 /// frozen-Hessian solve.
 #[derive(Debug, Clone)]
@@ -61,11 +85,19 @@ pub(crate) struct VelocityState {
     pub delta: Vec<f64>,
     /// The frozen-Hessian Kronecker solve of I ⊗ M + h² C ⊗ H̄.
     kron: KroneckerWork,
+    /// The exact Newton matrix, dense, for steps where the frozen Hessian stalls (systems up
+    /// to [`VELOCITY_DENSE_SIZE`] unknowns).
+    dense: Option<DenseNewton>,
     /// `Auto`'s memory: recent steps the velocity form gave up, solves since the last one,
     /// and the steps left to hand to the nodal solvers directly.
     recent_failures: usize,
     calm: usize,
     holdoff: usize,
+    /// The same for steps that needed the dense matrix: recent ones, and the steps left that
+    /// start with it instead of the frozen Hessian.
+    recent_dense: usize,
+    dense_calm: usize,
+    dense_start: usize,
 }
 
 impl VelocityState {
@@ -77,6 +109,36 @@ impl VelocityState {
             return true;
         }
         false
+    }
+
+    /// Whether this step starts with the dense matrix (the frozen Hessian stalled in two of the
+    /// last 8 steps, less than [`AUTO_HOLDOFF`] steps ago); counts the step.
+    fn starts_dense(&mut self) -> bool {
+        if self.dense.is_none() {
+            return false;
+        }
+        if self.dense_start > 0 {
+            self.dense_start -= 1;
+            return true;
+        }
+        false
+    }
+
+    /// Record whether a step's frozen Hessian stalled into the dense matrix.
+    fn record_dense(&mut self, escalated: bool) {
+        if !escalated {
+            self.dense_calm += 1;
+            if self.dense_calm > AUTO_CALM {
+                self.recent_dense = 0;
+            }
+            return;
+        }
+        self.dense_calm = 0;
+        self.recent_dense += 1;
+        if self.recent_dense >= 2 {
+            self.recent_dense = 0;
+            self.dense_start = AUTO_HOLDOFF;
+        }
     }
 
     /// Record the outcome of a step's velocity-form solve for `Auto`.
@@ -97,12 +159,24 @@ impl VelocityState {
         }
     }
 
-    /// One frozen-Hessian correction: δ = J̃⁻¹(−F) from the residual in `delta` (left
-    /// there), c ← c + δ with c_0 compensated (TwoSum into its low part).
-    fn correct(&mut self, kt: &super::kronecker::KroneckerTables, h: f64, d: usize) {
-        // J̃ = h (I ⊗ M/h + h C ⊗ H̄): the Kronecker solve of the bracket.
-        self.delta.iter_mut().for_each(|x| *x /= h);
-        self.kron.solve(kt, h, &mut self.delta);
+    /// One correction δ = J⁻¹(−F) from the residual in `delta` (left there) with the frozen
+    /// Kronecker matrix or the dense exact one, c ← c + δ with c_0 compensated (TwoSum into
+    /// its low part).
+    fn correct(
+        &mut self,
+        linear: Linear,
+        kt: &super::kronecker::KroneckerTables,
+        h: f64,
+        d: usize,
+    ) {
+        match (linear, self.dense.as_mut()) {
+            (Linear::Dense, Some(dn)) => dn.lu.solve_in_place(&mut self.delta, &mut dn.scratch),
+            _ => {
+                // J̃ = h (I ⊗ M/h + h C ⊗ H̄): the Kronecker solve of the bracket.
+                self.delta.iter_mut().for_each(|x| *x /= h);
+                self.kron.solve(kt, h, &mut self.delta);
+            }
+        }
         for ((c, lo), &x) in self.c[..d].iter_mut().zip(&mut self.c0_lo).zip(&self.delta) {
             let (s, e) = two_sum(*c, x);
             *c = s;
@@ -130,9 +204,18 @@ impl VelocityState {
             has_prev: false,
             delta: vec![0.0; size],
             kron: KroneckerWork::new(vt.kron.as_ref()?, d, mass, blocks)?,
+            dense: (size <= VELOCITY_DENSE_SIZE).then(|| DenseNewton {
+                jac: vec![0.0; size * size],
+                acc: vec![0.0; d * d * vt.k],
+                lu: Lu::with_capacity(size),
+                scratch: vec![0.0; size],
+            }),
             recent_failures: 0,
             calm: 0,
             holdoff: 0,
+            recent_dense: 0,
+            dense_calm: 0,
+            dense_start: 0,
         })
     }
 }
@@ -193,7 +276,16 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         }
         ws.newton.last_lo.iter_mut().for_each(|x| *x = 0.0);
         let mut previous = f64::INFINITY;
-        let (mut frozen, mut refrozen) = (false, false);
+        // `factored`: the current linear solve's matrix belongs to this step; `fresh`: it was
+        // built at the last iterate.
+        let start_dense = ws.velocity.as_mut().is_some_and(|v| v.starts_dense());
+        let first = if start_dense {
+            Linear::Dense
+        } else {
+            Linear::Frozen
+        };
+        let (mut linear, mut factored, mut refrozen) = (first, false, false);
+        let mut fresh = false;
         let mut it = 0;
         loop {
             if it > 0 {
@@ -201,28 +293,49 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 stats.gradient_evaluations += self.tables().m;
             }
             stats.residual = res;
-            if !res.is_finite() {
-                return false;
-            }
-            if it >= opts.max_iterations {
+            if !res.is_finite() || it >= opts.max_iterations {
                 return false;
             }
             let (Some(vs), Some(kt)) = (ws.velocity.as_mut(), vt.kron.as_ref()) else {
                 return false;
             };
-            if !frozen {
-                // H̄ at this iterate: the step's guess, or where the iteration stalled.
+            if !factored {
+                // At this iterate: the step's guess, or where the iteration stalled.
                 stats.factorizations += 1;
-                stats.hessian_evaluations +=
-                    self.mean_force_jacobian(lag, &mut ws.stage, &mut vs.kron);
-                if vs.kron.factor(kt, h).is_err() {
-                    return false;
+                match (linear, vs.dense.as_mut()) {
+                    (Linear::Dense, Some(dn)) => {
+                        lag.force_jacobian_at_points(&ws.stage.qj, &mut ws.stage.hall);
+                        ws.stage.hall_stale = false;
+                        stats.hessian_evaluations += self.tables().m;
+                        let sep = ws.separable.as_ref();
+                        assemble_dense(
+                            vt,
+                            &self.tables().weights,
+                            h,
+                            ws.d,
+                            &ws.stage.hall,
+                            sep,
+                            dn,
+                        );
+                        let size = vt.k * ws.d;
+                        if dn.lu.refactor(&dn.jac[..size * size]).is_err() {
+                            return false;
+                        }
+                    }
+                    _ => {
+                        stats.hessian_evaluations +=
+                            self.mean_force_jacobian(lag, &mut ws.stage, &mut vs.kron);
+                        if vs.kron.factor(kt, h).is_err() {
+                            return false;
+                        }
+                    }
                 }
-                frozen = true;
+                factored = true;
+                fresh = true;
                 previous = f64::INFINITY;
             }
             let d = ws.d;
-            vs.correct(kt, h, d);
+            vs.correct(linear, kt, h, d);
             it += 1;
             stats.iterations += 1;
             let delta = max_abs(&vs.delta);
@@ -236,12 +349,19 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 f64::INFINITY
             };
             let tol = opts.tolerance * scale;
+            // Exact Newton converges quadratically: a slow contraction at small increments is
+            // its round-off floor (the nodal solver's `floor_tolerance`); the frozen Hessian's
+            // linear iteration gets the floor only much closer to round-off.
+            let floor = match linear {
+                Linear::Dense => opts.floor_tolerance,
+                Linear::Frozen => VELOCITY_FLOOR,
+            };
             let converged = delta == 0.0
                 || delta <= tol
                 || (theta < VELOCITY_STALL && theta / (1.0 - theta) * delta <= tol)
                 || (theta.is_finite()
                     && (theta >= VELOCITY_STALL || delta > previous)
-                    && delta <= VELOCITY_FLOOR * scale);
+                    && delta <= floor * scale);
             if converged {
                 // The forces at the solution: the impulse and the step's residual. Its
                 // correction costs no force evaluation and is applied too: a linear iteration
@@ -253,19 +373,38 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 stats.residual = self.velocity_residual(lag, ws, vt, p);
                 stats.gradient_evaluations += self.tables().m;
                 if let Some(vs) = ws.velocity.as_mut() {
-                    vs.correct(kt, h, d);
+                    vs.correct(linear, kt, h, d);
+                    if !start_dense {
+                        vs.record_dense(linear == Linear::Dense);
+                    }
                 }
                 self.finish_velocity_form(ws, vt);
                 return true;
             }
             let stalled = theta.is_finite() && theta > VELOCITY_STALL;
-            if stalled && refrozen {
-                return false;
+            match linear {
+                Linear::Frozen if stalled && !refrozen => {
+                    factored = false;
+                    refrozen = true;
+                }
+                Linear::Frozen if stalled => {
+                    // The frozen Hessian is too far from the step's even when refrozen: exact
+                    // Newton in the same form, where the system is small enough.
+                    if vs.dense.is_none() {
+                        return false;
+                    }
+                    linear = Linear::Dense;
+                    factored = false;
+                    stats.fallbacks += 1;
+                }
+                Linear::Dense if stalled && fresh => return false,
+                // A matrix from an earlier iterate that no longer contracts fast: rebuild it.
+                Linear::Dense if theta.is_finite() && theta > opts.reuse_contraction => {
+                    factored = false;
+                }
+                _ => {}
             }
-            if stalled {
-                frozen = false;
-                refrozen = true;
-            }
+            fresh = false;
             previous = delta;
         }
     }
@@ -516,6 +655,62 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         for r in 0..d {
             (ws.newton.impulse[r], ws.newton.impulse_lo[r]) =
                 two_sum(ws.stage.dd_hi[r], ws.stage.dd_lo[r]);
+        }
+    }
+}
+
+/// The exact Newton matrix of the velocity form, J = I ⊗ M + h² Σ_j b_j ψ_j ι_jᵀ ⊗ H_j, from the
+/// node force Jacobians `hall` (m×D×D), into `dn.jac`: per row block b, the D² sums
+/// Σ_j (h² b_j ψ_jb H_j[r, s]) ι_j· accumulated along the rows of ι (contiguous, vectorised),
+/// as the nodal Newton matrix is (`stage.rs`), then scattered into the blocks.
+fn assemble_dense(
+    vt: &VelocityTables,
+    weights: &[f64],
+    h: f64,
+    d: usize,
+    hall: &[f64],
+    sep: Option<&super::separable::Separable>,
+    dn: &mut DenseNewton,
+) {
+    let k = vt.k;
+    let (size, dd) = (k * d, d * d);
+    let h2 = h * h;
+    for b in 0..k {
+        let acc = &mut dn.acc[..dd * k];
+        acc.iter_mut().for_each(|x| *x = 0.0);
+        for (j, hj) in hall.chunks_exact(dd).enumerate() {
+            let base = h2 * weights[j] * vt.psi[j * k + b];
+            if base == 0.0 {
+                continue;
+            }
+            let row = &vt.iota[j * k..(j + 1) * k];
+            for (rs, &hrs) in hj.iter().enumerate() {
+                let g = base * hrs;
+                if g == 0.0 {
+                    continue;
+                }
+                for (x, &y) in acc[rs * k..(rs + 1) * k].iter_mut().zip(row) {
+                    *x += g * y;
+                }
+            }
+        }
+        for r in 0..d {
+            let jrow = (b * d + r) * size;
+            for s in 0..d {
+                let block = &acc[(r * d + s) * k..(r * d + s + 1) * k];
+                for (a, &v) in block.iter().enumerate() {
+                    dn.jac[jrow + a * d + s] = v;
+                }
+            }
+        }
+    }
+    if let Some(sep) = sep {
+        for b in 0..k {
+            for r in 0..d {
+                for s in 0..d {
+                    dn.jac[(b * d + r) * size + b * d + s] += sep.mass[r * d + s];
+                }
+            }
         }
     }
 }

@@ -200,13 +200,8 @@ pub fn measure<S: System>(
         seconds: 0.0,
         failure: None,
     };
-    let gvi = match GalerkinIntegrator::from_kinds(
-        method.basis,
-        method.n,
-        method.quadrature,
-        method.quad_points,
-        method.h,
-    ) {
+    // The method's own integrator: basis, n, quadrature, points, h and its stage solver.
+    let gvi = match method.integrator() {
         Ok(g) => g,
         Err(e) => {
             m.failure = Some(e.to_string());
