@@ -375,7 +375,7 @@ fn thin_accumulate<const D: usize>(args: ThinArgs<'_>, c: &mut [f64], sc: Stride
     // so that every entry sees exactly the operations of the unblocked loop.
     let blocked = m - m % ROWS;
     for i in (0..blocked).step_by(ROWS) {
-        let mut acc = [load(c, i), load(c, i + 1), load(c, i + 2), load(c, i + 3)];
+        let mut acc: [[f64; D]; ROWS] = std::array::from_fn(|r| load(c, i + r));
         for kk in 0..k {
             let o = sb.offset + kk * sb.row_stride;
             let br = &b[o..o + D];

@@ -465,13 +465,19 @@ impl KroneckerWork {
             for p in 0..s {
                 let row = i + p;
                 let acc = &mut self.acc[p * d..(p + 1) * d];
-                acc.iter_mut().for_each(|x| *x = 0.0);
-                for j in i + s..k {
-                    let tij = kt.t[row * k + j];
-                    if tij != 0.0 {
-                        for (a, z) in acc.iter_mut().zip(&self.zeta[j * d..(j + 1) * d]) {
-                            *a += tij * z;
-                        }
+                let t_row = &kt.t[row * k..(row + 1) * k];
+                // Up to four coordinates at a time, their sums held in registers (a sum kept in
+                // memory is bound by store-to-load latency at small D); each sum runs over j
+                // in order, so the result is bit for bit that of the plain loop.
+                for r0 in (0..d).step_by(4) {
+                    let w = 4.min(d - r0);
+                    let out = &mut acc[r0..r0 + w];
+                    let (zeta, first) = (&self.zeta[..], i + s);
+                    match w {
+                        1 => coupling_sum::<1>(t_row, zeta, d, r0, first, out),
+                        2 => coupling_sum::<2>(t_row, zeta, d, r0, first, out),
+                        3 => coupling_sum::<3>(t_row, zeta, d, r0, first, out),
+                        _ => coupling_sum::<4>(t_row, zeta, d, r0, first, out),
                     }
                 }
                 for ((a, &mu), &y) in acc.iter_mut().zip(&self.mu).zip(&self.yh[row * d..]) {
@@ -493,4 +499,26 @@ impl KroneckerWork {
         Self::transform(d, self.block, &self.vt, k, &self.zeta, &mut self.y);
         gemm(k, k, d, 1.0, &kt.u, rk, &self.y, rd, 0.0, rhs, rd);
     }
+}
+
+/// out[r] = Σ_{j ≥ first} t_row[j] ζ[j·d + r0 + r] for r < W, the terms in the order of j, zero
+/// coefficients skipped.
+fn coupling_sum<const W: usize>(
+    t_row: &[f64],
+    zeta: &[f64],
+    d: usize,
+    r0: usize,
+    first: usize,
+    out: &mut [f64],
+) {
+    let mut a = [0.0f64; W];
+    for (j, &tij) in t_row.iter().enumerate().skip(first) {
+        if tij != 0.0 {
+            let z = &zeta[j * d + r0..j * d + r0 + W];
+            for r in 0..W {
+                a[r] += tij * z[r];
+            }
+        }
+    }
+    out.copy_from_slice(&a);
 }

@@ -551,40 +551,33 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         // (exact products by FMA, TwoSum): M c_0 − p_k cancels to the size of the force term,
         // and a rounded sum leaves a one-signed error in every step's increment (the nodal
         // Legendre-transform row is summed the same way, `legendre_transform`).
-        ws.stage.dd_hi.iter_mut().for_each(|x| *x = 0.0);
-        ws.stage.dd_lo.iter_mut().for_each(|x| *x = 0.0);
+        // One coordinate at a time, its (hi, lo) pair in registers over the whole sum.
         for r in 0..d {
-            let (hi, lo) = (&mut ws.stage.dd_hi[r], &mut ws.stage.dd_lo[r]);
+            let (mut hi, mut lo) = (0.0, 0.0);
             match &sep.mass_diagonal {
                 Some(diag) => {
-                    dd_acc(hi, lo, diag[r], vs.c[r]);
-                    *lo += diag[r] * vs.c0_lo[r];
+                    dd_acc(&mut hi, &mut lo, diag[r], vs.c[r]);
+                    lo += diag[r] * vs.c0_lo[r];
                 }
                 None => {
                     for s in 0..d {
-                        dd_acc(hi, lo, sep.mass[r * d + s], vs.c[s]);
-                        *lo += sep.mass[r * d + s] * vs.c0_lo[s];
+                        dd_acc(&mut hi, &mut lo, sep.mass[r * d + s], vs.c[s]);
+                        lo += sep.mass[r * d + s] * vs.c0_lo[s];
                     }
                 }
             }
-            let (s, e) = two_sum(*hi, -p_k[r]);
-            *hi = s;
-            *lo += e - ws.newton.p_err[r];
-        }
-        for j in 0..m {
-            let (w, psi) = (t.weights[j] * h, vt.psi[j * k]);
-            let f = &ws.stage.lq[j * d..(j + 1) * d];
-            for ((hi, lo), &f) in ws
-                .stage
-                .dd_hi
-                .iter_mut()
-                .zip(ws.stage.dd_lo.iter_mut())
-                .zip(f)
-            {
+            let (s, e) = two_sum(hi, -p_k[r]);
+            hi = s;
+            lo += e - ws.newton.p_err[r];
+            for j in 0..m {
+                let (w, psi) = (t.weights[j] * h, vt.psi[j * k]);
+                let f = ws.stage.lq[j * d + r];
                 let g = w * f;
-                dd_acc(hi, lo, psi, g);
-                *lo += psi * w.mul_add(f, -g);
+                dd_acc(&mut hi, &mut lo, psi, g);
+                lo += psi * w.mul_add(f, -g);
             }
+            ws.stage.dd_hi[r] = hi;
+            ws.stage.dd_lo[r] = lo;
         }
         let mut norm = 0.0f64;
         for b in 0..k {
