@@ -551,7 +551,6 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         // (exact products by FMA, TwoSum): M c_0 − p_k cancels to the size of the force term,
         // and a rounded sum leaves a one-signed error in every step's increment (the nodal
         // Legendre-transform row is summed the same way, `legendre_transform`).
-        // One coordinate at a time, its (hi, lo) pair in registers over the whole sum.
         for r in 0..d {
             let (mut hi, mut lo) = (0.0, 0.0);
             match &sep.mass_diagonal {
@@ -567,17 +566,29 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 }
             }
             let (s, e) = two_sum(hi, -p_k[r]);
-            hi = s;
-            lo += e - ws.newton.p_err[r];
+            ws.stage.dd_hi[r] = s;
+            ws.stage.dd_lo[r] = lo + (e - ws.newton.p_err[r]);
+        }
+        // The force terms, eight coordinates side by side with their (hi, lo) pairs in
+        // registers: each sum runs over j in order (the same bits as one coordinate at a time),
+        // independent sums hide each other's latency, and they vectorise for large D.
+        const LANES: usize = 8;
+        for r0 in (0..d).step_by(LANES) {
+            let w_lanes = LANES.min(d - r0);
+            let (mut hi, mut lo) = ([0.0f64; LANES], [0.0f64; LANES]);
+            hi[..w_lanes].copy_from_slice(&ws.stage.dd_hi[r0..r0 + w_lanes]);
+            lo[..w_lanes].copy_from_slice(&ws.stage.dd_lo[r0..r0 + w_lanes]);
             for j in 0..m {
                 let (w, psi) = (t.weights[j] * h, vt.psi[j * k]);
-                let f = ws.stage.lq[j * d + r];
-                let g = w * f;
-                dd_acc(&mut hi, &mut lo, psi, g);
-                lo += psi * w.mul_add(f, -g);
+                let f = &ws.stage.lq[j * d + r0..j * d + r0 + w_lanes];
+                for ((hi, lo), &f) in hi.iter_mut().zip(lo.iter_mut()).zip(f) {
+                    let g = w * f;
+                    dd_acc(hi, lo, psi, g);
+                    *lo += psi * w.mul_add(f, -g);
+                }
             }
-            ws.stage.dd_hi[r] = hi;
-            ws.stage.dd_lo[r] = lo;
+            ws.stage.dd_hi[r0..r0 + w_lanes].copy_from_slice(&hi[..w_lanes]);
+            ws.stage.dd_lo[r0..r0 + w_lanes].copy_from_slice(&lo[..w_lanes]);
         }
         let mut norm = 0.0f64;
         for b in 0..k {
