@@ -187,6 +187,26 @@ impl Strided {
     }
 }
 
+/// C ← Aᵀ B + β C for a row-major table A (k×m), B (k×n) and C (m×n), both row-major: the
+/// projection of node values B on the columns of a node table A (Φᵀ F, ψᵀ F).
+pub fn gemm_transposed(
+    m: usize,
+    k: usize,
+    n: usize,
+    a: &[f64],
+    b: &[f64],
+    beta: f64,
+    c: &mut [f64],
+) {
+    let at = Strided {
+        offset: 0,
+        row_stride: 1,
+        col_stride: m,
+    };
+    let rn = Strided::rows(0, n);
+    gemm(m, k, n, 1.0, a, at, b, rn, beta, c, rn);
+}
+
 /// C ← α A B + β C for A (m×k), B (k×n), C (m×n) given as strided views into slices.
 ///
 /// A plain i-k-j loop whose innermost loop runs over contiguous rows of B and C when their

@@ -24,12 +24,13 @@
 use super::dd::dd_acc_columns;
 use super::legendre_transform::legendre_transforms_of_gradient;
 use super::stage::Mode;
+use super::stage_scratch::StageScratch;
 use super::{GalerkinIntegrator, StepStats, Workspace};
 use crate::basis::Basis;
 use crate::curve::GalerkinCurveRef;
 use crate::error::{GviError, Result, ensure_finite, ensure_len};
 use crate::lagrangian::Lagrangian;
-use crate::linalg::{Strided, gemm};
+use crate::linalg::{Strided, gemm, gemm_transposed};
 use crate::quadrature::Quadrature;
 
 impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
@@ -175,6 +176,26 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         }
     }
 
+    /// The forces L_q at the nodes of the curve in `stage.qj` into `stage.lq`, and the weighted
+    /// forces h b_j L_q(c_j) into `stage.scaled` (separable Lagrangians): what the stage
+    /// equations project on their test functions, in either form.
+    pub(super) fn weighted_forces<L: Lagrangian>(&self, lag: &L, stage: &mut StageScratch) {
+        let (t, h) = (self.tables(), self.step_size());
+        let d = stage.lq.len() / t.m.max(1);
+        lag.force_at_points(&stage.qj, &mut stage.lq);
+        for (j, (s, f)) in stage
+            .scaled
+            .chunks_exact_mut(d)
+            .zip(stage.lq.chunks_exact(d))
+            .enumerate()
+        {
+            let w = t.weights[j] * h;
+            for (s, &f) in s.iter_mut().zip(f) {
+                *s = w * f;
+            }
+        }
+    }
+
     /// ∂S/∂Q_a for every a into `ws.stage.grad`, from the coefficients in `ws.newton.coeffs` (or
     /// `ws.guess.cand`). Returns the number of first-derivative evaluations.
     pub(super) fn action_gradient<L: Lagrangian>(
@@ -270,32 +291,9 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                     }
                 }
             }
-            lag.force_at_points(&ws.stage.qj, &mut ws.stage.lq);
-            for j in 0..m {
-                let w = t.weights[j] * h;
-                for r in 0..d {
-                    ws.stage.scaled[j * d + r] = w * ws.stage.lq[j * d + r];
-                }
-            }
-            // grad += Φᵀ (h b ∘ L_q): the transpose is a strided view of the table.
-            let phi_t = Strided {
-                offset: 0,
-                row_stride: 1,
-                col_stride: n,
-            };
-            gemm(
-                n,
-                m,
-                d,
-                1.0,
-                &t.phi,
-                phi_t,
-                &ws.stage.scaled,
-                rd,
-                1.0,
-                &mut ws.stage.grad,
-                rd,
-            );
+            self.weighted_forces(lag, &mut ws.stage);
+            // grad += Φᵀ (h b ∘ L_q).
+            gemm_transposed(n, m, d, &t.phi, &ws.stage.scaled, 1.0, &mut ws.stage.grad);
         } else {
             for j in 0..m {
                 let (lq, lv) = (

@@ -16,7 +16,7 @@ use super::velocity_form::VelocityTables;
 use super::{GalerkinIntegrator, InitialGuess, StepStats, Workspace};
 use crate::basis::Basis;
 use crate::lagrangian::Lagrangian;
-use crate::linalg::{Lu, Strided, gemm};
+use crate::linalg::{Lu, Strided, gemm, gemm_transposed};
 use crate::quadrature::Quadrature;
 
 /// Contraction per iteration above which the frozen Hessian is refrozen at the current
@@ -521,32 +521,9 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 *x += b;
             }
         }
-        lag.force_at_points(&ws.stage.qj, &mut ws.stage.lq);
-        for j in 0..m {
-            let w = t.weights[j] * h;
-            for r in 0..d {
-                ws.stage.scaled[j * d + r] = w * ws.stage.lq[j * d + r];
-            }
-        }
-        // Σ_j ψ_jb (h b_j f_j): ψᵀ as a strided view of the table.
-        let psi_t = Strided {
-            offset: 0,
-            row_stride: 1,
-            col_stride: k,
-        };
-        gemm(
-            k,
-            m,
-            d,
-            1.0,
-            &vt.psi,
-            psi_t,
-            &ws.stage.scaled,
-            rd,
-            0.0,
-            &mut vs.delta,
-            rd,
-        );
+        self.weighted_forces(lag, &mut ws.stage);
+        // Σ_j ψ_jb (h b_j f_j).
+        gemm_transposed(k, m, d, &vt.psi, &ws.stage.scaled, 0.0, &mut vs.delta);
         // Row 0, the momentum condition that fixes q_{k+1} = q_k + h c_0, in double-double
         // (exact products by FMA, TwoSum): M c_0 − p_k cancels to the size of the force term,
         // and a rounded sum leaves a one-signed error in every step's increment (the nodal
