@@ -43,6 +43,7 @@ mod solver;
 mod stage;
 mod stage_scratch;
 mod tangent;
+mod velocity_equations;
 mod velocity_form;
 mod velocity_solve;
 mod workspace;

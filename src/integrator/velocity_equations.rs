@@ -1,0 +1,310 @@
+//! The velocity form's equations as the iteration of `velocity_solve` uses them: the initial
+//! modes, the residual F(c) = M c_b + h Σ_j b_j ψ_b(c_j) f_j − δ_b0 p_k with its momentum row in
+//! double-double, the dense exact Newton matrix, and the converged modes written back as the
+//! basis's coefficients, the impulse and the state the next step extrapolates from.
+
+use super::dd::{dd_acc, dd_acc_columns, two_sum};
+use super::velocity_form::VelocityTables;
+use super::{GalerkinIntegrator, InitialGuess, Workspace};
+use crate::basis::Basis;
+use crate::lagrangian::Lagrangian;
+use crate::linalg::{Lu, Strided, gemm, gemm_transposed};
+use crate::quadrature::Quadrature;
+
+/// The dense exact Newton matrix of the velocity form and its factorisation.
+#[derive(Debug, Clone)]
+pub(super) struct DenseNewton {
+    pub jac: Vec<f64>,
+    /// D² partial rows of one row block (D²·k).
+    pub acc: Vec<f64>,
+    pub lu: Lu,
+    pub scratch: Vec<f64>,
+}
+
+impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
+    /// The initial modes: the previous step's velocity continued (exact for polynomials),
+    /// else the RK4 predictor's curve projected on the modes, else constant velocity M⁻¹p.
+    pub(super) fn velocity_guess<L: Lagrangian>(
+        &self,
+        lag: &L,
+        ws: &mut Workspace,
+        vt: &VelocityTables,
+        q: &[f64],
+        p: &[f64],
+        extrapolate: bool,
+    ) -> InitialGuess {
+        let (k, d, n, h) = (vt.k, ws.d, self.tables().n, self.step_size());
+        if let Some(vs) = ws.velocity.as_mut()
+            && vs.has_prev
+            && extrapolate
+        {
+            let rk = Strided::rows(0, k);
+            let rd = Strided::rows(0, d);
+            gemm(
+                k,
+                k,
+                d,
+                1.0,
+                &vt.extrapolate,
+                rk,
+                &vs.prev,
+                rd,
+                0.0,
+                &mut vs.c,
+                rd,
+            );
+            return InitialGuess::Extrapolate;
+        }
+        let predicted = self.make_guess(lag, ws, InitialGuess::Predictor, q, p);
+        let Some(vs) = ws.velocity.as_mut() else {
+            return InitialGuess::Constant;
+        };
+        if predicted {
+            let (rn, rd) = (Strided::rows(0, n), Strided::rows(0, d));
+            gemm(
+                k,
+                n,
+                d,
+                1.0 / h,
+                &vt.from_basis,
+                rn,
+                &ws.guess.cand,
+                rd,
+                0.0,
+                &mut vs.c,
+                rd,
+            );
+            if vs.c.iter().all(|x| x.is_finite()) {
+                return InitialGuess::Predictor;
+            }
+        }
+        vs.c.iter_mut().for_each(|x| *x = 0.0);
+        vs.c[..d].copy_from_slice(p);
+        if let Some(sep) = &ws.separable {
+            sep.solve_mass(&mut vs.c[..d], &mut ws.stage.small_scratch);
+        }
+        InitialGuess::Constant
+    }
+
+    /// F(c) at the iterate: the curve at the nodes into `ws.stage.qj`, the forces into
+    /// `ws.stage.lq`, −F into the state's `delta`; returns max |F|.
+    pub(super) fn velocity_residual<L: Lagrangian>(
+        &self,
+        lag: &L,
+        ws: &mut Workspace,
+        vt: &VelocityTables,
+        p_k: &[f64],
+    ) -> f64 {
+        let t = self.tables();
+        let (m, k, d, h) = (t.m, vt.k, ws.d, self.step_size());
+        let (Some(vs), Some(sep)) = (ws.velocity.as_mut(), ws.separable.as_ref()) else {
+            return f64::NAN;
+        };
+        let (rk, rd) = (Strided::rows(0, k), Strided::rows(0, d));
+        // q_j = q_k + (δq_k + h ι_j0 c_0,lo + h Σ_a ι_ja c_a): the small parts first.
+        for (j, row) in ws.stage.qj.chunks_exact_mut(d).enumerate() {
+            let w = h * vt.iota[j * k];
+            for ((x, &e), &lo) in row.iter_mut().zip(&ws.newton.base_err).zip(&vs.c0_lo) {
+                *x = e + w * lo;
+            }
+        }
+        gemm(
+            m,
+            k,
+            d,
+            h,
+            &vt.iota,
+            rk,
+            &vs.c,
+            rd,
+            1.0,
+            &mut ws.stage.qj,
+            rd,
+        );
+        for row in ws.stage.qj.chunks_exact_mut(d) {
+            for (x, b) in row.iter_mut().zip(&ws.newton.base) {
+                *x += b;
+            }
+        }
+        self.weighted_forces(lag, &mut ws.stage);
+        // Σ_j ψ_jb (h b_j f_j).
+        gemm_transposed(k, m, d, &vt.psi, &ws.stage.scaled, 0.0, &mut vs.delta);
+        // Row 0, the momentum condition that fixes q_{k+1} = q_k + h c_0, in double-double
+        // (exact products by FMA, TwoSum): M c_0 − p_k cancels to the size of the force term,
+        // and a rounded sum leaves a one-signed error in every step's increment (the nodal
+        // Legendre-transform row is summed the same way, `legendre_transform`).
+        for r in 0..d {
+            let (mut hi, mut lo) = (0.0, 0.0);
+            match &sep.mass_diagonal {
+                Some(diag) => {
+                    dd_acc(&mut hi, &mut lo, diag[r], vs.c[r]);
+                    lo += diag[r] * vs.c0_lo[r];
+                }
+                None => {
+                    for s in 0..d {
+                        dd_acc(&mut hi, &mut lo, sep.mass[r * d + s], vs.c[s]);
+                        lo += sep.mass[r * d + s] * vs.c0_lo[s];
+                    }
+                }
+            }
+            let (s, e) = two_sum(hi, -p_k[r]);
+            ws.stage.dd_hi[r] = s;
+            ws.stage.dd_lo[r] = lo + (e - ws.newton.p_err[r]);
+        }
+        // The force terms, eight coordinates side by side with their (hi, lo) pairs in
+        // registers: each sum runs over j in order (the same bits as one coordinate at a time),
+        // independent sums hide each other's latency, and they vectorise for large D.
+        const LANES: usize = 8;
+        for r0 in (0..d).step_by(LANES) {
+            let w_lanes = LANES.min(d - r0);
+            let (mut hi, mut lo) = ([0.0f64; LANES], [0.0f64; LANES]);
+            hi[..w_lanes].copy_from_slice(&ws.stage.dd_hi[r0..r0 + w_lanes]);
+            lo[..w_lanes].copy_from_slice(&ws.stage.dd_lo[r0..r0 + w_lanes]);
+            for j in 0..m {
+                let (w, psi) = (t.weights[j] * h, vt.psi[j * k]);
+                let f = &ws.stage.lq[j * d + r0..j * d + r0 + w_lanes];
+                for ((hi, lo), &f) in hi.iter_mut().zip(lo.iter_mut()).zip(f) {
+                    let g = w * f;
+                    dd_acc(hi, lo, psi, g);
+                    *lo += psi * w.mul_add(f, -g);
+                }
+            }
+            ws.stage.dd_hi[r0..r0 + w_lanes].copy_from_slice(&hi[..w_lanes]);
+            ws.stage.dd_lo[r0..r0 + w_lanes].copy_from_slice(&lo[..w_lanes]);
+        }
+        let mut norm = 0.0f64;
+        for b in 0..k {
+            for r in 0..d {
+                let i = b * d + r;
+                let f = if b == 0 {
+                    ws.stage.dd_hi[r] + ws.stage.dd_lo[r]
+                } else {
+                    let mc = match &sep.mass_diagonal {
+                        Some(diag) => diag[r] * vs.c[i],
+                        None => (0..d).map(|s| sep.mass[r * d + s] * vs.c[b * d + s]).sum(),
+                    };
+                    mc + vs.delta[i]
+                };
+                vs.delta[i] = -f;
+                norm = norm.max(f.abs());
+                if !f.is_finite() {
+                    norm = f64::INFINITY;
+                }
+            }
+        }
+        norm
+    }
+
+    /// The converged modes as the nodal solve leaves its result: increments ΔQ_i = h Σ_a B_ia
+    /// c_a (ΔQ_{n−1} = h c_0 as hi + lo), the impulse h Σ_j b_j f_j (double-double) from the
+    /// forces of the last residual, and the modes remembered for the next guess.
+    pub(super) fn finish_velocity_form(&self, ws: &mut Workspace, vt: &VelocityTables) {
+        let t = self.tables();
+        let (n, k, d, h) = (t.n, vt.k, ws.d, self.step_size());
+        let Some(vs) = ws.velocity.as_mut() else {
+            return;
+        };
+        let (rk, rd) = (Strided::rows(0, k), Strided::rows(0, d));
+        gemm(
+            n,
+            k,
+            d,
+            h,
+            &vt.to_basis,
+            rk,
+            &vs.c,
+            rd,
+            0.0,
+            &mut ws.newton.coeffs,
+            rd,
+        );
+        let last = (n - 1) * d;
+        for r in 0..d {
+            let c0 = vs.c[r];
+            let hi = h * c0;
+            ws.newton.coeffs[r] = 0.0;
+            ws.newton.coeffs[last + r] = hi;
+            ws.newton.last_lo[r] = h.mul_add(c0, -hi) + h * vs.c0_lo[r];
+        }
+        vs.prev.copy_from_slice(&vs.c);
+        vs.has_prev = true;
+        self.impulse(ws);
+    }
+
+    /// The total impulse h Σ_j b_j L_q(c_j) of the forces in `ws.stage.lq`, in double-double,
+    /// into `ws.newton.impulse` (hi) and `impulse_lo`.
+    pub(super) fn impulse(&self, ws: &mut Workspace) {
+        let (t, h, d) = (self.tables(), self.step_size(), ws.d);
+        ws.stage.dd_hi.iter_mut().for_each(|x| *x = 0.0);
+        ws.stage.dd_lo.iter_mut().for_each(|x| *x = 0.0);
+        let weights = &t.weights;
+        dd_acc_columns(
+            t.m,
+            |j| h * weights[j],
+            &ws.stage.lq,
+            d,
+            &mut ws.stage.dd_hi,
+            &mut ws.stage.dd_lo,
+        );
+        for r in 0..d {
+            (ws.newton.impulse[r], ws.newton.impulse_lo[r]) =
+                two_sum(ws.stage.dd_hi[r], ws.stage.dd_lo[r]);
+        }
+    }
+}
+
+/// The exact Newton matrix of the velocity form, J = I ⊗ M + h² Σ_j b_j ψ_j ι_jᵀ ⊗ H_j, from the
+/// node force Jacobians `hall` (m×D×D), into `dn.jac`: per row block b, the D² sums
+/// Σ_j (h² b_j ψ_jb H_j[r, s]) ι_j· accumulated along the rows of ι (contiguous, vectorised),
+/// as the nodal Newton matrix is (`stage.rs`), then scattered into the blocks.
+pub(super) fn assemble_dense(
+    vt: &VelocityTables,
+    weights: &[f64],
+    h: f64,
+    d: usize,
+    hall: &[f64],
+    sep: Option<&super::separable::Separable>,
+    dn: &mut DenseNewton,
+) {
+    let k = vt.k;
+    let (size, dd) = (k * d, d * d);
+    let h2 = h * h;
+    for b in 0..k {
+        let acc = &mut dn.acc[..dd * k];
+        acc.iter_mut().for_each(|x| *x = 0.0);
+        for (j, hj) in hall.chunks_exact(dd).enumerate() {
+            let base = h2 * weights[j] * vt.psi[j * k + b];
+            if base == 0.0 {
+                continue;
+            }
+            let row = &vt.iota[j * k..(j + 1) * k];
+            for (rs, &hrs) in hj.iter().enumerate() {
+                let g = base * hrs;
+                if g == 0.0 {
+                    continue;
+                }
+                for (x, &y) in acc[rs * k..(rs + 1) * k].iter_mut().zip(row) {
+                    *x += g * y;
+                }
+            }
+        }
+        for r in 0..d {
+            let jrow = (b * d + r) * size;
+            for s in 0..d {
+                let block = &acc[(r * d + s) * k..(r * d + s + 1) * k];
+                for (a, &v) in block.iter().enumerate() {
+                    dn.jac[jrow + a * d + s] = v;
+                }
+            }
+        }
+    }
+    if let Some(sep) = sep {
+        for b in 0..k {
+            for r in 0..d {
+                for s in 0..d {
+                    dn.jac[(b * d + r) * size + b * d + s] += sep.mass[r * d + s];
+                }
+            }
+        }
+    }
+}
