@@ -56,3 +56,18 @@ def test_overrides_and_convergence_in_n():
     assert errs[1] < errs[0] / 100
     traj = gv.run_scene("kepler", q0=[0.5, 0.0], p0=[0.0, 1.6], steps=3)
     np.testing.assert_array_equal(traj.q[0], [0.5, 0.0])
+
+
+def test_every_solver_name_gives_the_same_map():
+    """`solver=` takes every stage solver's name; the velocity form (`modal`, the default
+    `auto`'s choice here) and exact Newton on the nodal equations give the same trajectory to
+    the round-off the Rust tests hold them to (1e-10 relative)."""
+    runs = {
+        s: gv.Integrator(n=16, h=1.0, solver=s).integrate(
+            gv.systems.Kepler(1.0), [0.4, 0.0], [0.0, 2.0], 50
+        )
+        for s in ("exact", "modal", "auto", "kronecker", "newton-krylov", "fixed-point")
+    }
+    ref = runs["exact"].q
+    for s, t in runs.items():
+        assert np.abs(t.q - ref).max() <= 1e-10 * np.abs(ref).max(), s
