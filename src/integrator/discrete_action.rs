@@ -152,11 +152,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             &mut ws.stage.qj,
             rd,
         );
-        for row in ws.stage.qj.chunks_exact_mut(d) {
-            for (x, b) in row.iter_mut().zip(&ws.newton.base) {
-                *x += b;
-            }
-        }
+        ws.stage.add_to_nodes(&ws.newton.base);
         // Velocities: the separable residual and Jacobian never use them (the kinetic part is
         // the precomputed K ΔQ), only the general path and the value of L_d do.
         if ws.separable.is_none() || ws.need_velocities {

@@ -65,6 +65,16 @@ pub(crate) struct StageScratch {
 }
 
 impl StageScratch {
+    /// q_j ← q_j + q_k at every node: the curve's constant part added last, after the small
+    /// parts (increments and compensation terms), so that they are not rounded away.
+    pub(crate) fn add_to_nodes(&mut self, base: &[f64]) {
+        for row in self.qj.chunks_exact_mut(base.len()) {
+            for (x, b) in row.iter_mut().zip(base) {
+                *x += b;
+            }
+        }
+    }
+
     /// Buffers for n basis functions, m nodes, D coordinates; `general`: the Lagrangian is not
     /// separable (node Hessians are kept); `block_entries`: size of `hblocks` (0: unused).
     pub(crate) fn new(n: usize, m: usize, d: usize, general: bool, block_entries: usize) -> Self {

@@ -121,11 +121,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             &mut ws.stage.qj,
             rd,
         );
-        for row in ws.stage.qj.chunks_exact_mut(d) {
-            for (x, b) in row.iter_mut().zip(&ws.newton.base) {
-                *x += b;
-            }
-        }
+        ws.stage.add_to_nodes(&ws.newton.base);
         self.weighted_forces(lag, &mut ws.stage);
         // Σ_j ψ_jb (h b_j f_j).
         gemm_transposed(k, m, d, &vt.psi, &ws.stage.scaled, 0.0, &mut vs.delta);
