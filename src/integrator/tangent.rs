@@ -404,16 +404,17 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         }
     }
 
-    /// The tangent map along a run of `steps` steps from (q0, p0): the cumulative products
-    /// Φ_k = J_{k−1} ⋯ J_0 for k = 1 … steps (each 2D×2D, order (q, p)), i.e. the solution of
-    /// the discrete variational equations.
-    pub fn tangent_map<L: Lagrangian>(
+    /// The step Jacobians J_0, J_1, … of a run of `steps` steps from (q0, p0), each handed to
+    /// `visit` in turn (2D×2D, order (q, p)): the walk the tangent map and the Lyapunov
+    /// estimate share, with one workspace and no allocation per step.
+    fn walk_step_jacobians<L: Lagrangian>(
         &self,
         lag: &L,
         q0: &[f64],
         p0: &[f64],
         steps: usize,
-    ) -> Result<Vec<DMatrix<f64>>> {
+        mut visit: impl FnMut(&DMatrix<f64>),
+    ) -> Result<()> {
         check_steps(steps)?;
         self.check_state(lag, q0, p0)?;
         let mut ws = self.workspace(lag)?;
@@ -422,8 +423,6 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let (mut q, mut p) = (q0.to_vec(), p0.to_vec());
         let (mut qn, mut pn) = (vec![0.0; d], vec![0.0; d]);
         let mut jac = DMatrix::<f64>::zeros(2 * d, 2 * d);
-        let mut phi = DMatrix::<f64>::identity(2 * d, 2 * d);
-        let mut out = Vec::with_capacity(steps.min(1 << 16));
         for k in 0..steps {
             self.step_jacobian_into(
                 lag,
@@ -435,11 +434,30 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 &mut jac,
                 k,
             )?;
-            phi = &jac * &phi;
-            out.push(phi.clone());
+            visit(&jac);
             std::mem::swap(&mut q, &mut qn);
             std::mem::swap(&mut p, &mut pn);
         }
+        Ok(())
+    }
+
+    /// The tangent map along a run of `steps` steps from (q0, p0): the cumulative products
+    /// Φ_k = J_{k−1} ⋯ J_0 for k = 1 … steps (each 2D×2D, order (q, p)), i.e. the solution of
+    /// the discrete variational equations.
+    pub fn tangent_map<L: Lagrangian>(
+        &self,
+        lag: &L,
+        q0: &[f64],
+        p0: &[f64],
+        steps: usize,
+    ) -> Result<Vec<DMatrix<f64>>> {
+        let d2 = 2 * lag.dim();
+        let mut phi = DMatrix::<f64>::identity(d2, d2);
+        let mut out = Vec::with_capacity(steps.min(1 << 16));
+        self.walk_step_jacobians(lag, q0, p0, steps, |jac| {
+            phi = jac * &phi;
+            out.push(phi.clone());
+        })?;
         Ok(out)
     }
 
@@ -454,37 +472,17 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         p0: &[f64],
         steps: usize,
     ) -> Result<Vec<f64>> {
-        check_steps(steps)?;
-        self.check_state(lag, q0, p0)?;
-        let mut ws = self.workspace(lag)?;
-        let mut tws = self.tangent_workspace(lag)?;
-        let d = lag.dim();
-        let d2 = 2 * d;
-        let (mut q, mut p) = (q0.to_vec(), p0.to_vec());
-        let (mut qn, mut pn) = (vec![0.0; d], vec![0.0; d]);
-        let mut jac = DMatrix::<f64>::zeros(d2, d2);
+        let d2 = 2 * lag.dim();
         let mut basis = DMatrix::<f64>::identity(d2, d2);
         let mut sums = vec![0.0; d2];
-        for k in 0..steps {
-            self.step_jacobian_into(
-                lag,
-                &mut ws,
-                &mut tws,
-                &q,
-                &p,
-                (&mut qn, &mut pn),
-                &mut jac,
-                k,
-            )?;
-            let qr = (&jac * &basis).qr();
+        self.walk_step_jacobians(lag, q0, p0, steps, |jac| {
+            let qr = (jac * &basis).qr();
             let r = qr.r();
             for (i, s) in sums.iter_mut().enumerate() {
                 *s += r[(i, i)].abs().ln();
             }
             basis = qr.q();
-            std::mem::swap(&mut q, &mut qn);
-            std::mem::swap(&mut p, &mut pn);
-        }
+        })?;
         let time = steps as f64 * self.step_size();
         let mut exps: Vec<f64> = sums.iter().map(|s| s / time).collect();
         exps.sort_by(|a, b| b.total_cmp(a));
