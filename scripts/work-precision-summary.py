@@ -48,7 +48,8 @@ def main():
     out.append(
         "The fastest configuration reaching each error, per scene: the fastest Galerkin "
         "configuration (any basis, n, h, stage solver `auto`, the paper's 2n Gauss points or "
-        "the economical ⌈3n/2⌉, families `galerkin-BASIS-econ`), the fastest peer (in-process "
+        "the economical ⌈3n/2⌉ or the compact n, families `galerkin-BASIS-econ` and "
+        "`galerkin-BASIS-compact`), the fastest peer (in-process "
         "baselines at their best, and REBOUND 4.4.3 IAS15 / WHFast timed in their own process), "
         "and the ratio Galerkin time / best peer time (above 1: the peer is faster); the ratios "
         "in parentheses count the paper's 2n points only, and the last column is the ratio "
@@ -76,7 +77,7 @@ def main():
             peer = fastest(pts, lambda p: not p["method"].startswith("galerkin"), t)
             local = fastest(pts, lambda p: not p["method"].startswith("galerkin") and not p.get("external"), t)
             paper = fastest(pts, lambda p: p["method"].startswith("galerkin")
-                            and not p["method"].endswith("-econ"), t)
+                            and not p["method"].endswith(("-econ", "-compact")), t)
             ias = fastest(pts, lambda p: p["method"] == "rebound-ias15", t)
 
             def ratio(a, b):

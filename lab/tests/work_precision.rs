@@ -165,8 +165,9 @@ fn long_preset_at_a_short_horizon() {
     }
 }
 
-/// Every Galerkin basis gains an economical family `galerkin-BASIS-econ`; every row records
-/// its quadrature points (2n paper, ⌈3n/2⌉ economical, none for the classical peers), in the
+/// Every Galerkin basis gains an economical family `galerkin-BASIS-econ` and a compact one
+/// `galerkin-BASIS-compact`; every row records its quadrature points (2n paper, ⌈3n/2⌉
+/// economical, n compact, none for the classical peers), in the
 /// JSON and in the CSV (which reads back); `quad_points = [Paper]` sweeps the paper rule only,
 /// with the rows and labels of the paper-only study.
 #[test]
@@ -188,10 +189,12 @@ fn economical_family_and_its_point_counts() {
             config.ns.len() * config.galerkin_divisors.len()
         );
         assert_eq!(count(&econ), count(&paper), "{econ}");
+        assert_eq!(count(&format!("{paper}-compact")), count(&paper));
     }
     for p in &study.points {
         let expected = match (p.method.starts_with("galerkin"), p.n) {
             (true, Some(n)) if p.method.ends_with("-econ") => Some((3 * n).div_ceil(2)),
+            (true, Some(n)) if p.method.ends_with("-compact") => Some(n),
             (true, Some(n)) => Some(2 * n),
             (true, None) => panic!("Galerkin row without n: {}", p.parameters),
             (false, _) => None,
@@ -212,6 +215,10 @@ fn economical_family_and_its_point_counts() {
     assert_eq!(
         row("galerkin-legendre-econ").parameters,
         "n = 16, h = 2, m = 24"
+    );
+    assert_eq!(
+        row("galerkin-legendre-compact").parameters,
+        "n = 16, h = 2, m = 16"
     );
     // CSV: a quad_points column, read back by the external reader.
     let csv = study.csv().unwrap();
@@ -242,7 +249,12 @@ fn economical_family_and_its_point_counts() {
     let mut paper_only = config.clone();
     paper_only.quad_points = vec![QuadPoints::Paper];
     let study = work_precision(&built, &paper_only).unwrap();
-    assert!(study.points.iter().all(|p| !p.method.ends_with("-econ")));
+    assert!(
+        study
+            .points
+            .iter()
+            .all(|p| !p.method.ends_with("-econ") && !p.method.ends_with("-compact"))
+    );
     assert!(study.points.iter().any(|p| p.method == "galerkin-legendre"));
 }
 

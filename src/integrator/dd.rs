@@ -4,7 +4,18 @@
 
 /// The max-norm max_i |x_i| (0 for an empty slice).
 pub(super) fn max_abs(x: &[f64]) -> f64 {
-    x.iter().fold(0.0f64, |m, v| m.max(v.abs()))
+    // Four running maxima side by side (one alone is a serial chain of `max` latencies, 4 %
+    // of a Kepler step); `max` is exact and ignores NaN, so the order does not matter.
+    let mut lanes = [0.0f64; 4];
+    let chunks = x.chunks_exact(4);
+    let rest = chunks.remainder();
+    for c in chunks {
+        for (l, v) in lanes.iter_mut().zip(c) {
+            *l = l.max(v.abs());
+        }
+    }
+    let m = lanes[0].max(lanes[1]).max(lanes[2].max(lanes[3]));
+    rest.iter().fold(m, |m, v| m.max(v.abs()))
 }
 
 /// Knuth's TwoSum: s = fl(a + b) and the exact rounding error e, a + b = s + e.

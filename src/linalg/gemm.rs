@@ -168,44 +168,46 @@ type ThinArgs<'a> = (
 /// A with contiguous rows: each row of C is D independent sums kept in registers, then
 /// scaled. Bounds were checked by [`gemm`].
 fn thin<const D: usize>(args: ThinArgs<'_>, c: &mut [f64], sc: Strided) {
-    let (m, k, alpha, a, sa, b, sb, beta) = args;
-    // Four rows of C at a time: their sums are independent, so interleaving them hides the
-    // latency of each serial sum (every entry is still summed over k in order: the same bits).
-    let store = |c: &mut [f64], i: usize, acc: &[f64; D]| {
-        for j in 0..D {
-            let ci = sc.offset + i * sc.row_stride + j * sc.col_stride;
-            c[ci] = alpha * acc[j] + if beta == 0.0 { 0.0 } else { beta * c[ci] };
-        }
-    };
+    // Four rows of C at a time, the remaining ones as one block too: their sums are
+    // independent, so interleaving them hides the latency of each serial sum (every entry is
+    // still summed over k in order: the same bits).
+    let m = args.0;
     let blocked = m - m % ROWS;
     for i in (0..blocked).step_by(ROWS) {
-        let mut acc = [[0.0f64; D]; ROWS];
-        for kk in 0..k {
-            let o = sb.offset + kk * sb.row_stride;
-            let br = &b[o..o + D];
-            for (r, acc) in acc.iter_mut().enumerate() {
-                let x = a[sa.offset + (i + r) * sa.row_stride + kk * sa.col_stride];
-                for j in 0..D {
-                    acc[j] += x * br[j];
-                }
-            }
-        }
-        for (r, acc) in acc.iter().enumerate() {
-            store(c, i + r, acc);
-        }
+        thin_rows::<D, ROWS>(args, i, c, sc);
     }
-    for i in blocked..m {
-        let a0 = sa.offset + i * sa.row_stride;
-        let mut acc = [0.0f64; D];
-        for kk in 0..k {
-            let x = a[a0 + kk * sa.col_stride];
-            let o = sb.offset + kk * sb.row_stride;
-            let br = &b[o..o + D];
+    match m - blocked {
+        1 => thin_rows::<D, 1>(args, blocked, c, sc),
+        2 => thin_rows::<D, 2>(args, blocked, c, sc),
+        3 => thin_rows::<D, 3>(args, blocked, c, sc),
+        _ => {}
+    }
+}
+
+/// [`thin`] on rows i … i + R − 1.
+fn thin_rows<const D: usize, const R: usize>(
+    args: ThinArgs<'_>,
+    i: usize,
+    c: &mut [f64],
+    sc: Strided,
+) {
+    let (_, k, alpha, a, sa, b, sb, beta) = args;
+    let mut acc = [[0.0f64; D]; R];
+    for kk in 0..k {
+        let o = sb.offset + kk * sb.row_stride;
+        let br = &b[o..o + D];
+        for (r, acc) in acc.iter_mut().enumerate() {
+            let x = a[sa.offset + (i + r) * sa.row_stride + kk * sa.col_stride];
             for j in 0..D {
                 acc[j] += x * br[j];
             }
         }
-        store(c, i, &acc);
+    }
+    for (r, acc) in acc.iter().enumerate() {
+        for j in 0..D {
+            let ci = sc.offset + (i + r) * sc.row_stride + j * sc.col_stride;
+            c[ci] = alpha * acc[j] + if beta == 0.0 { 0.0 } else { beta * c[ci] };
+        }
     }
 }
 
@@ -317,10 +319,33 @@ fn wide_block<const R: usize, const G: usize>(
 /// [`thin`] for A with strided rows (e.g. Φᵀ): C's row is scaled by beta first and
 /// alpha·a_ik·B_k accumulated into it, in the order of the general loop of [`gemm`].
 fn thin_accumulate<const D: usize>(args: ThinArgs<'_>, c: &mut [f64], sc: Strided) {
-    let (m, k, alpha, a, sa, b, sb, beta) = args;
-    let load = |c: &[f64], i: usize| {
-        let c0 = sc.offset + i * sc.row_stride;
-        let mut acc = [0.0f64; D];
+    // Four rows at a time and the remaining ones as one block, as in `thin`.
+    let m = args.0;
+    let blocked = m - m % ROWS;
+    for i in (0..blocked).step_by(ROWS) {
+        thin_accumulate_rows::<D, ROWS>(args, i, c, sc);
+    }
+    match m - blocked {
+        1 => thin_accumulate_rows::<D, 1>(args, blocked, c, sc),
+        2 => thin_accumulate_rows::<D, 2>(args, blocked, c, sc),
+        3 => thin_accumulate_rows::<D, 3>(args, blocked, c, sc),
+        _ => {}
+    }
+}
+
+/// [`thin_accumulate`] on rows i … i + R − 1. A zero a_ik is skipped (as the general loop
+/// does): adding its zero product instead would change nothing for finite B, but skip it
+/// anyway so that every entry sees exactly the operations of the unblocked loop.
+fn thin_accumulate_rows<const D: usize, const R: usize>(
+    args: ThinArgs<'_>,
+    i: usize,
+    c: &mut [f64],
+    sc: Strided,
+) {
+    let (_, k, alpha, a, sa, b, sb, beta) = args;
+    let mut acc = [[0.0f64; D]; R];
+    for (r, acc) in acc.iter_mut().enumerate() {
+        let c0 = sc.offset + (i + r) * sc.row_stride;
         for (j, x) in acc.iter_mut().enumerate() {
             let cij = c[c0 + j * sc.col_stride];
             *x = if beta == 0.0 {
@@ -331,52 +356,25 @@ fn thin_accumulate<const D: usize>(args: ThinArgs<'_>, c: &mut [f64], sc: Stride
                 cij
             };
         }
-        acc
-    };
-    let store = |c: &mut [f64], i: usize, acc: &[f64; D]| {
-        let c0 = sc.offset + i * sc.row_stride;
-        for (j, x) in acc.iter().enumerate() {
-            c[c0 + j * sc.col_stride] = *x;
-        }
-    };
-    // Four rows at a time, as in `thin`. A zero a_ik is skipped (as the general loop does):
-    // adding its zero product instead would change nothing for finite B, but skip it anyway
-    // so that every entry sees exactly the operations of the unblocked loop.
-    let blocked = m - m % ROWS;
-    for i in (0..blocked).step_by(ROWS) {
-        let mut acc: [[f64; D]; ROWS] = std::array::from_fn(|r| load(c, i + r));
-        for kk in 0..k {
-            let o = sb.offset + kk * sb.row_stride;
-            let br = &b[o..o + D];
-            for (r, acc) in acc.iter_mut().enumerate() {
-                let aik = alpha * a[sa.offset + (i + r) * sa.row_stride + kk * sa.col_stride];
-                if aik == 0.0 {
-                    continue;
-                }
-                for j in 0..D {
-                    acc[j] += aik * br[j];
-                }
-            }
-        }
-        for (r, acc) in acc.iter().enumerate() {
-            store(c, i + r, acc);
-        }
     }
-    for i in blocked..m {
-        let mut acc = load(c, i);
-        let a0 = sa.offset + i * sa.row_stride;
-        for kk in 0..k {
-            let aik = alpha * a[a0 + kk * sa.col_stride];
+    for kk in 0..k {
+        let o = sb.offset + kk * sb.row_stride;
+        let br = &b[o..o + D];
+        for (r, acc) in acc.iter_mut().enumerate() {
+            let aik = alpha * a[sa.offset + (i + r) * sa.row_stride + kk * sa.col_stride];
             if aik == 0.0 {
                 continue;
             }
-            let o = sb.offset + kk * sb.row_stride;
-            let br = &b[o..o + D];
             for j in 0..D {
                 acc[j] += aik * br[j];
             }
         }
-        store(c, i, &acc);
+    }
+    for (r, acc) in acc.iter().enumerate() {
+        let c0 = sc.offset + (i + r) * sc.row_stride;
+        for (j, x) in acc.iter().enumerate() {
+            c[c0 + j * sc.col_stride] = *x;
+        }
     }
 }
 
@@ -388,56 +386,59 @@ mod gemm_tests {
     /// and transposed A, contiguous and strided B, and every beta case.
     #[test]
     fn few_column_kernels_match_a_naive_product() {
-        let (m, k) = (5, 7);
-        let a: Vec<f64> = (0..m * k).map(|x| (x as f64 * 0.3).sin()).collect();
-        let at: Vec<f64> = (0..k * m).map(|idx| a[(idx % m) * k + idx / m]).collect();
-        for n in 1..=4 {
-            let b: Vec<f64> = (0..k * n).map(|x| (x as f64 * 0.7).cos()).collect();
-            let bt: Vec<f64> = (0..n * k).map(|idx| b[(idx % k) * n + idx / k]).collect();
-            let a_views = [
-                (&a, Strided::rows(0, k)),
-                (
-                    &at,
-                    Strided {
-                        offset: 0,
-                        row_stride: 1,
-                        col_stride: m,
-                    },
-                ),
-            ];
-            let b_views = [
-                (&b, Strided::rows(0, n)),
-                (
-                    &bt,
-                    Strided {
-                        offset: 0,
-                        row_stride: 1,
-                        col_stride: k,
-                    },
-                ),
-            ];
-            for (av, sa) in a_views {
-                for (bv, sb) in b_views {
-                    for (alpha, beta) in [(1.0, 0.0), (2.0, 1.0), (-1.5, 0.5)] {
-                        let mut c = vec![0.25; m * n];
-                        gemm(
-                            m,
-                            k,
-                            n,
-                            alpha,
-                            av,
-                            sa,
-                            bv,
-                            sb,
-                            beta,
-                            &mut c,
-                            Strided::rows(0, n),
-                        );
-                        for i in 0..m {
-                            for j in 0..n {
-                                let dot: f64 = (0..k).map(|t| a[i * k + t] * b[t * n + j]).sum();
-                                let exact = alpha * dot + beta * 0.25;
-                                assert!((c[i * n + j] - exact).abs() < 1e-13, "n = {n}");
+        // m = 5 … 8: every remainder of the four-row blocks.
+        for (m, k) in [(5, 7), (6, 7), (7, 3), (8, 7)] {
+            let a: Vec<f64> = (0..m * k).map(|x| (x as f64 * 0.3).sin()).collect();
+            let at: Vec<f64> = (0..k * m).map(|idx| a[(idx % m) * k + idx / m]).collect();
+            for n in 1..=4 {
+                let b: Vec<f64> = (0..k * n).map(|x| (x as f64 * 0.7).cos()).collect();
+                let bt: Vec<f64> = (0..n * k).map(|idx| b[(idx % k) * n + idx / k]).collect();
+                let a_views = [
+                    (&a, Strided::rows(0, k)),
+                    (
+                        &at,
+                        Strided {
+                            offset: 0,
+                            row_stride: 1,
+                            col_stride: m,
+                        },
+                    ),
+                ];
+                let b_views = [
+                    (&b, Strided::rows(0, n)),
+                    (
+                        &bt,
+                        Strided {
+                            offset: 0,
+                            row_stride: 1,
+                            col_stride: k,
+                        },
+                    ),
+                ];
+                for (av, sa) in a_views {
+                    for (bv, sb) in b_views {
+                        for (alpha, beta) in [(1.0, 0.0), (2.0, 1.0), (-1.5, 0.5)] {
+                            let mut c = vec![0.25; m * n];
+                            gemm(
+                                m,
+                                k,
+                                n,
+                                alpha,
+                                av,
+                                sa,
+                                bv,
+                                sb,
+                                beta,
+                                &mut c,
+                                Strided::rows(0, n),
+                            );
+                            for i in 0..m {
+                                for j in 0..n {
+                                    let dot: f64 =
+                                        (0..k).map(|t| a[i * k + t] * b[t * n + j]).sum();
+                                    let exact = alpha * dot + beta * 0.25;
+                                    assert!((c[i * n + j] - exact).abs() < 1e-13, "n = {n}");
+                                }
                             }
                         }
                     }

@@ -61,8 +61,8 @@ pub struct WorkPrecisionArgs {
     #[arg(long, value_delimiter = ',', value_parser = super::values::count)]
     pub divisors: Option<Vec<usize>>,
     /// Galerkin quadrature point counts, comma-separated: `paper` (2n Gauss–Legendre points,
-    /// families galerkin-BASIS) and `economical` (⌈3n/2⌉ points, families
-    /// galerkin-BASIS-econ). Default: both.
+    /// families galerkin-BASIS), `economical` (⌈3n/2⌉ points, families galerkin-BASIS-econ)
+    /// and `compact` (n points, families galerkin-BASIS-compact). Default: all three.
     #[arg(long, value_delimiter = ',', value_parser = super::values::parsed::<QuadPoints>)]
     pub quadratures: Option<Vec<QuadPoints>>,
     #[command(flatten)]

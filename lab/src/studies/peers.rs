@@ -14,8 +14,9 @@ use galerkin_vi::quadrature::QuadratureKind;
 use galerkin_vi::systems::System;
 use serde::Serialize;
 
-/// How many Gauss–Legendre points a Galerkin step uses: the paper's 2n, or the economical
-/// ⌈3n/2⌉ ([`QuadratureKind::economical_points`]: 25 % fewer force evaluations per step).
+/// How many Gauss–Legendre points a Galerkin step uses: the paper's 2n, the economical
+/// ⌈3n/2⌉ ([`QuadratureKind::economical_points`]: 25 % fewer force evaluations per step), or
+/// the compact n ([`QuadratureKind::compact_points`]: for small h·ω).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum QuadPoints {
@@ -23,17 +24,33 @@ pub enum QuadPoints {
     Paper,
     /// ⌈3n/2⌉ points ([`QuadratureKind::economical_points`]).
     Economical,
+    /// n points ([`QuadratureKind::compact_points`]).
+    Compact,
 }
 
 impl QuadPoints {
-    /// Both choices, paper first.
-    pub const ALL: [QuadPoints; 2] = [QuadPoints::Paper, QuadPoints::Economical];
+    /// Every choice, paper first.
+    pub const ALL: [QuadPoints; 3] = [
+        QuadPoints::Paper,
+        QuadPoints::Economical,
+        QuadPoints::Compact,
+    ];
 
-    /// The name on the command line (`paper`, `economical`).
+    /// The name on the command line (`paper`, `economical`, `compact`).
     pub fn as_str(self) -> &'static str {
         match self {
             QuadPoints::Paper => "paper",
             QuadPoints::Economical => "economical",
+            QuadPoints::Compact => "compact",
+        }
+    }
+
+    /// The suffix of the method family (`""`, `-econ`, `-compact`).
+    pub fn family_suffix(self) -> &'static str {
+        match self {
+            QuadPoints::Paper => "",
+            QuadPoints::Economical => "-econ",
+            QuadPoints::Compact => "-compact",
         }
     }
 
@@ -43,6 +60,7 @@ impl QuadPoints {
         match self {
             QuadPoints::Paper => rule.default_points(n),
             QuadPoints::Economical => rule.economical_points(n),
+            QuadPoints::Compact => rule.compact_points(n),
         }
     }
 }
@@ -60,7 +78,9 @@ impl std::str::FromStr for QuadPoints {
             .into_iter()
             .find(|q| q.as_str() == s.trim())
             .ok_or_else(|| {
-                format!("unknown quadrature point count '{s}' (expected paper or economical)")
+                format!(
+                    "unknown quadrature point count '{s}' (expected paper, economical or compact)"
+                )
             })
     }
 }
@@ -76,7 +96,7 @@ pub enum Peer {
         basis: BasisKind,
         /// Number of basis functions.
         n: usize,
-        /// Number of quadrature points: the paper's or the economical one.
+        /// Number of quadrature points: the paper's, the economical or the compact one.
         points: QuadPoints,
     },
     /// Störmer–Verlet.
@@ -102,19 +122,12 @@ pub enum Peer {
 
 impl Peer {
     /// The method family, e.g. `galerkin-chebyshev`, `galerkin-legendre-econ` (economical
-    /// quadrature), `gauss-2`, `dop853`.
+    /// quadrature), `galerkin-hermite-compact` (n points), `gauss-2`, `dop853`.
     pub fn family(&self) -> String {
         match self {
-            Peer::Galerkin {
-                basis,
-                points: QuadPoints::Paper,
-                ..
-            } => format!("galerkin-{basis}"),
-            Peer::Galerkin {
-                basis,
-                points: QuadPoints::Economical,
-                ..
-            } => format!("galerkin-{basis}-econ"),
+            Peer::Galerkin { basis, points, .. } => {
+                format!("galerkin-{basis}{}", points.family_suffix())
+            }
             Peer::StormerVerlet => "stormer-verlet".into(),
             Peer::Rk4 => "rk4".into(),
             Peer::Gauss { s } => format!("gauss-{s}"),

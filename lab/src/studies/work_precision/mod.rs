@@ -58,7 +58,8 @@ pub struct WorkPrecisionConfig {
     /// Galerkin bases to sweep.
     pub bases: Vec<BasisKind>,
     /// Galerkin quadrature point counts to sweep: the paper's 2n Gauss–Legendre points
-    /// (families `galerkin-BASIS`) and the economical ⌈3n/2⌉ (families `galerkin-BASIS-econ`).
+    /// (families `galerkin-BASIS`), the economical ⌈3n/2⌉ (families `galerkin-BASIS-econ`) and
+    /// the compact n (families `galerkin-BASIS-compact`).
     pub quad_points: Vec<QuadPoints>,
     /// Galerkin steps per sample interval (h = Δ/m).
     pub galerkin_divisors: Vec<usize>,
@@ -75,7 +76,7 @@ pub struct WorkPrecisionConfig {
 }
 
 impl WorkPrecisionConfig {
-    /// The full study: h ∈ Δ·{1, ½, ¼, ⅛}, n = 4 … 40, baselines at 1 … 2¹⁴ steps per
+    /// The full study: h ∈ Δ·{1, ½, ⅓, ¼, ⅙, ⅛}, n = 4 … 24 and 26 … 40 in steps of 2, baselines at 1 … 2¹⁴ steps per
     /// interval (at most 2·10⁶ steps), Gauss s = 2, 4, DOP853 at 10⁻⁴ … 10⁻¹⁴, 5 repeats.
     pub fn full() -> Self {
         WorkPrecisionConfig {
@@ -83,8 +84,8 @@ impl WorkPrecisionConfig {
             repeats: 5,
             bases: BasisKind::ALL.to_vec(),
             quad_points: QuadPoints::ALL.to_vec(),
-            galerkin_divisors: vec![1, 2, 4, 8],
-            ns: (4..=40).step_by(2).collect(),
+            galerkin_divisors: vec![1, 2, 3, 4, 6, 8],
+            ns: (4..=24).chain((26..=40).step_by(2)).collect(),
             baseline_divisors: (0..=14).map(|k| 1 << k).collect(),
             gauss_stages: vec![2, 4],
             tolerances: (4..=14).map(|k| 10f64.powi(-k)).collect(),
@@ -140,7 +141,8 @@ pub struct WorkPoint {
     pub h: Option<f64>,
     /// Basis functions (Galerkin).
     pub n: Option<usize>,
-    /// Quadrature points per step (Galerkin: 2n for the paper's rule, ⌈3n/2⌉ economical).
+    /// Quadrature points per step (Galerkin: 2n for the paper's rule, ⌈3n/2⌉ economical, n
+    /// compact).
     pub quad_points: Option<usize>,
     /// Tolerance (DOP853).
     pub tolerance: Option<f64>,
@@ -419,12 +421,8 @@ fn time_point<S: System>(
             points: QuadPoints::Paper,
             ..
         } => (format!("n = {n}, h = {h}"), Some(h), Some(n), None),
-        Peer::Galerkin {
-            n,
-            points: QuadPoints::Economical,
-            ..
-        } => (
-            format!("n = {n}, h = {h}, m = {}", QuadPoints::Economical.points(n)),
+        Peer::Galerkin { n, points, .. } => (
+            format!("n = {n}, h = {h}, m = {}", points.points(n)),
             Some(h),
             Some(n),
             None,
