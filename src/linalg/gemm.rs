@@ -86,14 +86,14 @@ pub fn gemm(
         let args = (m, k, alpha, a, sa, b, sb, beta);
         let row_major = sa.col_stride == 1;
         match (n, row_major) {
-            (1, true) => thin::<1>(args, c, sc),
-            (2, true) => thin::<2>(args, c, sc),
-            (3, true) => thin::<3>(args, c, sc),
-            (_, true) => thin::<4>(args, c, sc),
-            (1, false) => thin_accumulate::<1>(args, c, sc),
-            (2, false) => thin_accumulate::<2>(args, c, sc),
-            (3, false) => thin_accumulate::<3>(args, c, sc),
-            (_, false) => thin_accumulate::<4>(args, c, sc),
+            (1, true) => thin::<1, false>(args, c, sc),
+            (2, true) => thin::<2, false>(args, c, sc),
+            (3, true) => thin::<3, false>(args, c, sc),
+            (_, true) => thin::<4, false>(args, c, sc),
+            (1, false) => thin::<1, true>(args, c, sc),
+            (2, false) => thin::<2, true>(args, c, sc),
+            (3, false) => thin::<3, true>(args, c, sc),
+            (_, false) => thin::<4, true>(args, c, sc),
         }
         return;
     }
@@ -164,28 +164,35 @@ type ThinArgs<'a> = (
     f64,
 );
 
-/// C = alpha·A·B + beta·C for B with D contiguous columns (row-major rows of length D) and
-/// A with contiguous rows: each row of C is D independent sums kept in registers, then
-/// scaled. Bounds were checked by [`gemm`].
-fn thin<const D: usize>(args: ThinArgs<'_>, c: &mut [f64], sc: Strided) {
+/// C = alpha·A·B + beta·C for B with D contiguous columns (row-major rows of length D): each
+/// row of C is D independent sums kept in registers. Bounds were checked by [`gemm`].
+///
+/// Two summation orders, each that of a plain loop, so that the blocking changes no bit:
+/// - `ACCUMULATE = false` (A with contiguous rows, C = Φ Q): the D sums of a_ik·b_kj from zero,
+///   then scaled, alpha·sum + beta·c;
+/// - `ACCUMULATE = true` (A with strided rows, e.g. Φᵀ F): C's row is scaled by beta first
+///   and alpha·a_ik·B_k accumulated into it, in the order of the general loop of [`gemm`],
+///   a zero alpha·a_ik skipped as there (adding its zero product would change nothing for
+///   finite B, but every entry then sees exactly the operations of the unblocked loop).
+fn thin<const D: usize, const ACCUMULATE: bool>(args: ThinArgs<'_>, c: &mut [f64], sc: Strided) {
     // Four rows of C at a time, the remaining ones as one block too: their sums are
     // independent, so interleaving them hides the latency of each serial sum (every entry is
     // still summed over k in order: the same bits).
     let m = args.0;
     let blocked = m - m % ROWS;
     for i in (0..blocked).step_by(ROWS) {
-        thin_rows::<D, ROWS>(args, i, c, sc);
+        thin_rows::<D, ROWS, ACCUMULATE>(args, i, c, sc);
     }
     match m - blocked {
-        1 => thin_rows::<D, 1>(args, blocked, c, sc),
-        2 => thin_rows::<D, 2>(args, blocked, c, sc),
-        3 => thin_rows::<D, 3>(args, blocked, c, sc),
+        1 => thin_rows::<D, 1, ACCUMULATE>(args, blocked, c, sc),
+        2 => thin_rows::<D, 2, ACCUMULATE>(args, blocked, c, sc),
+        3 => thin_rows::<D, 3, ACCUMULATE>(args, blocked, c, sc),
         _ => {}
     }
 }
 
 /// [`thin`] on rows i … i + R − 1.
-fn thin_rows<const D: usize, const R: usize>(
+fn thin_rows<const D: usize, const R: usize, const ACCUMULATE: bool>(
     args: ThinArgs<'_>,
     i: usize,
     c: &mut [f64],
@@ -193,11 +200,24 @@ fn thin_rows<const D: usize, const R: usize>(
 ) {
     let (_, k, alpha, a, sa, b, sb, beta) = args;
     let mut acc = [[0.0f64; D]; R];
+    if ACCUMULATE && beta != 0.0 {
+        for (r, acc) in acc.iter_mut().enumerate() {
+            let c0 = sc.offset + (i + r) * sc.row_stride;
+            for (j, x) in acc.iter_mut().enumerate() {
+                let cij = c[c0 + j * sc.col_stride];
+                *x = if beta != 1.0 { cij * beta } else { cij };
+            }
+        }
+    }
     for kk in 0..k {
         let o = sb.offset + kk * sb.row_stride;
         let br = &b[o..o + D];
         for (r, acc) in acc.iter_mut().enumerate() {
             let x = a[sa.offset + (i + r) * sa.row_stride + kk * sa.col_stride];
+            let x = if ACCUMULATE { alpha * x } else { x };
+            if ACCUMULATE && x == 0.0 {
+                continue;
+            }
             for j in 0..D {
                 acc[j] += x * br[j];
             }
@@ -206,7 +226,11 @@ fn thin_rows<const D: usize, const R: usize>(
     for (r, acc) in acc.iter().enumerate() {
         for j in 0..D {
             let ci = sc.offset + (i + r) * sc.row_stride + j * sc.col_stride;
-            c[ci] = alpha * acc[j] + if beta == 0.0 { 0.0 } else { beta * c[ci] };
+            c[ci] = if ACCUMULATE {
+                acc[j]
+            } else {
+                alpha * acc[j] + if beta == 0.0 { 0.0 } else { beta * c[ci] }
+            };
         }
     }
 }
@@ -312,68 +336,6 @@ fn wide_block<const R: usize, const G: usize>(
         for (acc, &(j0, skip)) in acc.iter().zip(&blocks) {
             let c0 = sc.offset + (i + r) * sc.row_stride + j0;
             c[c0 + skip..c0 + LANES].copy_from_slice(&acc[skip..]);
-        }
-    }
-}
-
-/// [`thin`] for A with strided rows (e.g. Φᵀ): C's row is scaled by beta first and
-/// alpha·a_ik·B_k accumulated into it, in the order of the general loop of [`gemm`].
-fn thin_accumulate<const D: usize>(args: ThinArgs<'_>, c: &mut [f64], sc: Strided) {
-    // Four rows at a time and the remaining ones as one block, as in `thin`.
-    let m = args.0;
-    let blocked = m - m % ROWS;
-    for i in (0..blocked).step_by(ROWS) {
-        thin_accumulate_rows::<D, ROWS>(args, i, c, sc);
-    }
-    match m - blocked {
-        1 => thin_accumulate_rows::<D, 1>(args, blocked, c, sc),
-        2 => thin_accumulate_rows::<D, 2>(args, blocked, c, sc),
-        3 => thin_accumulate_rows::<D, 3>(args, blocked, c, sc),
-        _ => {}
-    }
-}
-
-/// [`thin_accumulate`] on rows i … i + R − 1. A zero a_ik is skipped (as the general loop
-/// does): adding its zero product instead would change nothing for finite B, but skip it
-/// anyway so that every entry sees exactly the operations of the unblocked loop.
-fn thin_accumulate_rows<const D: usize, const R: usize>(
-    args: ThinArgs<'_>,
-    i: usize,
-    c: &mut [f64],
-    sc: Strided,
-) {
-    let (_, k, alpha, a, sa, b, sb, beta) = args;
-    let mut acc = [[0.0f64; D]; R];
-    for (r, acc) in acc.iter_mut().enumerate() {
-        let c0 = sc.offset + (i + r) * sc.row_stride;
-        for (j, x) in acc.iter_mut().enumerate() {
-            let cij = c[c0 + j * sc.col_stride];
-            *x = if beta == 0.0 {
-                0.0
-            } else if beta != 1.0 {
-                cij * beta
-            } else {
-                cij
-            };
-        }
-    }
-    for kk in 0..k {
-        let o = sb.offset + kk * sb.row_stride;
-        let br = &b[o..o + D];
-        for (r, acc) in acc.iter_mut().enumerate() {
-            let aik = alpha * a[sa.offset + (i + r) * sa.row_stride + kk * sa.col_stride];
-            if aik == 0.0 {
-                continue;
-            }
-            for j in 0..D {
-                acc[j] += aik * br[j];
-            }
-        }
-    }
-    for (r, acc) in acc.iter().enumerate() {
-        let c0 = sc.offset + (i + r) * sc.row_stride;
-        for (j, x) in acc.iter().enumerate() {
-            c[c0 + j * sc.col_stride] = *x;
         }
     }
 }
