@@ -76,7 +76,7 @@ pub struct WorkPrecisionConfig {
 }
 
 impl WorkPrecisionConfig {
-    /// The full study: h ∈ Δ·{1, ½, ⅓, ¼, ⅙, ⅛}, n = 4 … 24 and 26 … 40 in steps of 2, baselines at 1 … 2¹⁴ steps per
+    /// The full study: h ∈ Δ·{1, ½, ⅓, ¼, ⅕, ⅙, ⅛}, n = 4 … 24 and 26 … 40 in steps of 2, baselines at 1 … 2¹⁴ steps per
     /// interval (at most 2·10⁶ steps), Gauss s = 2, 4, DOP853 at 10⁻⁴ … 10⁻¹⁴, 5 repeats.
     pub fn full() -> Self {
         WorkPrecisionConfig {
@@ -84,7 +84,7 @@ impl WorkPrecisionConfig {
             repeats: 5,
             bases: BasisKind::ALL.to_vec(),
             quad_points: QuadPoints::ALL.to_vec(),
-            galerkin_divisors: vec![1, 2, 3, 4, 6, 8],
+            galerkin_divisors: vec![1, 2, 3, 4, 5, 6, 8],
             ns: (4..=24).chain((26..=40).step_by(2)).collect(),
             baseline_divisors: (0..=14).map(|k| 1 << k).collect(),
             gauss_stages: vec![2, 4],
