@@ -43,7 +43,7 @@ impl WorkPrecisionStudy {
         )
         .log_x()
         .log_y()
-        .size(1000, 720);
+        .size(1100, 900);
         // One series per method: the Galerkin bases as markers over all (n, h) — their
         // envelope is the point — and the baselines as lines over their step or tolerance.
         let mut keys: Vec<String> = Vec::new();
@@ -67,6 +67,8 @@ impl WorkPrecisionStudy {
                 Series::line_markers(format!("{k} (external)"), pts)
             } else if k.starts_with("galerkin") && k.ends_with("-econ") {
                 Series::markers(format!("{k} (all n, h; ⌈3n/2⌉ Gauss points)"), pts)
+            } else if k.starts_with("galerkin") && k.ends_with("-compact") {
+                Series::markers(format!("{k} (all n, h; n Gauss points)"), pts)
             } else if k.starts_with("galerkin") {
                 Series::markers(format!("{k} (all n, h)"), pts)
             } else {
