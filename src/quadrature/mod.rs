@@ -336,4 +336,34 @@ mod kind_tests {
         }
         assert!("simpson".parse::<QuadratureKind>().is_err());
     }
+
+    /// The compact Gauss–Legendre rule has n points and degree 2n − 1: exact for the kinetic
+    /// integrand (degree 2n − 4), so the integrator accepts it for every polynomial basis,
+    /// while n − 2 points (degree 2n − 5) are rejected as too weak. Other rules keep their
+    /// default.
+    #[test]
+    fn compact_rule_is_exact_for_the_kinetic_term() {
+        use crate::basis::BasisKind;
+        use crate::integrator::GalerkinIntegrator;
+        let gl = QuadratureKind::GaussLegendre;
+        for n in [4, 12, 13, 20] {
+            assert_eq!(gl.compact_points(n), n);
+            assert_eq!(gl.build(n).unwrap().degree, 2 * n - 1);
+            for basis in [
+                BasisKind::Chebyshev,
+                BasisKind::Legendre,
+                BasisKind::Hermite,
+            ] {
+                assert!(GalerkinIntegrator::from_kinds(basis, n, gl, Some(n), 0.4).is_ok());
+                let weak = GalerkinIntegrator::from_kinds(basis, n, gl, Some(n - 2), 0.4);
+                assert!(
+                    matches!(weak, Err(crate::GviError::QuadratureTooWeak { .. })),
+                    "{basis} n = {n}"
+                );
+            }
+        }
+        for kind in [QuadratureKind::GaussLobatto, QuadratureKind::ClenshawCurtis] {
+            assert_eq!(kind.compact_points(9), kind.default_points(9));
+        }
+    }
 }
