@@ -200,12 +200,11 @@ fn thin_rows<const D: usize, const R: usize, const ACCUMULATE: bool>(
 ) {
     let (_, k, alpha, a, sa, b, sb, beta) = args;
     let mut acc = [[0.0f64; D]; R];
-    if ACCUMULATE && beta != 0.0 {
+    if ACCUMULATE {
         for (r, acc) in acc.iter_mut().enumerate() {
             let c0 = sc.offset + (i + r) * sc.row_stride;
             for (j, x) in acc.iter_mut().enumerate() {
-                let cij = c[c0 + j * sc.col_stride];
-                *x = if beta != 1.0 { cij * beta } else { cij };
+                *x = scaled_start(beta, c[c0 + j * sc.col_stride]);
             }
         }
     }
@@ -232,6 +231,19 @@ fn thin_rows<const D: usize, const R: usize, const ACCUMULATE: bool>(
                 alpha * acc[j] + if beta == 0.0 { 0.0 } else { beta * c[ci] }
             };
         }
+    }
+}
+
+/// The value an entry of C starts its sum from in the i-k-j loop of [`gemm`]: 0 for β = 0
+/// (C is not read), c for β = 1, β·c otherwise — so the register kernels give its bits.
+#[inline]
+fn scaled_start(beta: f64, c: f64) -> f64 {
+    if beta == 0.0 {
+        0.0
+    } else if beta != 1.0 {
+        c * beta
+    } else {
+        c
     }
 }
 
@@ -299,21 +311,12 @@ fn wide_block<const R: usize, const G: usize>(
     sc: Strided,
 ) {
     let (_, k, alpha, a, sa, b, sb, beta) = args;
-    let start = |x: f64| {
-        if beta == 0.0 {
-            0.0
-        } else if beta != 1.0 {
-            x * beta
-        } else {
-            x
-        }
-    };
     let mut acc = [[[0.0f64; LANES]; G]; R];
     for (r, acc) in acc.iter_mut().enumerate() {
         for (acc, &(j0, _)) in acc.iter_mut().zip(&blocks) {
             let c0 = sc.offset + (i + r) * sc.row_stride + j0;
             for (x, &cij) in acc.iter_mut().zip(&c[c0..c0 + LANES]) {
-                *x = start(cij);
+                *x = scaled_start(beta, cij);
             }
         }
     }
