@@ -379,8 +379,20 @@ fn shipped_scenes_pass_strict_without_warnings() {
         assert!(o.status.success(), "{args:?}: {}", stderr(&o));
         assert!(!stderr(&o).contains("warning"), "{args:?}: {}", stderr(&o));
     }
-    // Mercury ejected by n = 6 is flagged.
-    let o = gvi(&["run", "solar-system", "--n", "6", "--steps", "100"]);
+    // Mercury ejected by n = 6 is flagged. At n < 10 the stage equations at h = 100 d have
+    // several nearby solutions (a degree-5 curve over more than one Mercury orbit), and which
+    // one a solver finds, or whether it finds one, depends on its path: exact Newton is the
+    // deterministic reference here.
+    let o = gvi(&[
+        "run",
+        "solar-system",
+        "--n",
+        "6",
+        "--steps",
+        "100",
+        "--solver",
+        "exact",
+    ]);
     assert!(
         stderr(&o).contains("warning: relative energy error"),
         "{}",

@@ -3,7 +3,7 @@
 //! preconditioner uses), the node Jacobians for Newton–Krylov's products, and the choice
 //! `auto` makes per workspace.
 
-use super::kronecker::KroneckerTables;
+use super::kronecker::{KroneckerTables, KroneckerWorkParts};
 use crate::error::{GviError, Result};
 
 impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIntegrator<B, Q> {
@@ -27,10 +27,27 @@ impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIn
         if kinetic_only {
             kw.hbar.iter_mut().for_each(|x| *x = 0.0);
             kw.factor(kt, h)?;
+            kw.exact.clear();
             return Ok(0);
         }
         self.mean_force_jacobian(lag, &mut ws.stage, kw);
         kw.factor(kt, h)?;
+        if let Some(sep) = ws.separable.as_ref() {
+            // The exact self-blocks of the fast bodies, from the node Jacobians' diagonal
+            // blocks (or the full node Jacobians) at the freeze.
+            let (d, b) = (kw.dim(), kw.block());
+            let stage = &ws.stage;
+            let KroneckerWorkParts { exact, mu } = kw.parts();
+            if stage.hall_stale {
+                exact.factor(t, h, &sep.mass, mu, |j, r, s| {
+                    stage.hblocks[j * d * b + (r / b) * b * b + (r % b) * b + s % b]
+                });
+            } else {
+                exact.factor(t, h, &sep.mass, mu, |j, r, s| {
+                    stage.hall[j * d * d + r * d + s]
+                });
+            }
+        }
         Ok(m)
     }
 

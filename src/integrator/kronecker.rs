@@ -23,6 +23,7 @@ use crate::error::{GviError, Result};
 use crate::linalg::{Lu, Strided, gemm};
 
 use super::Tables;
+use super::self_blocks::SelfBlocks;
 
 /// The (basis, quadrature, n)-dependent part of the Kronecker solver.
 #[derive(Debug, Clone)]
@@ -195,6 +196,8 @@ pub(crate) struct KroneckerWork {
     yh: Vec<f64>,
     zeta: Vec<f64>,
     acc: Vec<f64>,
+    /// Exact self-blocks of the fast coordinate blocks ([`super::self_blocks`]).
+    pub(crate) exact: SelfBlocks,
 }
 
 impl KroneckerWork {
@@ -205,6 +208,8 @@ impl KroneckerWork {
         d: usize,
         mass: &[f64],
         blocks: Option<usize>,
+        nodes: usize,
+        self_block_rate: f64,
     ) -> Option<Self> {
         // Block mode needs b | D and a block-diagonal M (then L⁻¹ is block diagonal too).
         let block = match blocks {
@@ -259,6 +264,7 @@ impl KroneckerWork {
             yh: vec![0.0; k * d],
             zeta: vec![0.0; k * d],
             acc: vec![0.0; 2 * d],
+            exact: SelfBlocks::new(k, nodes, d, block, self_block_rate),
         })
     }
 
@@ -456,6 +462,7 @@ impl KroneckerWork {
     /// Solve J̃ x = r in place (`rhs` holds k×D values, block-row-major).
     pub(crate) fn solve(&mut self, kt: &KroneckerTables, h: f64, rhs: &mut [f64]) {
         let (d, k) = (self.d, kt.k);
+        self.exact.save(d, rhs);
         let (rd, rk) = (Strided::rows(0, d), Strided::rows(0, k));
         gemm(k, k, d, 1.0, &kt.r, rk, rhs, rd, 0.0, &mut self.y, rd);
         Self::transform(d, self.block, &self.v, k, &self.y, &mut self.yh);
@@ -510,7 +517,22 @@ impl KroneckerWork {
         // z = ζ Vᵀ (into y), x = U z.
         Self::transform(d, self.block, &self.vt, k, &self.zeta, &mut self.y);
         gemm(k, k, d, 1.0, &kt.u, rk, &self.y, rd, 0.0, rhs, rd);
+        self.exact.solve(d, rhs);
     }
+
+    /// The exact self-blocks (mutable) beside the frozen eigenvalues μ (D) that select them.
+    pub(crate) fn parts(&mut self) -> KroneckerWorkParts<'_> {
+        KroneckerWorkParts {
+            exact: &mut self.exact,
+            mu: &self.mu,
+        }
+    }
+}
+
+/// Borrowed parts of a [`KroneckerWork`].
+pub(crate) struct KroneckerWorkParts<'a> {
+    pub exact: &'a mut SelfBlocks,
+    pub mu: &'a [f64],
 }
 
 /// out[r] = Σ_{j ≥ first} t_row[j] ζ[j·d + r0 + r] for r < W, the terms in the order of j, zero

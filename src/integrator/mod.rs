@@ -38,6 +38,7 @@ mod modal;
 mod newton;
 mod newton_state;
 mod options;
+mod self_blocks;
 mod separable;
 mod solver;
 mod stage;

@@ -204,7 +204,7 @@ impl VelocityState {
             prev: vec![0.0; size],
             has_prev: false,
             delta: vec![0.0; size],
-            kron: KroneckerWork::new(vt.kron.as_ref()?, d, mass, blocks)?,
+            kron: KroneckerWork::new(vt.kron.as_ref()?, d, mass, blocks, 0, f64::MAX)?,
             dense: (size <= VELOCITY_DENSE_SIZE || (d <= 3 && size <= VELOCITY_DENSE_SMALL_D))
                 .then(|| DenseNewton {
                     jac: vec![0.0; size * size],

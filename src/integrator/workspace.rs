@@ -87,6 +87,8 @@ impl Workspace {
                 d,
                 &sep.mass,
                 lagrangian.coordinate_blocks(),
+                m,
+                gvi.options().self_block_rate,
             ),
             _ => None,
         };

@@ -1,0 +1,194 @@
+//! Exact self-blocks of the fast coordinate blocks (the fast bodies of an N-body system) in
+//! the Kronecker preconditioner.
+//!
+//! The frozen-Hessian solve of [`super::kronecker`] replaces every node Jacobian H_j by the
+//! step's mean H̄. For a body that turns through a large angle in one step (Mercury at
+//! h = 100 d: (h ω)² ≈ 50) the neglected variation H_j − H̄ is larger than the kinetic term in
+//! the low modes, and GMRES has to recover those modes one iteration at a time. For such a
+//! block c (b coordinates) the preconditioner instead solves its exact, time-varying
+//! self-block of the Newton matrix,
+//!
+//! A_c = (P ⊗ I) [ (1/h) K_s ⊗ M_cc + h Σ_j b_j (φ(c_j) φ(c_j)ᵀ)_s ⊗ H_j,cc ],
+//!
+//! ((n−1)b)², factorised once per freeze; the other blocks keep the Kronecker solve (which
+//! is block diagonal per body already, so the two combine into one block-Jacobi
+//! preconditioner). A block is treated exactly when h² max |μ| > [`FAST_RATE`], μ the
+//! eigenvalues of its frozen block relative to its mass.
+
+use crate::linalg::{Lu, Strided, gemm};
+
+use super::Tables;
+
+/// h² |μ| above which a block's exact self-block replaces the frozen one.
+pub(crate) const FAST_RATE: f64 = 4.0;
+
+/// The exact self-blocks of one workspace (allocated once; at most D/b blocks).
+#[derive(Debug, Clone)]
+pub(crate) struct SelfBlocks {
+    b: usize,
+    k: usize,
+    rate: f64,
+    /// The block indices with an exact self-block, in order (capacity D/b).
+    active: Vec<usize>,
+    lus: Vec<Lu>,
+    /// Assembly scratch: A_c ((kb)²), the weighted node values (m×k) and one Gram block (k×k).
+    mat: Vec<f64>,
+    weighted: Vec<f64>,
+    gram: Vec<f64>,
+    /// The right-hand sides of the active blocks (kb each) and a solve scratch (kb).
+    saved: Vec<f64>,
+    scratch: Vec<f64>,
+}
+
+impl SelfBlocks {
+    /// Buffers for k unknown blocks, m nodes, D coordinates in blocks of b (none when b = D).
+    /// `rate`: the threshold on h² max |μ| ([`NewtonOptions::self_block_rate`]); m = 0 or
+    /// b = D: no self-blocks.
+    ///
+    /// [`NewtonOptions::self_block_rate`]: super::NewtonOptions::self_block_rate
+    pub(crate) fn new(k: usize, m: usize, d: usize, b: usize, rate: f64) -> Self {
+        let blocks = if b < d && b > 0 && m > 0 && rate < f64::MAX {
+            d / b
+        } else {
+            0
+        };
+        let kb = k * b;
+        SelfBlocks {
+            b,
+            k,
+            rate,
+            active: Vec::with_capacity(blocks),
+            lus: (0..blocks).map(|_| Lu::with_capacity(kb)).collect(),
+            mat: if blocks > 0 {
+                vec![0.0; kb * kb]
+            } else {
+                vec![]
+            },
+            weighted: if blocks > 0 { vec![0.0; m * k] } else { vec![] },
+            gram: if blocks > 0 { vec![0.0; k * k] } else { vec![] },
+            saved: vec![0.0; blocks * kb],
+            scratch: vec![0.0; kb],
+        }
+    }
+
+    /// No exact self-blocks until the next [`Self::factor`].
+    pub(crate) fn clear(&mut self) {
+        self.active.clear();
+    }
+
+    /// Factorise the exact self-blocks of the blocks whose frozen eigenvalues `mu` (D) give
+    /// h² max |μ| above the threshold. `node_entry(j, r, s)` is entry (r, s) of the force
+    /// Jacobian at node j (only diagonal blocks are asked for); `mass` is M (D×D).
+    pub(crate) fn factor(
+        &mut self,
+        t: &Tables,
+        h: f64,
+        mass: &[f64],
+        mu: &[f64],
+        node_entry: impl Fn(usize, usize, usize) -> f64,
+    ) {
+        self.active.clear();
+        let (b, k) = (self.b, self.k);
+        if self.lus.is_empty() {
+            return;
+        }
+        let (n, m) = (t.n, t.m);
+        let d = mu.len();
+        let kb = k * b;
+        for c in 0..d / b {
+            let o = c * b;
+            let fast = mu[o..o + b].iter().any(|x| h * h * x.abs() > self.rate);
+            if !fast {
+                continue;
+            }
+            // Kinetic part (1/h) K_s ⊗ M_cc.
+            for a in 0..k {
+                for e in 0..k {
+                    let kin = t.kinetic[a * n + e + 1] / h;
+                    for r in 0..b {
+                        for s in 0..b {
+                            self.mat[(a * b + r) * kb + e * b + s] =
+                                kin * mass[(o + r) * d + o + s];
+                        }
+                    }
+                }
+            }
+            // Potential part: for each (r, s) the Gram block Σ_j h b_j H_j,rs φ_a φ_{e+1}.
+            for r in 0..b {
+                for s in 0..b {
+                    for j in 0..m {
+                        let w = h * t.weights[j] * node_entry(j, o + r, o + s);
+                        for e in 0..k {
+                            self.weighted[j * k + e] = w * t.phi[j * n + e + 1];
+                        }
+                    }
+                    let phi_t = Strided {
+                        offset: 0,
+                        row_stride: 1,
+                        col_stride: n,
+                    };
+                    let rk = Strided::rows(0, k);
+                    gemm(
+                        k,
+                        m,
+                        k,
+                        1.0,
+                        &t.phi,
+                        phi_t,
+                        &self.weighted,
+                        rk,
+                        0.0,
+                        &mut self.gram,
+                        rk,
+                    );
+                    for a in 0..k {
+                        for e in 0..k {
+                            self.mat[(a * b + r) * kb + e * b + s] += self.gram[a * k + e];
+                        }
+                    }
+                }
+            }
+            // P: row block 0 += Σ_{a ≥ 1} u_a (row block a).
+            for a in 1..k {
+                let u = t.unit[a];
+                if u != 0.0 {
+                    let (first, rest) = self.mat.split_at_mut(b * kb);
+                    let block = &rest[(a - 1) * b * kb..a * b * kb];
+                    for (f, x) in first.iter_mut().zip(block) {
+                        *f += u * x;
+                    }
+                }
+            }
+            let slot = self.active.len();
+            if self.lus[slot].refactor(&self.mat).is_ok() {
+                self.active.push(c);
+            }
+        }
+    }
+
+    /// Keep the right-hand side's entries of the active blocks (before the Kronecker solve
+    /// overwrites them).
+    pub(crate) fn save(&mut self, d: usize, rhs: &[f64]) {
+        let (b, k) = (self.b, self.k);
+        let kb = k * b;
+        for (slot, &c) in self.active.iter().enumerate() {
+            let saved = &mut self.saved[slot * kb..(slot + 1) * kb];
+            for a in 0..k {
+                saved[a * b..(a + 1) * b].copy_from_slice(&rhs[a * d + c * b..a * d + c * b + b]);
+            }
+        }
+    }
+
+    /// Overwrite the active blocks of the solution with their exact self-block solves.
+    pub(crate) fn solve(&mut self, d: usize, x: &mut [f64]) {
+        let (b, k) = (self.b, self.k);
+        let kb = k * b;
+        for (slot, &c) in self.active.iter().enumerate() {
+            let saved = &mut self.saved[slot * kb..(slot + 1) * kb];
+            self.lus[slot].solve_in_place(saved, &mut self.scratch);
+            for a in 0..k {
+                x[a * d + c * b..a * d + c * b + b].copy_from_slice(&saved[a * b..(a + 1) * b]);
+            }
+        }
+    }
+}
