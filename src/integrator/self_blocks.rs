@@ -185,7 +185,7 @@ impl SelfBlocks {
         let kb = k * b;
         for (slot, &c) in self.active.iter().enumerate() {
             let saved = &mut self.saved[slot * kb..(slot + 1) * kb];
-            self.lus[slot].solve_in_place(saved, &mut self.scratch);
+            self.lus[slot].solve_in_place_lanes(saved, &mut self.scratch);
             for a in 0..k {
                 x[a * d + c * b..a * d + c * b + b].copy_from_slice(&saved[a * b..(a + 1) * b]);
             }
