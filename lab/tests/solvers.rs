@@ -474,4 +474,19 @@ fn exact_self_blocks_of_the_fast_bodies_make_the_frozen_iteration_contract() {
     assert_eq!(fallbacks(&with), 0);
     assert!(fallbacks(&without) >= steps / 2);
     assert!(dw <= 1e-10 && dn <= 1e-10, "{dw:e} {dn:e}");
+    // The self-blocks are assembled and factorised in the workspace's buffers: no allocation
+    // per step.
+    let gvi = with_solver(BasisKind::Chebyshev, 16, 100.0, StageSolver::Kronecker);
+    let mut ws = gvi.workspace(&nbody).unwrap();
+    let d = init.q.len();
+    let (mut q, mut p) = (init.q.clone(), init.p.clone());
+    let (mut qn, mut pn) = (vec![0.0; d], vec![0.0; d]);
+    gvi.step(&nbody, &mut ws, &q, &p, &mut qn, &mut pn).unwrap();
+    let before = allocations();
+    for _ in 0..5 {
+        std::mem::swap(&mut q, &mut qn);
+        std::mem::swap(&mut p, &mut pn);
+        gvi.step(&nbody, &mut ws, &q, &p, &mut qn, &mut pn).unwrap();
+    }
+    assert_eq!(allocations() - before, 0);
 }
