@@ -22,13 +22,17 @@ use super::Tables;
 /// h² |μ| above which a block's exact self-block replaces the frozen one.
 pub(crate) const FAST_RATE: f64 = 4.0;
 
+/// At most this many blocks get exact self-blocks (the fastest ones): it bounds the memory,
+/// ((n − 1) b)² per block, and the factorisations per freeze for large N.
+pub(crate) const MAX_SELF_BLOCKS: usize = 8;
+
 /// The exact self-blocks of one workspace (allocated once; at most D/b blocks).
 #[derive(Debug, Clone)]
 pub(crate) struct SelfBlocks {
     b: usize,
     k: usize,
     rate: f64,
-    /// The block indices with an exact self-block, in order (capacity D/b).
+    /// The block indices with an exact self-block (at most [`MAX_SELF_BLOCKS`]).
     active: Vec<usize>,
     lus: Vec<Lu>,
     /// Assembly scratch: A_c ((kb)²), the weighted node values (m×k) and one Gram block (k×k).
@@ -48,7 +52,7 @@ impl SelfBlocks {
     /// [`NewtonOptions::self_block_rate`]: super::NewtonOptions::self_block_rate
     pub(crate) fn new(k: usize, m: usize, d: usize, b: usize, rate: f64) -> Self {
         let blocks = if b < d && b > 0 && m > 0 && rate < f64::MAX {
-            d / b
+            (d / b).min(MAX_SELF_BLOCKS)
         } else {
             0
         };
@@ -95,12 +99,32 @@ impl SelfBlocks {
         let (n, m) = (t.n, t.m);
         let d = mu.len();
         let kb = k * b;
+        let rate = |c: usize| {
+            mu[c * b..(c + 1) * b]
+                .iter()
+                .fold(0.0f64, |r, x| r.max(h * h * x.abs()))
+        };
+        // The fastest blocks above the threshold, at most as many as there are buffers, in
+        // the order of the coordinates.
+        let capacity = self.lus.len();
+        let mut floor = self.rate;
+        let fast_count = (0..d / b).filter(|&c| rate(c) > floor).count();
+        if fast_count > capacity {
+            // Raise the floor to the capacity-th largest rate (ties may leave fewer).
+            let mut above = fast_count;
+            while above > capacity {
+                floor = (0..d / b)
+                    .map(rate)
+                    .filter(|&r| r > floor)
+                    .fold(f64::INFINITY, f64::min);
+                above = (0..d / b).filter(|&c| rate(c) > floor).count();
+            }
+        }
         for c in 0..d / b {
-            let o = c * b;
-            let fast = mu[o..o + b].iter().any(|x| h * h * x.abs() > self.rate);
-            if !fast {
+            if rate(c) <= floor || self.active.len() == capacity {
                 continue;
             }
+            let o = c * b;
             // Kinetic part (1/h) K_s ⊗ M_cc.
             for a in 0..k {
                 for e in 0..k {
