@@ -67,7 +67,8 @@ pub struct NewtonOptions {
     /// when h² max |μ| exceeds this rate, μ the eigenvalues of the block's mean force Jacobian
     /// relative to its mass (h² |μ| ≈ (h ω)² for a body of orbital frequency ω). Default 4:
     /// at the paper's h = 100 d that is Mercury and Venus ((h ω)² ≈ 50 and 8), which makes the
-    /// frozen iteration contract where the frozen mean stalls (docs/solvers.md). Set to
+    /// frozen iteration contract where the frozen mean stalls (docs/solvers.md). At most
+    /// eight blocks, the fastest, are treated exactly. Set to
     /// `f64::MAX` to turn it off. Concerns the nodal stage equations of systems with
     /// coordinate blocks only (N-body); the map does not change.
     #[serde(default = "default_self_block_rate")]
