@@ -1,7 +1,8 @@
 //! Time of a short integration with each stage solver (exact, kronecker, newton-krylov, modal,
 //! auto)
 //! at a few sizes: 10 steps of Kepler e = 0.6 at h = 1 with n = 16, 32, 64 and of the outer
-//! solar system (h = 1825 days) with n = 12; 2 steps of the synthetic planetesimal ring
+//! solar system (h = 1825 days) with n = 12 and of the paper's 10-body run (J2000, n = 25,
+//! h = 100 days); 2 steps of the synthetic planetesimal ring
 //! (h = 1/8 of the innermost period) with N = 16 and 32 bodies at n = 16 (the exact solver's
 //! (15·96)² LU makes longer ring runs slow). Asserts nothing about time; the scaling
 //! study with fitted exponents is `gvi solver-scaling` (docs/studies/solver-scaling/).
@@ -82,6 +83,22 @@ fn solvers(c: &mut Criterion) {
             &built.initial,
             12,
             outer.method.h,
+            10,
+        );
+    }
+    // The paper's 10-body configuration (J2000, n = 25, h = 100 d), where Mercury and Venus
+    // get exact self-blocks in the frozen iteration's preconditioner (docs/solvers.md).
+    let solar = Scene::load("solar-system").expect("built-in scene");
+    if let Ok(built) = solar.build()
+        && let Some(system) = built.euclidean().ok().and_then(|s| s.as_nbody())
+    {
+        bench_case(
+            c,
+            "solar_system_n25_h100",
+            system,
+            &built.initial,
+            25,
+            100.0,
             10,
         );
     }
