@@ -72,35 +72,20 @@ fn solvers(c: &mut Criterion) {
             10,
         );
     }
-    let outer = Scene::load("outer-solar-system").expect("built-in scene");
-    if let Ok(built) = outer.build()
-        && let Some(system) = built.euclidean().ok().and_then(|s| s.as_nbody())
-    {
-        bench_case(
-            c,
-            "outer_solar_system_n12",
-            system,
-            &built.initial,
-            12,
-            outer.method.h,
-            10,
-        );
-    }
-    // The paper's 10-body configuration (J2000, n = 25, h = 100 d), where Mercury and Venus
-    // get exact self-blocks in the frozen iteration's preconditioner (docs/solvers.md).
-    let solar = Scene::load("solar-system").expect("built-in scene");
-    if let Ok(built) = solar.build()
-        && let Some(system) = built.euclidean().ok().and_then(|s| s.as_nbody())
-    {
-        bench_case(
-            c,
-            "solar_system_n25_h100",
-            system,
-            &built.initial,
-            25,
-            100.0,
-            10,
-        );
+    // The outer solar system at its scene's h = 1825 d, and the paper's 10-body
+    // configuration (J2000, n = 25, h = 100 d), where Mercury and Venus get exact self-blocks
+    // in the frozen iteration's preconditioner (docs/solvers.md).
+    for (name, group, n, h) in [
+        ("outer-solar-system", "outer_solar_system_n12", 12, None),
+        ("solar-system", "solar_system_n25_h100", 25, Some(100.0)),
+    ] {
+        let scene = Scene::load(name).expect("built-in scene");
+        if let Ok(built) = scene.build()
+            && let Some(system) = built.euclidean().ok().and_then(|s| s.as_nbody())
+        {
+            let h = h.unwrap_or(scene.method.h);
+            bench_case(c, group, system, &built.initial, n, h, 10);
+        }
     }
     for bodies in [16, 32] {
         let config = RingConfig::with_bodies(bodies);

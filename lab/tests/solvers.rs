@@ -8,7 +8,7 @@ use galerkin_vi::baselines::{OneStepMethod, Rk4};
 use galerkin_vi::geometry::{MomentumMap, Rotation, Translation, relative_symplecticity_defect};
 use galerkin_vi::integrator::StageSolver;
 use galerkin_vi::prelude::*;
-use galerkin_vi_lab::scene::Scene;
+use galerkin_vi_lab::scene::{InitialState, Scene};
 use nalgebra::DMatrix;
 
 #[path = "../../tests/common/counting.rs"]
@@ -42,6 +42,52 @@ fn with_solver(
         ..*gvi.options()
     };
     gvi.with_options(options)
+}
+
+/// [`with_solver`] with the fast-body self-block threshold `rate`
+/// (`NewtonOptions::self_block_rate`; `f64::MAX`: none).
+fn with_solver_rate(
+    basis: BasisKind,
+    n: usize,
+    h: f64,
+    solver: StageSolver,
+    rate: f64,
+) -> GalerkinIntegrator<AnyBasis, QuadratureRule> {
+    let gvi = with_solver(basis, n, h, solver);
+    let options = NewtonOptions {
+        self_block_rate: rate,
+        ..*gvi.options()
+    };
+    gvi.with_options(options)
+}
+
+/// A built-in N-body scene: the system, its initial state and the scene's step.
+fn scene_nbody(name: &str) -> (NBody, InitialState, f64) {
+    let scene = Scene::load(name).unwrap();
+    let built = scene.build().unwrap();
+    let nbody = built.euclidean().unwrap().as_nbody().unwrap().clone();
+    (nbody, built.initial, scene.method.h)
+}
+
+/// Allocations in `steps` steps after a first one that warms the workspace up.
+fn allocations_per_run<L: Lagrangian>(
+    gvi: &GalerkinIntegrator<AnyBasis, QuadratureRule>,
+    lag: &L,
+    init: &InitialState,
+    steps: usize,
+) -> usize {
+    let mut ws = gvi.workspace(lag).unwrap();
+    let d = init.q.len();
+    let (mut q, mut p) = (init.q.clone(), init.p.clone());
+    let (mut qn, mut pn) = (vec![0.0; d], vec![0.0; d]);
+    gvi.step(lag, &mut ws, &q, &p, &mut qn, &mut pn).unwrap();
+    let before = allocations();
+    for _ in 0..steps {
+        std::mem::swap(&mut q, &mut qn);
+        std::mem::swap(&mut p, &mut pn);
+        gvi.step(lag, &mut ws, &q, &p, &mut qn, &mut pn).unwrap();
+    }
+    allocations() - before
 }
 
 struct Case<'a, L: Lagrangian> {
@@ -120,16 +166,14 @@ fn every_solver_gives_the_exact_newton_map_across_bases_and_systems() {
     };
     let w = agreement(&c, &BasisKind::ALL);
     assert!(w <= bound, "coupled: {w:e}");
-    let scene = Scene::load("outer-solar-system").unwrap();
-    let built = scene.build().unwrap();
-    let nbody = built.euclidean().unwrap().as_nbody().unwrap().clone();
+    let (nbody, init, h) = scene_nbody("outer-solar-system");
     let o = Case {
         name: "outer solar system",
         lag: &nbody,
-        q0: &built.initial.q,
-        p0: &built.initial.p,
+        q0: &init.q,
+        p0: &init.p,
         n: 12,
-        h: scene.method.h,
+        h,
         steps: 20,
     };
     let w = agreement(&o, &[BasisKind::Chebyshev, BasisKind::Legendre]);
@@ -249,10 +293,8 @@ fn every_solver_computes_a_symplectic_map() {
 /// 3.3e-18 for the four solvers against a bound of 1.2e-16; loosely solved, 4.4e-12.
 #[test]
 fn every_solver_conserves_the_noether_momenta() {
-    let scene = Scene::load("outer-solar-system").unwrap();
-    let built = scene.build().unwrap();
-    let nbody = built.euclidean().unwrap().as_nbody().unwrap().clone();
-    let (q0, p0) = (&built.initial.q, &built.initial.p);
+    let (nbody, init, h) = scene_nbody("outer-solar-system");
+    let (q0, p0) = (&init.q, &init.p);
     let steps = 100;
     let maps: Vec<(&str, Box<dyn MomentumMap>)> = vec![
         ("P_x", Box::new(Translation::axis(3, 6, 0).unwrap())),
@@ -270,7 +312,7 @@ fn every_solver_conserves_the_noether_momenta() {
     );
     let bound = 1000.0 * f64::EPSILON * (steps as f64).sqrt() * scale;
     let drift = |opts: Option<NewtonOptions>, solver| {
-        let mut gvi = with_solver(BasisKind::Chebyshev, 12, scene.method.h, solver);
+        let mut gvi = with_solver(BasisKind::Chebyshev, 12, h, solver);
         if let Some(o) = opts {
             gvi = gvi.with_options(NewtonOptions { solver, ..o });
         }
@@ -341,25 +383,10 @@ fn every_solver_reports_failures_with_the_partial_trajectory() {
 /// No solver allocates inside the step loop (after the workspace is built).
 #[test]
 fn no_solver_allocates_per_step() {
-    let scene = Scene::load("outer-solar-system").unwrap();
-    let built = scene.build().unwrap();
-    let nbody = built.euclidean().unwrap().as_nbody().unwrap().clone();
+    let (nbody, init, h) = scene_nbody("outer-solar-system");
     for solver in StageSolver::ALL {
-        let gvi = with_solver(BasisKind::Chebyshev, 12, scene.method.h, solver);
-        let mut ws = gvi.workspace(&nbody).unwrap();
-        let d = built.initial.q.len();
-        let (mut q, mut p) = (built.initial.q.clone(), built.initial.p.clone());
-        let (mut qn, mut pn) = (vec![0.0; d], vec![0.0; d]);
-        gvi.step(&nbody, &mut ws, &q, &p, &mut qn, &mut pn).unwrap();
-        std::mem::swap(&mut q, &mut qn);
-        std::mem::swap(&mut p, &mut pn);
-        let before = allocations();
-        for _ in 0..10 {
-            gvi.step(&nbody, &mut ws, &q, &p, &mut qn, &mut pn).unwrap();
-            std::mem::swap(&mut q, &mut qn);
-            std::mem::swap(&mut p, &mut pn);
-        }
-        let n = allocations() - before;
+        let gvi = with_solver(BasisKind::Chebyshev, 12, h, solver);
+        let n = allocations_per_run(&gvi, &nbody, &init, 10);
         assert_eq!(n, 0, "{solver}: {n} allocations in 10 steps");
     }
 }
@@ -376,9 +403,7 @@ fn matrix_free_products_give_the_same_map() {
     let h = config.step();
     let krylov = with_solver(BasisKind::Chebyshev, 8, h, StageSolver::NewtonKrylov);
     assert!(krylov.workspace(&ring).unwrap().uses_matrix_free_products());
-    let scene = Scene::load("solar-system").unwrap();
-    let built = scene.build().unwrap();
-    let ten = built.euclidean().unwrap().as_nbody().unwrap().clone();
+    let (ten, _, _) = scene_nbody("solar-system");
     assert!(!krylov.workspace(&ten).unwrap().uses_matrix_free_products());
     let a = krylov.integrate(&ring, 0.0, &init.q, &init.p, 3).unwrap();
     let b = with_solver(BasisKind::Chebyshev, 8, h, StageSolver::Kronecker)
@@ -403,10 +428,7 @@ fn matrix_free_products_give_the_same_map() {
 /// ~1e-10 AU).
 #[test]
 fn steps_the_velocity_form_cannot_solve_go_to_the_nodal_solvers() {
-    let scene = Scene::load("solar-system").unwrap();
-    let built = scene.build().unwrap();
-    let nbody = built.euclidean().unwrap().as_nbody().unwrap().clone();
-    let init = &built.initial;
+    let (nbody, init, _) = scene_nbody("solar-system");
     let run = |solver| {
         with_solver(BasisKind::Chebyshev, 25, 100.0, solver)
             .integrate(&nbody, init.t0, &init.q, &init.p, 20)
@@ -438,18 +460,10 @@ fn steps_the_velocity_form_cannot_solve_go_to_the_nodal_solvers() {
 /// falls back (9.5 iterations per step, 1.7e-14 from exact Newton); without, all 10 do (3.0e-14).
 #[test]
 fn exact_self_blocks_of_the_fast_bodies_make_the_frozen_iteration_contract() {
-    let scene = Scene::load("solar-system").unwrap();
-    let built = scene.build().unwrap();
-    let nbody = built.euclidean().unwrap().as_nbody().unwrap().clone();
-    let init = &built.initial;
+    let (nbody, init, _) = scene_nbody("solar-system");
     let steps = 10;
     let run = |solver, rate| {
-        let gvi = with_solver(BasisKind::Chebyshev, 16, 100.0, solver);
-        let options = NewtonOptions {
-            self_block_rate: rate,
-            ..*gvi.options()
-        };
-        gvi.with_options(options)
+        with_solver_rate(BasisKind::Chebyshev, 16, 100.0, solver, rate)
             .integrate(&nbody, init.t0, &init.q, &init.p, steps)
             .unwrap()
     };
@@ -477,18 +491,7 @@ fn exact_self_blocks_of_the_fast_bodies_make_the_frozen_iteration_contract() {
     // The self-blocks are assembled and factorised in the workspace's buffers: no allocation
     // per step.
     let gvi = with_solver(BasisKind::Chebyshev, 16, 100.0, StageSolver::Kronecker);
-    let mut ws = gvi.workspace(&nbody).unwrap();
-    let d = init.q.len();
-    let (mut q, mut p) = (init.q.clone(), init.p.clone());
-    let (mut qn, mut pn) = (vec![0.0; d], vec![0.0; d]);
-    gvi.step(&nbody, &mut ws, &q, &p, &mut qn, &mut pn).unwrap();
-    let before = allocations();
-    for _ in 0..5 {
-        std::mem::swap(&mut q, &mut qn);
-        std::mem::swap(&mut p, &mut pn);
-        gvi.step(&nbody, &mut ws, &q, &p, &mut qn, &mut pn).unwrap();
-    }
-    assert_eq!(allocations() - before, 0);
+    assert_eq!(allocations_per_run(&gvi, &nbody, &init, 5), 0);
 }
 
 /// More fast bodies than self-block buffers: a 32-body ring at four times its usual step
@@ -506,12 +509,7 @@ fn the_fastest_bodies_get_the_self_blocks_when_there_are_many() {
     let h = 4.0 * config.step();
     let steps = 3;
     let run = |solver, rate| {
-        let gvi = with_solver(BasisKind::Chebyshev, 10, h, solver);
-        let options = NewtonOptions {
-            self_block_rate: rate,
-            ..*gvi.options()
-        };
-        gvi.with_options(options)
+        with_solver_rate(BasisKind::Chebyshev, 10, h, solver, rate)
             .integrate(&ring, 0.0, &init.q, &init.p, steps)
             .unwrap()
     };
