@@ -464,21 +464,41 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let (guess, evals) = self.initial_guess(lag, ws, q, p);
         stats.guess = guess;
         stats.gradient_evaluations += evals;
-        if let Err(first) = self.solve_stage_equations(lag, ws, p, &mut stats) {
-            // Fallback: Newton from each of the other guesses before giving up (with very large
-            // steps the residual-best guess can lie in the basin of no root, or of another).
+        ws.newton.start.copy_from_slice(&ws.newton.coeffs);
+        let solver = self.options().solver;
+        if let Err(first) = self.solve_stage_equations(lag, ws, p, &mut stats, solver) {
+            // Fallbacks before giving up. A structured solver that failed hands the step to
+            // exact Newton, first from the same guess (its iterations can leave the basin the
+            // dense solver keeps when the step is hard, e.g. an under-resolved Mercury), so
+            // that no solver fails where `exact` succeeds. Then Newton from each of the other
+            // guesses (with very large steps the residual-best guess can lie in the basin of
+            // no root, or of another).
             let mut solved = false;
+            let retry = if self.stage_solver.is_none() && solver != StageSolver::Exact {
+                stats.fallbacks += 1;
+                ws.newton.coeffs.copy_from_slice(&ws.newton.start);
+                ws.newton.residual_ready = None;
+                solved = self
+                    .solve_stage_equations(lag, ws, p, &mut stats, StageSolver::Exact)
+                    .is_ok();
+                StageSolver::Exact
+            } else {
+                solver
+            };
             for g in [
                 InitialGuess::Predictor,
                 InitialGuess::Extrapolate,
                 InitialGuess::Linear,
                 InitialGuess::Constant,
             ] {
-                if g == guess || !self.make_guess(lag, ws, g, q, p) {
+                if solved || g == guess || !self.make_guess(lag, ws, g, q, p) {
                     continue;
                 }
                 ws.newton.coeffs.copy_from_slice(&ws.guess.cand);
-                if self.solve_stage_equations(lag, ws, p, &mut stats).is_ok() {
+                if self
+                    .solve_stage_equations(lag, ws, p, &mut stats, retry)
+                    .is_ok()
+                {
                     stats.guess = g;
                     solved = true;
                     break;
@@ -501,8 +521,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
     }
 
     /// The stage equations of an initial-value step from the iterate in `ws.newton.coeffs`, by the
-    /// integrator's custom stage solver if it has one, else by the built-in one its options
-    /// name. A custom solver's result is re-evaluated here, so the impulse and ∂S/∂Q in the
+    /// integrator's custom stage solver if it has one, else by the built-in `solver`. A custom solver's result is re-evaluated here, so the impulse and ∂S/∂Q in the
     /// workspace belong to the iterate it returns.
     fn solve_stage_equations<L: Lagrangian>(
         &self,
@@ -510,9 +529,10 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         ws: &mut Workspace,
         p: &[f64],
         stats: &mut StepStats,
+        solver: StageSolver,
     ) -> std::result::Result<(), StepFailure> {
         let Some(custom) = self.stage_solver.clone() else {
-            return self.newton(lag, ws, Mode::InitialValue, p, stats, self.options().solver);
+            return self.newton(lag, ws, Mode::InitialValue, p, stats, solver);
         };
         use super::equations::{StageEquations, StepEquations};
         let mut equations = StepEquations::new(self, lag, ws, p, stats);

@@ -30,6 +30,9 @@ pub(crate) struct NewtonState {
     pub impulse: Vec<f64>,
     /// … and its low-order part (the impulse is hi + lo to about twice the working precision).
     pub impulse_lo: Vec<f64>,
+    /// The step's initial guess (n×D), kept for a retry with exact Newton when a structured
+    /// solver fails from it.
+    pub start: Vec<f64>,
     /// The stage residual of the iterate is already in the workspace (its norm).
     pub residual_ready: Option<f64>,
     /// The Newton matrix ((n−1)D)².
@@ -76,6 +79,7 @@ impl NewtonState {
             last_lo: vec![0.0; d],
             impulse: vec![0.0; d],
             impulse_lo: vec![0.0; d],
+            start: vec![0.0; n * d],
             residual_ready: None,
             jac: vec![0.0; nu * nu],
             lu: Lu::with_capacity(nu),
