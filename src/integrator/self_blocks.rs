@@ -4,7 +4,8 @@
 //! The frozen-Hessian solve of [`super::kronecker`] replaces every node Jacobian H_j by the
 //! step's mean H̄. For a body that turns through a large angle in one step (Mercury at
 //! h = 100 d: (h ω)² ≈ 50) the neglected variation H_j − H̄ is larger than the kinetic term in
-//! the low modes, and GMRES has to recover those modes one iteration at a time. For such a
+//! the low modes: the frozen iteration stalls, and GMRES has to recover those modes one
+//! iteration at a time. For such a
 //! block c (b coordinates) the preconditioner instead solves its exact, time-varying
 //! self-block of the Newton matrix,
 //!
@@ -12,8 +13,9 @@
 //!
 //! ((n−1)b)², factorised once per freeze; the other blocks keep the Kronecker solve (which
 //! is block diagonal per body already, so the two combine into one block-Jacobi
-//! preconditioner). A block is treated exactly when h² max |μ| > [`FAST_RATE`], μ the
-//! eigenvalues of its frozen block relative to its mass.
+//! preconditioner). A block is treated exactly when h² max |μ| exceeds the rate
+//! (`NewtonOptions::self_block_rate`, default [`FAST_RATE`]), μ the eigenvalues of its frozen
+//! block relative to its mass; at most [`MAX_SELF_BLOCKS`] blocks, the fastest.
 
 use crate::linalg::{Lu, Strided, gemm};
 
@@ -26,7 +28,7 @@ pub(crate) const FAST_RATE: f64 = 4.0;
 /// ((n − 1) b)² per block, and the factorisations per freeze for large N.
 pub(crate) const MAX_SELF_BLOCKS: usize = 8;
 
-/// The exact self-blocks of one workspace (allocated once; at most D/b blocks).
+/// The exact self-blocks of one workspace (allocated once, for at most [`MAX_SELF_BLOCKS`]).
 #[derive(Debug, Clone)]
 pub(crate) struct SelfBlocks {
     b: usize,
