@@ -340,11 +340,7 @@ impl KroneckerWork {
             &mut self.w,
             rd,
         );
-        let lt = Strided {
-            offset: 0,
-            row_stride: 1,
-            col_stride: d,
-        };
+        let lt = Strided::transposed(d);
         gemm(
             d,
             d,

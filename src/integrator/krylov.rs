@@ -152,11 +152,7 @@ impl Operator<'_> {
                 gemm(1, d, d, w, node, x1, self.hall, rh, 0.0, nf, x1);
             }
         }
-        let phi_t = Strided {
-            offset: 0,
-            row_stride: 1,
-            col_stride: n,
-        };
+        let phi_t = Strided::transposed(n);
         gemm(k, m, d, 1.0, &t.phi, phi_t, nf, rd, 1.0, y, rd);
         // Row block 0 += Σ_{a ≥ 1} u_a (row block a).
         let (first, rest) = y.split_at_mut(d);

@@ -148,11 +148,7 @@ impl SelfBlocks {
                             self.weighted[j * k + e] = w * t.phi[j * n + e + 1];
                         }
                     }
-                    let phi_t = Strided {
-                        offset: 0,
-                        row_stride: 1,
-                        col_stride: n,
-                    };
+                    let phi_t = Strided::transposed(n);
                     let rk = Strided::rows(0, k);
                     gemm(
                         k,

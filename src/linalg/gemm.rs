@@ -25,6 +25,16 @@ impl Strided {
         }
     }
 
+    /// The transpose of dense row-major storage with `cols` columns starting at offset 0:
+    /// element (i, j) is stored entry (j, i), so the view has contiguous columns.
+    pub fn transposed(cols: usize) -> Self {
+        Strided {
+            offset: 0,
+            row_stride: 1,
+            col_stride: cols,
+        }
+    }
+
     fn last(&self, rows: usize, cols: usize) -> usize {
         self.offset + (rows.max(1) - 1) * self.row_stride + (cols.max(1) - 1) * self.col_stride
     }
@@ -41,11 +51,7 @@ pub fn gemm_transposed(
     beta: f64,
     c: &mut [f64],
 ) {
-    let at = Strided {
-        offset: 0,
-        row_stride: 1,
-        col_stride: m,
-    };
+    let at = Strided::transposed(m);
     let rn = Strided::rows(0, n);
     gemm(m, k, n, 1.0, a, at, b, rn, beta, c, rn);
 }
@@ -358,28 +364,8 @@ mod gemm_tests {
             for n in 1..=4 {
                 let b: Vec<f64> = (0..k * n).map(|x| (x as f64 * 0.7).cos()).collect();
                 let bt: Vec<f64> = (0..n * k).map(|idx| b[(idx % k) * n + idx / k]).collect();
-                let a_views = [
-                    (&a, Strided::rows(0, k)),
-                    (
-                        &at,
-                        Strided {
-                            offset: 0,
-                            row_stride: 1,
-                            col_stride: m,
-                        },
-                    ),
-                ];
-                let b_views = [
-                    (&b, Strided::rows(0, n)),
-                    (
-                        &bt,
-                        Strided {
-                            offset: 0,
-                            row_stride: 1,
-                            col_stride: k,
-                        },
-                    ),
-                ];
+                let a_views = [(&a, Strided::rows(0, k)), (&at, Strided::transposed(m))];
+                let b_views = [(&b, Strided::rows(0, n)), (&bt, Strided::transposed(k))];
                 for (av, sa) in a_views {
                     for (bv, sb) in b_views {
                         for (alpha, beta) in [(1.0, 0.0), (2.0, 1.0), (-1.5, 0.5)] {
@@ -433,11 +419,7 @@ mod gemm_tests {
             &a,
             Strided::rows(0, k),
             &bt,
-            Strided {
-                offset: 0,
-                row_stride: 1,
-                col_stride: k,
-            },
+            Strided::transposed(k),
             0.5,
             &mut c,
             sc,
@@ -475,14 +457,7 @@ mod gemm_tests {
                 })
                 .collect();
             let b: Vec<f64> = (0..k * n + 3).map(|x| (x as f64 * 0.71).cos()).collect();
-            let views = [
-                Strided::rows(0, k),
-                Strided {
-                    offset: 0,
-                    row_stride: 1,
-                    col_stride: m,
-                },
-            ];
+            let views = [Strided::rows(0, k), Strided::transposed(m)];
             for sa in views {
                 for (alpha, beta) in [(1.0, 0.0), (1.0, 1.0), (-1.5, 0.5)] {
                     let sb = Strided::rows(3, n);
