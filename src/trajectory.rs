@@ -1,28 +1,44 @@
 //! Solutions: states at the step ends plus every step's Galerkin curve (dense output,
 //! [`Trajectory::curve`] as a [`GalerkinCurveRef`]).
 
-use crate::basis::{AnyBasis, BasisKind};
+use crate::basis::{Basis, BasisKind};
 use crate::curve::GalerkinCurveRef;
 use crate::error::{GviError, Result};
 use crate::lagrangian::Lagrangian;
-use crate::quadrature::QuadratureKind;
 use crate::stats::StepStats;
 use serde::{Deserialize, Serialize};
-use std::sync::OnceLock;
+use std::sync::{Arc, OnceLock};
+
+/// A basis shared by a trajectory and the integrator that made it.
+pub type SharedBasis = Arc<dyn Basis>;
+
+/// The bases a trajectory evaluates its curves with, one per distinct n.
+type BasisTable = Vec<(usize, SharedBasis)>;
 
 /// The result of [`GalerkinIntegrator::integrate`](crate::GalerkinIntegrator::integrate):
 /// (q_k, p_k) at t_k = t0 + k h, and each step's Galerkin coefficients, so that q(t), q̇(t)
 /// and p(t) = ∂L/∂v(q(t), q̇(t)) can be read at any time in [t0, t_end].
 ///
-/// Serialises with serde; the basis used for dense output is rebuilt from its kind and n.
+/// The trajectory holds the basis its curves were computed in (the integrator's own value, a
+/// user's basis as much as a built-in one), so dense output never depends on a name.
+///
+/// Serialises with serde. The basis is recorded by name and n: a deserialised trajectory of a
+/// built-in basis rebuilds it; one of a user's basis
+/// ([`user_basis`](Trajectory::user_basis)) answers dense-output queries with
+/// [`GviError::BasisNotAttached`] until the basis is attached again with
+/// [`attach_basis`](Trajectory::attach_basis) — never with a silently different curve.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Trajectory {
-    /// Basis of the Galerkin curves.
-    pub basis: BasisKind,
+    /// Name of the basis of the Galerkin curves ([`Basis::name`]).
+    pub basis: String,
+    /// The basis is not one of the crate's ([`BasisKind::of`] is `None`): a deserialised
+    /// trajectory needs it attached for dense output.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub user_basis: bool,
     /// Number of basis functions.
     pub n: usize,
-    /// Quadrature family.
-    pub quadrature: QuadratureKind,
+    /// Name of the quadrature family ([`QuadratureRule::family`](crate::quadrature::QuadratureRule::family)).
+    pub quadrature: String,
     /// Quadrature points.
     pub quad_points: usize,
     /// Step size.
@@ -44,16 +60,18 @@ pub struct Trajectory {
     /// empty when every step uses `n`.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub step_n: Vec<usize>,
+    /// The bases of the curves, set by the integrator (or by
+    /// [`attach_basis`](Trajectory::attach_basis)), else rebuilt once from a built-in name.
     #[serde(skip)]
-    basis_cache: OnceLock<Option<AnyBasis>>,
+    bases: OnceLock<BasisTable>,
 }
 
 impl Trajectory {
-    #[allow(clippy::too_many_arguments)]
+    /// An empty trajectory whose curves are in `basis` (n = `basis.len()`), computed with a
+    /// quadrature of family `quadrature` and `quad_points` points.
     pub(crate) fn new(
-        basis: BasisKind,
-        n: usize,
-        quadrature: QuadratureKind,
+        basis: SharedBasis,
+        quadrature: &str,
         quad_points: usize,
         h: f64,
         t0: f64,
@@ -61,10 +79,14 @@ impl Trajectory {
         capacity: usize,
     ) -> Self {
         let cap = capacity.min(1 << 20);
+        let n = basis.len();
+        let bases = OnceLock::new();
+        let _ = bases.set(vec![(n, basis.clone())]);
         Trajectory {
-            basis,
+            basis: basis.name().to_string(),
+            user_basis: false,
             n,
-            quadrature,
+            quadrature: quadrature.to_string(),
             quad_points,
             h,
             t0,
@@ -74,8 +96,82 @@ impl Trajectory {
             coefficients: Vec::with_capacity(cap),
             stats: Vec::with_capacity(cap),
             step_n: Vec::new(),
-            basis_cache: OnceLock::new(),
+            bases,
         }
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    /// An empty trajectory for a built-in basis kind whose n may vary from step to step
+    /// (tolerance-driven runs): the bases are built on first use.
+    pub(crate) fn of_kind(
+        kind: BasisKind,
+        n: usize,
+        quadrature: &str,
+        quad_points: usize,
+        h: f64,
+        t0: f64,
+        dim: usize,
+        capacity: usize,
+    ) -> Self {
+        let cap = capacity.min(1 << 20);
+        Trajectory {
+            basis: kind.as_str().to_string(),
+            user_basis: false,
+            n,
+            quadrature: quadrature.to_string(),
+            quad_points,
+            h,
+            t0,
+            dim,
+            q: Vec::with_capacity(cap + 1),
+            p: Vec::with_capacity(cap + 1),
+            coefficients: Vec::with_capacity(cap),
+            stats: Vec::with_capacity(cap),
+            step_n: Vec::new(),
+            bases: OnceLock::new(),
+        }
+    }
+
+    /// Mark the trajectory's basis as one written outside the crate (set by the integrator
+    /// from the basis's type).
+    pub(crate) fn set_user_basis(&mut self, user: bool) {
+        self.user_basis = user;
+    }
+
+    /// Attach the basis of a deserialised trajectory's curves, so that dense output works
+    /// again: needed for a user's basis ([`user_basis`](Trajectory::user_basis)), allowed for
+    /// any. `family` builds the basis for a given n (every distinct n of the trajectory's
+    /// steps is built once).
+    ///
+    /// Errors: [`GviError::Mismatch`] when the basis's name is not the recorded one or
+    /// it does not have the n asked for; the error of `family`.
+    pub fn attach_basis<B: Basis>(
+        &mut self,
+        mut family: impl FnMut(usize) -> Result<B>,
+    ) -> Result<()> {
+        let mut table: BasisTable = Vec::new();
+        for n in self.distinct_n() {
+            let b = family(n)?;
+            if b.name() != self.basis || b.len() != n {
+                return Err(GviError::Mismatch {
+                    expected: format!("{} with n = {n}", self.basis),
+                    got: format!("{} with n = {}", b.name(), b.len()),
+                });
+            }
+            table.push((n, Arc::new(b)));
+        }
+        self.bases = OnceLock::new();
+        let _ = self.bases.set(table);
+        Ok(())
+    }
+
+    /// Every n the trajectory's steps use, in increasing order.
+    fn distinct_n(&self) -> Vec<usize> {
+        let mut ns: Vec<usize> = self.step_n.clone();
+        ns.push(self.n);
+        ns.sort_unstable();
+        ns.dedup();
+        ns
     }
 
     pub(crate) fn push_state(&mut self, q: &[f64], p: &[f64]) {
@@ -146,15 +242,44 @@ impl Trajectory {
         self.stats.iter().map(|s| s.gradient_evaluations).sum()
     }
 
-    fn basis(&self) -> Result<&AnyBasis> {
-        self.basis_cache
-            .get_or_init(|| self.basis.build(self.n).ok())
-            .as_ref()
-            .ok_or_else(|| GviError::InvalidBasisSize {
-                n: self.n,
-                basis: self.basis.to_string(),
-                reason: "cannot rebuild the basis of this trajectory".into(),
-            })
+    /// The basis of the curves with n functions: the one the integrator used or the user
+    /// attached, else (deserialised, built-in) rebuilt from the recorded name.
+    fn basis_with(&self, n: usize) -> Result<&dyn Basis> {
+        if self.bases.get().is_none() {
+            if self.user_basis {
+                return Err(GviError::BasisNotAttached {
+                    basis: self.basis.clone(),
+                });
+            }
+            let kind: BasisKind = self.basis.parse()?;
+            let mut table: BasisTable = Vec::new();
+            for m in self.distinct_n() {
+                if m >= 2 {
+                    table.push((m, Arc::new(kind.build(m)?)));
+                }
+            }
+            let _ = self.bases.set(table);
+        }
+        let found = self
+            .bases
+            .get()
+            .and_then(|t| t.iter().find(|(m, _)| *m == n))
+            .map(|(_, b)| &**b);
+        match found {
+            Some(b) => Ok(b),
+            None if self.user_basis => Err(GviError::BasisNotAttached {
+                basis: self.basis.clone(),
+            }),
+            None => {
+                // A built-in basis at an n the table does not hold (not expected: every n of
+                // the steps is in it).
+                Err(GviError::InvalidBasisSize {
+                    n,
+                    basis: self.basis.clone(),
+                    reason: "no basis of this size is attached to the trajectory".into(),
+                })
+            }
+        }
     }
 
     /// Locate t: (step index, τ ∈ [0, 1]).
@@ -209,12 +334,14 @@ impl Trajectory {
         let (n, d) = (curve.n(), self.dim);
         let (mut phi, mut dphi) = (vec![0.0; n], vec![0.0; n]);
         let (mut q, mut v) = (vec![0.0; d], vec![0.0; d]);
-        if n == self.n {
-            curve.state_into(self.basis()?, tau, &mut phi, &mut dphi, &mut q, &mut v);
-        } else {
-            let basis = self.basis.build(n)?;
-            curve.state_into(&basis, tau, &mut phi, &mut dphi, &mut q, &mut v);
-        }
+        curve.state_into(
+            self.basis_with(n)?,
+            tau,
+            &mut phi,
+            &mut dphi,
+            &mut q,
+            &mut v,
+        );
         Ok((q, v))
     }
 

@@ -332,7 +332,7 @@ fn run_system(system: &AnySystem, scene: &BuiltScene, options: RunOptions) -> Re
             "{} basis n = {}, {} with {} points, h = {}, {} solver",
             m.basis,
             m.n,
-            gvi.rule().kind,
+            gvi.rule().family,
             gvi.rule().len(),
             fmt_number(m.h),
             m.solver

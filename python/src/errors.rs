@@ -111,7 +111,9 @@ pub fn core_error(e: GviError) -> PyErr {
         GviError::DimensionMismatch { .. } => ShapeError::new_err(msg),
         GviError::NonFinite { .. } => NonFiniteError::new_err(msg),
         GviError::InvalidParameter { .. } => InvalidParameterError::new_err(msg),
-        GviError::InvalidInput { .. } => InvalidInputError::new_err(msg),
+        GviError::InvalidInput { .. }
+        | GviError::BasisNotAttached { .. }
+        | GviError::Mismatch { .. } => InvalidInputError::new_err(msg),
         GviError::NewtonFailure { .. }
         | GviError::PeriodicNotConverged { .. }
         | GviError::PeriodicUnderResolved { .. } => SolverError::new_err(msg),

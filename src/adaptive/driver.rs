@@ -109,10 +109,10 @@ pub fn integrate_adaptive<L: Lagrangian>(
         ErrorControl::Indicator => budget.powf(1.0 / INDICATOR_EXPONENT),
         _ => budget,
     };
-    let mut traj = Trajectory::new(
+    let mut traj = Trajectory::of_kind(
         opts.basis,
         opts.ladder[0],
-        opts.quadrature,
+        opts.quadrature.as_str(),
         opts.quadrature.default_points(opts.ladder[0]),
         opts.h,
         t0,
@@ -121,7 +121,16 @@ pub fn integrate_adaptive<L: Lagrangian>(
     );
     traj.push_state(q0, p0);
     let mut run = AdaptiveRun {
-        trajectory: Trajectory::new(opts.basis, 0, opts.quadrature, 0, opts.h, t0, d, 0),
+        trajectory: Trajectory::of_kind(
+            opts.basis,
+            0,
+            opts.quadrature.as_str(),
+            0,
+            opts.h,
+            t0,
+            d,
+            0,
+        ),
         indicators: Vec::with_capacity(steps),
         estimates: Vec::with_capacity(steps),
         control,

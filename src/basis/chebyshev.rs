@@ -1,6 +1,6 @@
 //! Lagrange polynomials at the Chebyshev–Lobatto points: the paper's spectral basis (§3.2.1).
 
-use super::{Basis, BasisKind, chebyshev_lobatto_points, check_size};
+use super::{Basis, chebyshev_lobatto_points, check_size};
 use crate::error::Result;
 
 /// Lagrange interpolating polynomials ℓ_0 … ℓ_{n−1} at the n Chebyshev–Lobatto points
@@ -110,10 +110,6 @@ impl Basis for ChebyshevLagrange {
 
     fn name(&self) -> &'static str {
         "chebyshev"
-    }
-
-    fn kind(&self) -> BasisKind {
-        BasisKind::Chebyshev
     }
 
     fn eval(&self, tau: f64, values: &mut [f64], derivatives: &mut [f64]) {

@@ -1,6 +1,6 @@
 //! The Fourier (sine) basis: linear end functions plus a sine series, docs/DESIGN.md §2.
 
-use super::{Basis, BasisKind, check_size};
+use super::{Basis, check_size};
 use crate::error::Result;
 
 /// Boundary-adapted Fourier basis: φ_0 = 1 − τ, φ_{n−1} = τ and the sines
@@ -65,10 +65,6 @@ impl Basis for Fourier {
 
     fn name(&self) -> &'static str {
         "fourier"
-    }
-
-    fn kind(&self) -> BasisKind {
-        BasisKind::Fourier
     }
 
     fn eval(&self, tau: f64, values: &mut [f64], derivatives: &mut [f64]) {

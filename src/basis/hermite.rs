@@ -1,7 +1,7 @@
 //! The Hermite (Hermite–Birkhoff) basis: end values and end derivatives as degrees of freedom,
 //! plus interior nodal values, docs/DESIGN.md §2.
 
-use super::{Basis, BasisKind, ChebyshevLagrange, check_size};
+use super::{Basis, ChebyshevLagrange, check_size};
 use crate::error::Result;
 
 /// Generalised Hermite basis of degree n − 1 (n ≥ 4). The degrees of freedom, in index order:
@@ -81,10 +81,6 @@ impl Basis for Hermite {
 
     fn name(&self) -> &'static str {
         "hermite"
-    }
-
-    fn kind(&self) -> BasisKind {
-        BasisKind::Hermite
     }
 
     fn eval(&self, tau: f64, values: &mut [f64], derivatives: &mut [f64]) {

@@ -1,6 +1,6 @@
 //! The modal boundary-adapted Legendre basis (integrated Legendre polynomials), docs/DESIGN.md §2.
 
-use super::{Basis, BasisKind, check_size};
+use super::{Basis, check_size};
 use crate::error::Result;
 
 /// Boundary-adapted modal Legendre basis of degree n − 1 (the "integrated Legendre" or
@@ -54,10 +54,6 @@ impl Basis for Legendre {
 
     fn name(&self) -> &'static str {
         "legendre"
-    }
-
-    fn kind(&self) -> BasisKind {
-        BasisKind::Legendre
     }
 
     fn eval(&self, tau: f64, values: &mut [f64], derivatives: &mut [f64]) {

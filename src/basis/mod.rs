@@ -52,7 +52,13 @@ use crate::error::{GviError, Result};
 use serde::{Deserialize, Serialize};
 
 /// A family of n functions on [0, 1] obeying the boundary-adapted contract.
-pub trait Basis {
+///
+/// A basis written outside the crate is a first-class citizen: it gets the step map, dense
+/// output, the tangent map, the discrete action and every study the built-in bases get. A
+/// [`Trajectory`](crate::Trajectory) keeps the basis itself (shared, hence `Send + Sync +
+/// 'static`) to evaluate its curves, so nothing has to name a built-in kind. The built-in
+/// kinds ([`BasisKind`]) are only names for scene files and the command line.
+pub trait Basis: std::fmt::Debug + Send + Sync + 'static {
     /// Number of basis functions n.
     fn len(&self) -> usize;
 
@@ -61,11 +67,10 @@ pub trait Basis {
         self.len() == 0
     }
 
-    /// Human-readable name, e.g. "chebyshev".
+    /// Human-readable name, e.g. "chebyshev". A serialised trajectory records it, and a
+    /// basis attached to a deserialised trajectory must answer the same name
+    /// ([`Trajectory::attach_basis`](crate::Trajectory::attach_basis)).
     fn name(&self) -> &'static str;
-
-    /// The kind, for serialisation and rebuilding (dense output of a stored trajectory).
-    fn kind(&self) -> BasisKind;
 
     /// Evaluate φ_i(τ) into `values[i]` and dφ_i/dτ into `derivatives[i]`, for all i.
     /// Both slices have length n. τ may lie outside [0, 1] (extrapolation).
@@ -132,6 +137,28 @@ impl BasisKind {
         }
     }
 
+    /// The built-in kind of `basis`, or `None` for a basis written outside the crate. Decided
+    /// by the basis's type, not by anything it answers, so a user's basis can never be
+    /// mistaken for a built-in one (a serialised trajectory of a built-in basis rebuilds it
+    /// by this kind; one of a user's basis needs the basis attached again).
+    pub fn of<B: Basis>(basis: &B) -> Option<BasisKind> {
+        let any = basis as &dyn std::any::Any;
+        if let Some(b) = any.downcast_ref::<AnyBasis>() {
+            return Some(b.kind());
+        }
+        if any.is::<ChebyshevLagrange>() {
+            Some(BasisKind::Chebyshev)
+        } else if any.is::<Legendre>() {
+            Some(BasisKind::Legendre)
+        } else if any.is::<Hermite>() {
+            Some(BasisKind::Hermite)
+        } else if any.is::<Fourier>() {
+            Some(BasisKind::Fourier)
+        } else {
+            None
+        }
+    }
+
     /// Build the basis with n functions.
     pub fn build(self, n: usize) -> Result<AnyBasis> {
         Ok(match self {
@@ -178,6 +205,18 @@ pub enum AnyBasis {
     Fourier(Fourier),
 }
 
+impl AnyBasis {
+    /// Which of the crate's bases this is.
+    pub fn kind(&self) -> BasisKind {
+        match self {
+            AnyBasis::Chebyshev(_) => BasisKind::Chebyshev,
+            AnyBasis::Legendre(_) => BasisKind::Legendre,
+            AnyBasis::Hermite(_) => BasisKind::Hermite,
+            AnyBasis::Fourier(_) => BasisKind::Fourier,
+        }
+    }
+}
+
 macro_rules! dispatch {
     ($self:ident, $b:ident => $e:expr) => {
         match $self {
@@ -195,9 +234,6 @@ impl Basis for AnyBasis {
     }
     fn name(&self) -> &'static str {
         dispatch!(self, b => b.name())
-    }
-    fn kind(&self) -> BasisKind {
-        dispatch!(self, b => b.kind())
     }
     fn eval(&self, tau: f64, values: &mut [f64], derivatives: &mut [f64]) {
         dispatch!(self, b => b.eval(tau, values, derivatives))
@@ -329,6 +365,7 @@ mod kind_tests {
             assert_eq!(json, format!("\"{}\"", kind.as_str()));
             let b = kind.build(6).unwrap();
             assert_eq!((b.kind(), b.len(), b.name()), (kind, 6, kind.as_str()));
+            assert_eq!(BasisKind::of(&b), Some(kind));
             // AnyBasis dispatches eval and the contract holds through it.
             assert!(contract_tests::check_contract(&b) < 1e-6);
         }

@@ -111,6 +111,26 @@ pub enum GviError {
         /// Why it stopped (diverged, non-finite, singular Jacobian, iteration limit).
         reason: String,
     },
+    /// A deserialised trajectory's curves are in a basis written outside the crate, which
+    /// serialisation cannot carry: attach it with
+    /// [`Trajectory::attach_basis`](crate::Trajectory::attach_basis) before dense output.
+    #[error(
+        "the trajectory's curves are in the user basis '{basis}', which is not attached: \
+         call Trajectory::attach_basis with it before reading the curves"
+    )]
+    BasisNotAttached {
+        /// Name of the basis recorded in the trajectory.
+        basis: String,
+    },
+    /// Two things that must belong together do not: a basis attached to a trajectory made with
+    /// another, or a workspace used with an integrator or system it was not made for.
+    #[error("mismatch: expected {expected}, got {got}")]
+    Mismatch {
+        /// What was expected.
+        expected: String,
+        /// What was given.
+        got: String,
+    },
     /// An input to a library function is invalid (named, with the reason).
     #[error("invalid {name}: {reason}")]
     InvalidInput {

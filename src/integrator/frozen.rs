@@ -155,32 +155,4 @@ impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIn
     pub fn has_velocity_form(&self) -> bool {
         self.tables().velocity.is_some()
     }
-
-    /// The solver `NewtonOptions::solver` names, with `Auto` resolved for this workspace.
-    pub(super) fn resolve_solver(
-        &self,
-        ws: &super::Workspace,
-        solver: super::StageSolver,
-    ) -> super::StageSolver {
-        use super::StageSolver;
-        match solver {
-            StageSolver::Auto | StageSolver::Modal => {
-                if ws.newton.kron.is_none() || (ws.n - 1) * ws.d <= AUTO_DENSE_SIZE {
-                    StageSolver::Exact
-                } else {
-                    match ws.newton.auto_level {
-                        0 | 1 => StageSolver::Kronecker,
-                        _ => StageSolver::NewtonKrylov,
-                    }
-                }
-            }
-            s => s,
-        }
-    }
 }
-
-/// Newton-system size (n − 1)·D up to which `Auto` takes the dense exact solver. Measured on
-/// Kepler (D = 2, h = 1, 200 steps): exact Newton is the fastest at n = 16 (size 30), the
-/// structured solvers and exact are within noise at n = 32 (size 62), and the frozen-Hessian
-/// solver is 1.8× faster at n = 64 (size 126); N-body scenes (D ≥ 18) are always above.
-const AUTO_DENSE_SIZE: usize = 64;

@@ -25,6 +25,7 @@
 //! [`NewtonOptions::compensated`] is off. The public coefficients
 //! ([`Workspace::coefficients`], `Trajectory::coefficients`) stay absolute Q.
 
+mod auto;
 mod dd;
 mod discrete_action;
 mod equations;
@@ -34,6 +35,7 @@ mod guess_state;
 mod kronecker;
 mod krylov;
 mod legendre_transform;
+mod linear;
 mod modal;
 mod newton;
 mod newton_state;
@@ -43,6 +45,7 @@ mod separable;
 mod solver;
 mod stage;
 mod stage_scratch;
+mod stepper;
 mod tangent;
 mod velocity_equations;
 mod velocity_form;
@@ -53,6 +56,7 @@ pub use discrete_action::DiscreteLagrangian;
 pub use equations::{Correction, StageEquations, StageSolve};
 pub use newton::{InitialGuess, NewtonOptions, StepFailure, StepStats};
 pub use solver::StageSolver;
+pub use stepper::Stepper;
 pub use tangent::{StepJacobian, TangentWorkspace};
 pub use workspace::{MATRIX_FREE_MIN_DIM, Workspace};
 
@@ -78,7 +82,8 @@ use crate::trajectory::Trajectory;
 /// ```
 #[derive(Debug, Clone)]
 pub struct GalerkinIntegrator<B: Basis = ChebyshevLagrange, Q: Quadrature = GaussLegendre> {
-    basis: B,
+    /// Shared with the trajectories the integrator makes, which evaluate their curves in it.
+    basis: std::sync::Arc<B>,
     quadrature: Q,
     rule: QuadratureRule,
     h: f64,
@@ -167,7 +172,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let rule = quadrature.rule()?;
         let tables = Tables::build(&basis, &rule)?;
         let integrator = GalerkinIntegrator {
-            basis,
+            basis: std::sync::Arc::new(basis),
             quadrature,
             rule,
             h,
@@ -311,9 +316,21 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         Ok(())
     }
 
-    /// A fresh workspace for `lagrangian` (allocates; reuse it across steps).
-    pub fn workspace<L: Lagrangian>(&self, lagrangian: &L) -> Result<Workspace> {
-        Workspace::new(self, lagrangian)
+    /// An empty trajectory of this integrator's curves (its basis, shared), for `capacity`
+    /// steps of dimension `dim` from `t0`.
+    pub(crate) fn empty_trajectory(&self, t0: f64, dim: usize, capacity: usize) -> Trajectory {
+        let basis: crate::trajectory::SharedBasis = self.basis.clone();
+        let mut traj = Trajectory::new(
+            basis,
+            &self.rule.family,
+            self.rule.len(),
+            self.h,
+            t0,
+            dim,
+            capacity,
+        );
+        traj.set_user_basis(BasisKind::of(&*self.basis).is_none());
+        traj
     }
 
     /// Validate an initial state for `lagrangian`.
@@ -324,6 +341,11 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         ensure_finite("initial position q0", q)?;
         ensure_finite("initial momentum p0", p)?;
         Ok(())
+    }
+
+    /// A fresh workspace for `lagrangian` (allocates; reuse it across steps).
+    pub fn workspace<L: Lagrangian>(&self, lagrangian: &L) -> Result<Workspace> {
+        Workspace::new(self, lagrangian)
     }
 
     /// Integrate `steps` steps from (q0, p0) at time t0, keeping every step's Galerkin
@@ -354,51 +376,20 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 value: t0,
             }));
         }
-        self.check_state(lagrangian, q0, p0).map_err(fail)?;
-        let mut ws = self.workspace(lagrangian).map_err(fail)?;
-        let d = lagrangian.dim();
-        let mut traj = Trajectory::new(
-            self.basis.kind(),
-            self.tables.n,
-            self.rule.kind,
-            self.rule.len(),
-            self.h,
-            t0,
-            d,
-            steps,
-        );
+        let mut stepper = self.stepper(lagrangian, t0, q0, p0).map_err(fail)?;
+        let mut traj = self.empty_trajectory(t0, lagrangian.dim(), steps);
         traj.push_state(q0, p0);
-        let mut q = q0.to_vec();
-        let mut p = p0.to_vec();
-        let mut q_next = vec![0.0; d];
-        let mut p_next = vec![0.0; d];
-        // Compensation terms of the running sums q and p (docs/DESIGN.md §4), kept across steps.
-        let (mut q_err, mut p_err) = (vec![0.0; d], vec![0.0; d]);
-        let compensated = self.options.compensated;
-        for k in 0..steps {
-            let t = t0 + k as f64 * self.h;
-            let result = if compensated {
-                self.step_compensated(lagrangian, &mut ws, &mut q, &mut q_err, &mut p, &mut p_err)
-            } else {
-                self.step(lagrangian, &mut ws, &q, &p, &mut q_next, &mut p_next)
-                    .inspect(|_| {
-                        std::mem::swap(&mut q, &mut q_next);
-                        std::mem::swap(&mut p, &mut p_next);
-                    })
-            };
-            match result {
-                Ok(stats) => {
-                    traj.push_step(ws.curve().starting_at(t), &q, &p, stats);
-                }
-                Err(failure) => {
+        for _ in 0..steps {
+            match stepper.step() {
+                Ok(stats) => traj.push_step(
+                    stepper.curve(),
+                    stepper.position(),
+                    stepper.momentum(),
+                    stats,
+                ),
+                Err(error) => {
                     return Err(IntegrationFailure {
-                        error: GviError::NewtonFailure {
-                            step: k,
-                            t,
-                            residual: failure.residual,
-                            iterations: failure.iterations,
-                            reason: failure.reason,
-                        },
+                        error,
                         partial: Some(Box::new(traj)),
                     });
                 }

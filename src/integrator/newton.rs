@@ -11,20 +11,7 @@ use crate::basis::Basis;
 use crate::lagrangian::Lagrangian;
 use crate::quadrature::Quadrature;
 
-/// The linear solve inside one Newton iteration.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Linear {
-    /// Dense LU of the exact Jacobian.
-    Dense,
-    /// The Kronecker solve of the frozen-Hessian Jacobian.
-    Frozen,
-    /// GMRES on the exact Jacobian, preconditioned by the Kronecker solve.
-    Krylov,
-}
-
-/// Solves without a frozen-Hessian failure after which `Auto` forgets the earlier ones (two
-/// failures within this window make it start the next solves with Newton–Krylov).
-const AUTO_CALM: usize = 8;
+use super::linear::Linear;
 
 /// Contraction per iteration above which the fixed-point iteration hands over to the frozen
 /// Hessian: slower, it needs more than ~20 cheap iterations where the frozen Hessian needs a
@@ -35,10 +22,6 @@ const FIXED_POINT_STALL: f64 = 0.2;
 /// iteration that stops shrinking is at the round-off floor of its residual, not stalled
 /// (Newton's quadratic iteration uses `NewtonOptions::floor_tolerance`, 1e-10, instead).
 const LINEAR_FLOOR: f64 = 1e-13;
-
-/// Solves for which `Auto` stays on the rung it escalated to before it tries the cheaper rung
-/// below again.
-const AUTO_HOLDOFF: usize = 32;
 
 /// Contraction per iteration above which the Kronecker solver's frozen Hessian is refrozen
 /// (once) and then abandoned for exact Newton within the step.
@@ -89,24 +72,6 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             && ws.newton.krylov.is_some()
             && self.tables().kron.is_some();
         let auto = matches!(solver, StageSolver::Auto | StageSolver::Modal);
-        if auto {
-            // Try the cheaper rung again once the hold-off has passed.
-            if ws.newton.auto_holdoff == 0 && ws.newton.auto_level > 1 {
-                ws.newton.auto_level -= 1;
-                ws.newton.auto_holdoff = AUTO_HOLDOFF;
-            }
-            ws.newton.auto_holdoff = ws.newton.auto_holdoff.saturating_sub(1);
-            ws.newton.auto_calm += 1;
-            if ws.newton.auto_calm > AUTO_CALM {
-                ws.newton.auto_recent = 0;
-            }
-        }
-        let escalate = |ws: &mut Workspace, level: usize| {
-            if auto && level > ws.newton.auto_level {
-                ws.newton.auto_level = level;
-                ws.newton.auto_holdoff = AUTO_HOLDOFF;
-            }
-        };
         let mut fixed_point = false;
         let mut linear = match (structured, self.resolve_solver(ws, solver)) {
             (true, StageSolver::Kronecker) => Linear::Frozen,
@@ -289,7 +254,6 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                         fixed_point = false;
                         have_lu = false;
                         stats.fallbacks += 1;
-                        escalate(ws, 1);
                     } else if stalled && !refrozen {
                         have_lu = false;
                         refrozen = true;
@@ -304,12 +268,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                         // Start the next solves with Newton–Krylov only when the frozen
                         // Hessian fails repeatedly, not at an occasional hard step (Kepler's
                         // periapsis).
-                        ws.newton.auto_calm = 0;
-                        ws.newton.auto_recent += 1;
-                        if ws.newton.auto_recent >= 2 {
-                            escalate(ws, 2);
-                            ws.newton.auto_recent = 0;
-                        }
+                        ws.auto.krylov.failure();
                         previous_increment = f64::INFINITY;
                         continue;
                     } else if stalled {
@@ -363,6 +322,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         q_next: &mut [f64],
         p_next: &mut [f64],
     ) -> std::result::Result<StepStats, StepFailure> {
+        self.check_workspace(lag, ws, q, p, [q_next.len(), p_next.len()])?;
         let stats = self.solve_step(lag, ws, q, p)?;
         let d = ws.d;
         let last = (ws.n - 1) * d;
@@ -391,6 +351,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         p: &mut [f64],
         p_err: &mut [f64],
     ) -> std::result::Result<StepStats, StepFailure> {
+        self.check_workspace(lag, ws, q, p, [q_err.len(), p_err.len()])?;
         ws.newton.base_err.copy_from_slice(q_err);
         ws.newton.p_err.copy_from_slice(p_err);
         let solved = self.solve_step(lag, ws, q, p);
@@ -434,6 +395,45 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         ws.guess.has_prev = true;
     }
 
+    /// Refuse a workspace made for another integrator or dimension, and states of the wrong
+    /// length, before anything is indexed (a workspace's tables are laid out for one basis,
+    /// quadrature, h and D). [`Stepper`](super::Stepper) owns its workspace, so there this
+    /// cannot happen.
+    fn check_workspace<L: Lagrangian>(
+        &self,
+        lag: &L,
+        ws: &Workspace,
+        q: &[f64],
+        p: &[f64],
+        outputs: [usize; 2],
+    ) -> std::result::Result<(), StepFailure> {
+        let d = ws.d;
+        let reason = if !ws.made_for.matches(self) {
+            format!(
+                "the workspace was made for {} but the integrator is {}",
+                ws.made_for,
+                super::workspace::MadeFor::of(self, lag.dim())
+            )
+        } else if lag.dim() != d || q.len() != d || p.len() != d || outputs != [d, d] {
+            format!(
+                "the workspace was made for dimension D = {d}; the Lagrangian has {}, the \
+                 state {} and {}, the outputs {} and {}",
+                lag.dim(),
+                q.len(),
+                p.len(),
+                outputs[0],
+                outputs[1]
+            )
+        } else {
+            return Ok(());
+        };
+        Err(StepFailure {
+            residual: f64::NAN,
+            iterations: 0,
+            reason,
+        })
+    }
+
     /// Solve the stage equations of one step from (q, p): on success `ws.newton.coeffs` holds the
     /// increments ΔQ and `ws.newton.impulse` the total impulse h Σ_j b_j L_q(c_j).
     fn solve_step<L: Lagrangian>(
@@ -445,13 +445,15 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
     ) -> std::result::Result<StepStats, StepFailure> {
         ws.newton.base.copy_from_slice(q);
         let mut stats = StepStats::default();
-        let auto = self.options().solver == StageSolver::Auto;
-        if self.velocity_form_applies(ws)
-            && !(auto && ws.velocity.as_mut().is_some_and(|v| v.holding_off()))
-        {
+        if self.velocity_form_applies(ws) {
             let solved = self.solve_velocity_form(lag, ws, q, p, &mut stats);
-            if let Some(v) = ws.velocity.as_mut() {
-                v.record(solved);
+            if solved {
+                ws.auto.velocity_gives_up.calm_solve();
+            } else {
+                ws.auto.velocity_gives_up.failure();
+                if let Some(v) = ws.velocity.as_mut() {
+                    v.has_prev = false;
+                }
             }
             if solved {
                 stats.gradient_evaluations += std::mem::take(&mut ws.guess.guess_force_evaluations);

@@ -1,18 +1,17 @@
 //! The state of one step's solve: the Newton iterate (the increments ΔQ_i = Q_i − u_i q_k),
 //! the compensated parts of the state and of the result, the linear solve (Newton matrix, LU,
-//! right-hand side, the structured solvers' buffers) and the rung `StageSolver::Auto` is on.
+//! right-hand side, the structured solvers' buffers).
 //!
 //! The iterate lives in increments from q_k so that q_{k+1} = q_k + ΔQ_{n−1} is known to full
 //! relative accuracy (docs/DESIGN.md §4); its low part `last_lo` and the state's low parts
 //! (`base_err`, `p_err`, from compensated stepping) are carried beside it. Some of this
-//! outlives a step on purpose: the factorisation (`lu_valid`, reused across steps when asked)
-//! and `Auto`'s rung with its hold-off counters.
+//! outlives a step on purpose: the factorisation (`lu_valid`, reused across steps when asked).
 
 use super::kronecker::KroneckerWork;
 use super::krylov::KrylovWork;
 use crate::linalg::Lu;
 
-/// The Newton iterate, its compensation terms, the linear solve and `Auto`'s state.
+/// The Newton iterate, its compensation terms and the linear solve.
 #[derive(Debug, Clone)]
 pub(crate) struct NewtonState {
     /// The Newton unknowns: increments ΔQ_i = Q_i − u_i q_k, row i (n×D; ΔQ_0 = 0).
@@ -49,16 +48,6 @@ pub(crate) struct NewtonState {
     pub kron: Option<KroneckerWork>,
     /// Buffers of the Newton–Krylov solver (present with `kron`).
     pub krylov: Option<KrylovWork>,
-    /// `StageSolver::Auto`'s current rung (1 frozen Hessian, 2 Newton–Krylov; the fixed-point
-    /// iteration, rung 0, is never faster than the frozen Hessian in the scaling study and is
-    /// left to an explicit choice) …
-    pub auto_level: usize,
-    /// … and the solves left before it tries the rung below again.
-    pub auto_holdoff: usize,
-    /// Frozen-Hessian failures of `Auto` in the recent solves …
-    pub auto_recent: usize,
-    /// … and solves since the last one.
-    pub auto_calm: usize,
 }
 
 impl NewtonState {
@@ -88,10 +77,6 @@ impl NewtonState {
             scratch: vec![0.0; nu],
             kron,
             krylov,
-            auto_level: 1,
-            auto_holdoff: 0,
-            auto_recent: 0,
-            auto_calm: 0,
         }
     }
 }

@@ -11,8 +11,10 @@
 //! loses a step the nodal equations would have solved. `Auto` remembers both escalations for
 //! the next steps ([`VelocityState::record`]).
 
+use super::auto;
 use super::dd::{max_abs, two_sum};
 use super::kronecker::KroneckerWork;
+use super::linear::Linear;
 use super::velocity_equations::{DenseNewton, assemble_dense};
 use super::velocity_form::VelocityTables;
 use super::{GalerkinIntegrator, InitialGuess, StepStats, Workspace};
@@ -26,15 +28,6 @@ use crate::quadrature::Quadrature;
 /// hands the step to the nodal solvers otherwise).
 const VELOCITY_STALL: f64 = 0.5;
 
-/// Steps without a failure after which `Auto` forgets the earlier ones …
-const AUTO_CALM: usize = 8;
-
-/// … and the steps it then hands to the nodal solvers directly after a second failure within
-/// them (large h·ω, where the frozen Hessian stalls and the system is too large to continue
-/// densely: on 20 steps of the paper's 10-body run the explicit `modal` tries and fails 22
-/// times, `auto` 4).
-const AUTO_HOLDOFF: usize = 32;
-
 /// Relative residual of the extrapolated guess above which the RK4 predictor is tried too.
 /// Measured on Kepler e = 0.6, T = 200 (Legendre n = 10, h = 0.25; n = 18, h = 0.5;
 /// n = 12, h = 0.5): trusting every extrapolation is fastest but lets periapsis steps start
@@ -47,25 +40,13 @@ const EXTRAPOLATION_TRUST: f64 = 1e-3;
 /// floor of its residual (converged, not stalled).
 const VELOCITY_FLOOR: f64 = 1e-13;
 
-/// The linear solve of a velocity-form iteration.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Linear {
-    /// The frozen-Hessian Kronecker solve (simplified Newton).
-    Frozen,
-    /// The exact Newton matrix, dense LU (kept while it contracts by 0.1).
-    Dense,
-}
-
 /// Unknowns (n − 1)·D up to which a step whose frozen Hessian stalls continues with the dense
-/// exact Newton matrix of the velocity form before it is handed to the nodal solvers: 64, the
-/// nodal `auto`'s own dense threshold, and up to [`VELOCITY_DENSE_SMALL_D`] for systems of at
-/// most three coordinates (Kepler to n = 129), whose Hessians and Newton matrix stay cheap.
-/// Measured on the outer solar system at h = 1825 d, n = 8 (D = 18, 126 unknowns): continuing
-/// densely took 1.9e-4 s per step against 9.2e-5 s when the two stalling steps went to the
-/// nodal Newton–Krylov solver.
-const VELOCITY_DENSE_SIZE: usize = 64;
-
-/// See [`VELOCITY_DENSE_SIZE`].
+/// exact Newton matrix of the velocity form before it is handed to the nodal solvers:
+/// [`auto::DENSE_SIZE`], the nodal `auto`'s own dense threshold, and up to this many for
+/// systems of at most three coordinates (Kepler to n = 129), whose Hessians and Newton matrix
+/// stay cheap. Measured on the outer solar system at h = 1825 d, n = 8 (D = 18, 126 unknowns):
+/// continuing densely took 1.9e-4 s per step against 9.2e-5 s when the two stalling steps went
+/// to the nodal Newton–Krylov solver.
 const VELOCITY_DENSE_SMALL_D: usize = 256;
 
 /// Per-workspace state of the velocity form: the iterate, the previous step's modes, and the
@@ -87,79 +68,11 @@ pub(crate) struct VelocityState {
     /// The frozen-Hessian Kronecker solve of I ⊗ M + h² C ⊗ H̄.
     kron: KroneckerWork,
     /// The exact Newton matrix, dense, for steps where the frozen Hessian stalls (small
-    /// systems, [`VELOCITY_DENSE_SIZE`]).
+    /// systems, [`auto::DENSE_SIZE`] and [`VELOCITY_DENSE_SMALL_D`]).
     dense: Option<DenseNewton>,
-    /// `Auto`'s memory: recent steps the velocity form gave up, solves since the last one,
-    /// and the steps left to hand to the nodal solvers directly.
-    recent_failures: usize,
-    calm: usize,
-    holdoff: usize,
-    /// The same for steps that needed the dense matrix: recent ones, and the steps left that
-    /// start with it instead of the frozen Hessian.
-    recent_dense: usize,
-    dense_calm: usize,
-    dense_start: usize,
 }
 
 impl VelocityState {
-    /// `Auto`: whether this step goes to the nodal solvers directly (the velocity form
-    /// failed twice within [`AUTO_CALM`] steps, less than [`AUTO_HOLDOFF`] steps ago).
-    pub(super) fn holding_off(&mut self) -> bool {
-        if self.holdoff > 0 {
-            self.holdoff -= 1;
-            return true;
-        }
-        false
-    }
-
-    /// Whether this step starts with the dense matrix (the frozen Hessian stalled in two of the
-    /// last 8 steps, less than [`AUTO_HOLDOFF`] steps ago); counts the step.
-    fn starts_dense(&mut self) -> bool {
-        if self.dense.is_none() {
-            return false;
-        }
-        if self.dense_start > 0 {
-            self.dense_start -= 1;
-            return true;
-        }
-        false
-    }
-
-    /// Record whether a step's frozen Hessian stalled into the dense matrix.
-    fn record_dense(&mut self, escalated: bool) {
-        if !escalated {
-            self.dense_calm += 1;
-            if self.dense_calm > AUTO_CALM {
-                self.recent_dense = 0;
-            }
-            return;
-        }
-        self.dense_calm = 0;
-        self.recent_dense += 1;
-        if self.recent_dense >= 2 {
-            self.recent_dense = 0;
-            self.dense_start = AUTO_HOLDOFF;
-        }
-    }
-
-    /// Record the outcome of a step's velocity-form solve for `Auto`.
-    pub(super) fn record(&mut self, solved: bool) {
-        if solved {
-            self.calm += 1;
-            if self.calm > AUTO_CALM {
-                self.recent_failures = 0;
-            }
-            return;
-        }
-        self.has_prev = false;
-        self.calm = 0;
-        self.recent_failures += 1;
-        if self.recent_failures >= 2 {
-            self.recent_failures = 0;
-            self.holdoff = AUTO_HOLDOFF;
-        }
-    }
-
     /// One correction δ = J⁻¹(−F) from the residual in `delta` (left there) with the frozen
     /// Kronecker matrix or the dense exact one, c ← c + δ with c_0 compensated (TwoSum into
     /// its low part).
@@ -205,36 +118,19 @@ impl VelocityState {
             has_prev: false,
             delta: vec![0.0; size],
             kron: KroneckerWork::new(vt.kron.as_ref()?, d, mass, blocks, 0, f64::MAX)?,
-            dense: (size <= VELOCITY_DENSE_SIZE || (d <= 3 && size <= VELOCITY_DENSE_SMALL_D))
-                .then(|| DenseNewton {
+            dense: (size <= auto::DENSE_SIZE || (d <= 3 && size <= VELOCITY_DENSE_SMALL_D)).then(
+                || DenseNewton {
                     jac: vec![0.0; size * size],
                     acc: vec![0.0; d * d * vt.k],
                     lu: Lu::with_capacity(size),
                     scratch: vec![0.0; size],
-                }),
-            recent_failures: 0,
-            calm: 0,
-            holdoff: 0,
-            recent_dense: 0,
-            dense_calm: 0,
-            dense_start: 0,
+                },
+            ),
         })
     }
 }
 
 impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
-    /// Whether this step can be solved in the velocity form.
-    pub(super) fn velocity_form_applies(&self, ws: &Workspace) -> bool {
-        ws.velocity.is_some()
-            && self.tables().velocity.is_some()
-            && self.stage_solver.is_none()
-            && !ws.guess.has_warm
-            && matches!(
-                self.options().solver,
-                super::StageSolver::Auto | super::StageSolver::Modal
-            )
-    }
-
     /// Solve the step from (q_k, p_k) = (`ws.newton.base`, `p`) in the velocity form. On
     /// success the increments ΔQ (with the low part of ΔQ_{n−1}) and the impulse are in
     /// `ws.newton`, as the nodal solve leaves them.
@@ -280,7 +176,10 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let mut previous = f64::INFINITY;
         // `factored`: the current linear solve's matrix belongs to this step; `fresh`: it was
         // built at the last iterate.
-        let start_dense = ws.velocity.as_mut().is_some_and(|v| v.starts_dense());
+        // `Auto`'s memory (every solver that reaches the velocity form keeps it): start with the
+        // dense matrix for the steps after two stalls of the frozen Hessian.
+        let start_dense = ws.velocity.as_ref().is_some_and(|v| v.dense.is_some())
+            && ws.auto.velocity_dense.holding();
         let first = if start_dense {
             Linear::Dense
         } else {
@@ -355,8 +254,8 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             // its round-off floor (the nodal solver's `floor_tolerance`); the frozen Hessian's
             // linear iteration gets the floor only much closer to round-off.
             let floor = match linear {
-                Linear::Dense => opts.floor_tolerance,
                 Linear::Frozen => VELOCITY_FLOOR,
+                Linear::Dense | Linear::Krylov => opts.floor_tolerance,
             };
             let converged = delta == 0.0
                 || delta <= tol
@@ -376,8 +275,12 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 stats.gradient_evaluations += self.tables().m;
                 if let Some(vs) = ws.velocity.as_mut() {
                     vs.correct(linear, kt, h, d);
-                    if !start_dense {
-                        vs.record_dense(linear == Linear::Dense);
+                }
+                if !start_dense {
+                    if linear == Linear::Dense {
+                        ws.auto.velocity_dense.failure();
+                    } else {
+                        ws.auto.velocity_dense.calm_solve();
                     }
                 }
                 self.finish_velocity_form(ws, vt);

@@ -31,6 +31,8 @@ use crate::quadrature::Quadrature;
 /// from which the next initial guess is extrapolated.
 #[derive(Debug, Clone)]
 pub struct Workspace {
+    /// What the workspace was made for: a step with another integrator is refused.
+    pub(crate) made_for: MadeFor,
     /// Configuration dimension D.
     pub(crate) d: usize,
     /// Number of basis functions n.
@@ -54,6 +56,52 @@ pub struct Workspace {
     /// The velocity form's iterate and linear solve (separable Lagrangians with a polynomial
     /// basis and a rule exact for the kinetic term).
     pub(crate) velocity: Option<VelocityState>,
+    /// What `StageSolver::Auto` learnt from the recent steps.
+    pub(crate) auto: super::auto::AutoState,
+}
+
+/// The integrator a workspace was made for (basis and its n, quadrature family and points,
+/// h) and the dimension of its Lagrangian: its tables are laid out for exactly these.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct MadeFor {
+    pub basis: &'static str,
+    pub n: usize,
+    pub quadrature: String,
+    pub m: usize,
+    pub h: f64,
+    pub d: usize,
+}
+
+impl MadeFor {
+    pub(crate) fn of<B: Basis, Q: Quadrature>(gvi: &GalerkinIntegrator<B, Q>, d: usize) -> Self {
+        MadeFor {
+            basis: gvi.basis().name(),
+            n: gvi.n(),
+            quadrature: gvi.rule().family.clone(),
+            m: gvi.rule().len(),
+            h: gvi.step_size(),
+            d,
+        }
+    }
+
+    /// Whether a step of `gvi` may use this workspace (no allocation).
+    pub(crate) fn matches<B: Basis, Q: Quadrature>(&self, gvi: &GalerkinIntegrator<B, Q>) -> bool {
+        self.basis == gvi.basis().name()
+            && self.n == gvi.n()
+            && self.m == gvi.rule().len()
+            && self.h.to_bits() == gvi.step_size().to_bits()
+            && self.quadrature == gvi.rule().family
+    }
+}
+
+impl std::fmt::Display for MadeFor {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} basis n = {}, {} with {} points, h = {}, D = {}",
+            self.basis, self.n, self.quadrature, self.m, self.h, self.d
+        )
+    }
 }
 
 /// Configuration dimension from which Newton–Krylov uses a system's matrix-free force-Jacobian
@@ -119,6 +167,7 @@ impl Workspace {
             _ => None,
         };
         Ok(Workspace {
+            made_for: MadeFor::of(gvi, d),
             d,
             n,
             separable,
@@ -129,6 +178,7 @@ impl Workspace {
             guess: GuessState::new(n, d, substeps),
             last: GalerkinCurve::with_capacity(n, d, h),
             velocity,
+            auto: Default::default(),
         })
     }
 

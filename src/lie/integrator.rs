@@ -144,7 +144,7 @@ impl<B: Basis> LieGalerkin<B> {
                         "{} points of {} integrate degree {} but the {} basis with n = {n} \
                          needs degree {required} (φ_a'φ_b' exactly)",
                         rule.len(),
-                        rule.kind,
+                        rule.family,
                         rule.degree,
                         basis.name()
                     ),

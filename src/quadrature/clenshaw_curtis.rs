@@ -50,10 +50,6 @@ impl Quadrature for ClenshawCurtis {
         format!("clenshaw-curtis ({} points)", self.points)
     }
 
-    fn kind(&self) -> QuadratureKind {
-        QuadratureKind::ClenshawCurtis
-    }
-
     fn rule(&self) -> Result<QuadratureRule> {
         let m = self.points;
         let (nodes, weights) = if m == 1 {
@@ -93,7 +89,7 @@ impl Quadrature for ClenshawCurtis {
             (nodes, weights)
         };
         let rule = QuadratureRule {
-            kind: QuadratureKind::ClenshawCurtis,
+            family: QuadratureKind::ClenshawCurtis.as_str().into(),
             nodes,
             weights,
             degree: self.degree_of_exactness(),

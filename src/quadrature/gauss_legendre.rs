@@ -48,17 +48,13 @@ impl Quadrature for GaussLegendre {
         format!("gauss-legendre ({} points)", self.points)
     }
 
-    fn kind(&self) -> QuadratureKind {
-        QuadratureKind::GaussLegendre
-    }
-
     fn rule(&self) -> Result<QuadratureRule> {
         let gl = gauss_quad::legendre::GaussLegendre::new(self.points);
         let mut pairs: Vec<(f64, f64)> =
             gl.iter().map(|(x, w)| (0.5 * (x + 1.0), 0.5 * w)).collect();
         pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
         let rule = QuadratureRule {
-            kind: QuadratureKind::GaussLegendre,
+            family: QuadratureKind::GaussLegendre.as_str().into(),
             nodes: pairs.iter().map(|p| p.0).collect(),
             weights: pairs.iter().map(|p| p.1).collect(),
             degree: self.degree_of_exactness(),

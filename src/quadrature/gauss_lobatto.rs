@@ -98,10 +98,6 @@ impl Quadrature for GaussLobatto {
         format!("gauss-lobatto ({} points)", self.points)
     }
 
-    fn kind(&self) -> QuadratureKind {
-        QuadratureKind::GaussLobatto
-    }
-
     fn rule(&self) -> Result<QuadratureRule> {
         let m = self.points;
         let big_n = m - 1;
@@ -143,7 +139,7 @@ impl Quadrature for GaussLobatto {
             weights.push(0.5 * scale / (p * p));
         }
         let rule = QuadratureRule {
-            kind: QuadratureKind::GaussLobatto,
+            family: QuadratureKind::GaussLobatto.as_str().into(),
             nodes,
             weights,
             degree: self.degree_of_exactness(),

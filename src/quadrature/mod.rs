@@ -36,8 +36,6 @@ pub trait Quadrature {
     fn degree_of_exactness(&self) -> usize;
     /// Human-readable name.
     fn name(&self) -> String;
-    /// The kind, for serialisation.
-    fn kind(&self) -> QuadratureKind;
     /// Nodes and weights on [0, 1].
     fn rule(&self) -> Result<QuadratureRule>;
 }
@@ -54,10 +52,15 @@ pub(crate) fn check_points(rule: &str, points: usize, min: usize, max: usize) ->
 }
 
 /// Nodes c_j ∈ [0, 1] and weights b_j (Σ b_j = 1) with the rule's degree of exactness.
+///
+/// A rule written outside the crate is built with [`QuadratureRule::new`] and any family
+/// name; nothing about it has to be a built-in [`QuadratureKind`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct QuadratureRule {
-    /// Which family the rule belongs to.
-    pub kind: QuadratureKind,
+    /// The family's name, e.g. `gauss-legendre` (a built-in [`QuadratureKind`]'s name) or a
+    /// user's `gauss-radau`.
+    #[serde(alias = "kind")]
+    pub family: String,
     /// Nodes in [0, 1], increasing.
     pub nodes: Vec<f64>,
     /// Weights, summing to 1.
@@ -67,6 +70,26 @@ pub struct QuadratureRule {
 }
 
 impl QuadratureRule {
+    /// A validated rule: the family's name, nodes in [0, 1], weights summing to 1 and the
+    /// polynomial degree of exactness.
+    ///
+    /// Errors: as [`validate`](Self::validate).
+    pub fn new(
+        family: impl Into<String>,
+        nodes: Vec<f64>,
+        weights: Vec<f64>,
+        degree: usize,
+    ) -> Result<Self> {
+        let rule = QuadratureRule {
+            family: family.into(),
+            nodes,
+            weights,
+            degree,
+        };
+        rule.validate()?;
+        Ok(rule)
+    }
+
     /// Validate: equal lengths, at least one node, nodes in [0, 1], finite weights summing to 1.
     pub fn validate(&self) -> Result<()> {
         let bad = |reason: String| Err(GviError::InvalidQuadrature { reason });
@@ -234,10 +257,7 @@ impl Quadrature for QuadratureRule {
         self.degree
     }
     fn name(&self) -> String {
-        format!("{} ({} points)", self.kind, self.nodes.len())
-    }
-    fn kind(&self) -> QuadratureKind {
-        self.kind
+        format!("{} ({} points)", self.family, self.nodes.len())
     }
     fn rule(&self) -> Result<QuadratureRule> {
         self.validate()?;
@@ -285,7 +305,7 @@ pub(crate) mod exactness_tests {
             assert!(
                 (got - exact).abs() < 1e-14,
                 "{:?} with {} points: degree {k} error {:e}",
-                rule.kind,
+                rule.family,
                 rule.len(),
                 (got - exact).abs()
             );
@@ -302,7 +322,7 @@ pub(crate) mod exactness_tests {
         assert!(
             err > 1e-12,
             "{:?} with {} points integrates degree {} exactly (error {err:e}): the stated degree {d} is not sharp",
-            rule.kind,
+            rule.family,
             rule.len(),
             d + 1
         );
@@ -321,7 +341,7 @@ mod kind_tests {
             assert_eq!(json, format!("\"{}\"", kind.as_str()));
             for n in [2, 5, 16] {
                 let rule = kind.build(kind.default_points(n)).unwrap();
-                assert_eq!(rule.kind, kind);
+                assert_eq!(rule.family, kind.as_str());
                 assert_eq!(rule.len(), kind.default_points(n));
                 // Every default except the trapezoid rule is exact for φ_a'φ_b' (degree 2n − 4),
                 // with room to spare (degree ≥ 4n − 1).

@@ -45,10 +45,6 @@ impl Quadrature for Trapezoid {
         format!("trapezoid ({} points)", self.points)
     }
 
-    fn kind(&self) -> QuadratureKind {
-        QuadratureKind::Trapezoid
-    }
-
     fn rule(&self) -> Result<QuadratureRule> {
         let m = self.points;
         let intervals = (m - 1) as f64;
@@ -63,7 +59,7 @@ impl Quadrature for Trapezoid {
             })
             .collect();
         let rule = QuadratureRule {
-            kind: QuadratureKind::Trapezoid,
+            family: QuadratureKind::Trapezoid.as_str().into(),
             nodes,
             weights,
             degree: 1,

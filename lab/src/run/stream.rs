@@ -193,7 +193,7 @@ fn stream_system(
         "{} basis n = {}, {} with {} points, h = {}, {} solver (streamed)",
         m.basis,
         m.n,
-        gvi.rule().kind,
+        gvi.rule().family,
         gvi.rule().len(),
         super::fmt_number(m.h),
         m.solver
