@@ -41,6 +41,7 @@ pub mod lagrangian;
 pub mod lie;
 pub mod linalg;
 pub mod method;
+pub mod newton;
 pub mod periodic;
 pub mod quadrature;
 pub mod stats;

@@ -95,15 +95,7 @@ impl StageSolve for StageSolver {
     }
 }
 
-/// The size of a correction just applied and of the unknowns it was applied to (max-norms),
-/// for convergence tests relative to the scale of the increments ΔQ.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Correction {
-    /// max |δ|.
-    pub size: f64,
-    /// max |ΔQ| after the update (never 0: at least the smallest positive normal).
-    pub scale: f64,
-}
+pub use crate::newton::Correction;
 
 /// The stage equations of one initial-value step, F(ΔQ) = 0 in the increments
 /// ΔQ_1 … ΔQ_{n−1} of the Galerkin curve's coefficients, as a stage solver sees them.

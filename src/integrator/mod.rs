@@ -39,6 +39,7 @@ mod linear;
 mod modal;
 mod newton;
 mod newton_state;
+mod nodal_newton;
 mod options;
 mod self_blocks;
 mod separable;

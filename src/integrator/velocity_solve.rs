@@ -21,6 +21,9 @@ use super::{GalerkinIntegrator, InitialGuess, StepStats, Workspace};
 use crate::basis::Basis;
 use crate::lagrangian::Lagrangian;
 use crate::linalg::Lu;
+use crate::newton::{
+    Adapt, ConvergedBy, Correction, NewtonFailure, NewtonIteration, Progress, Termination,
+};
 use crate::quadrature::Quadrature;
 
 /// Contraction per iteration above which the frozen Hessian is refrozen at the current
@@ -145,8 +148,6 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let (Some(vt), Some(_)) = (self.tables().velocity.as_ref(), ws.velocity.as_ref()) else {
             return false;
         };
-        let opts = self.options();
-        let h = self.step_size();
         stats.guess = self.velocity_guess(lag, ws, vt, q, p, true);
         if let Some(vs) = ws.velocity.as_mut() {
             vs.c0_lo.iter_mut().for_each(|x| *x = 0.0);
@@ -173,144 +174,193 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             }
         }
         ws.newton.last_lo.iter_mut().for_each(|x| *x = 0.0);
-        let mut previous = f64::INFINITY;
-        // `factored`: the current linear solve's matrix belongs to this step; `fresh`: it was
-        // built at the last iterate.
+        if vt.kron.is_none() {
+            return false;
+        }
         // `Auto`'s memory (every solver that reaches the velocity form keeps it): start with the
         // dense matrix for the steps after two stalls of the frozen Hessian.
         let start_dense = ws.velocity.as_ref().is_some_and(|v| v.dense.is_some())
             && ws.auto.velocity_dense.holding();
-        let first = if start_dense {
-            Linear::Dense
-        } else {
-            Linear::Frozen
-        };
-        let (mut linear, mut factored, mut refrozen) = (first, false, false);
-        let mut fresh = false;
-        let mut it = 0;
-        loop {
-            if it > 0 {
-                res = self.velocity_residual(lag, ws, vt, p);
-                stats.gradient_evaluations += self.tables().m;
-            }
-            stats.residual = res;
-            if !res.is_finite() || it >= opts.max_iterations {
-                return false;
-            }
-            let (Some(vs), Some(kt)) = (ws.velocity.as_mut(), vt.kron.as_ref()) else {
-                return false;
-            };
-            if !factored {
-                // At this iterate: the step's guess, or where the iteration stalled.
-                stats.factorizations += 1;
-                match (linear, vs.dense.as_mut()) {
-                    (Linear::Dense, Some(dn)) => {
-                        lag.force_jacobian_at_points(&ws.stage.qj, &mut ws.stage.hall);
-                        ws.stage.hall_stale = false;
-                        stats.hessian_evaluations += self.tables().m;
-                        let sep = ws.separable.as_ref();
-                        assemble_dense(
-                            vt,
-                            &self.tables().weights,
-                            h,
-                            ws.d,
-                            &ws.stage.hall,
-                            sep,
-                            dn,
-                        );
-                        let size = vt.k * ws.d;
-                        if dn.lu.refactor(&dn.jac[..size * size]).is_err() {
-                            return false;
-                        }
-                    }
-                    _ => {
-                        stats.hessian_evaluations +=
-                            self.mean_force_jacobian(lag, &mut ws.stage, &mut vs.kron);
-                        if vs.kron.factor(kt, h).is_err() {
-                            return false;
-                        }
-                    }
-                }
-                factored = true;
-                fresh = true;
-                previous = f64::INFINITY;
-            }
-            let d = ws.d;
-            vs.correct(linear, kt, h, d);
-            it += 1;
-            stats.iterations += 1;
-            let delta = max_abs(&vs.delta);
-            let scale = max_abs(&vs.c).max(f64::MIN_POSITIVE);
-            if !delta.is_finite() || !scale.is_finite() {
-                return false;
-            }
-            let theta = if previous.is_finite() {
-                delta / previous
+        let mut iteration = VelocityNewton {
+            gvi: self,
+            lag,
+            ws,
+            vt,
+            p,
+            stats,
+            initial_residual: res,
+            start_dense,
+            linear: if start_dense {
+                Linear::Dense
             } else {
-                f64::INFINITY
-            };
-            let tol = opts.tolerance * scale;
-            // Exact Newton converges quadratically: a slow contraction at small increments is
-            // its round-off floor (the nodal solver's `floor_tolerance`); the frozen Hessian's
-            // linear iteration gets the floor only much closer to round-off.
-            let floor = match linear {
-                Linear::Frozen => VELOCITY_FLOOR,
-                Linear::Dense | Linear::Krylov => opts.floor_tolerance,
-            };
-            let converged = delta == 0.0
-                || delta <= tol
-                || (theta < VELOCITY_STALL && theta / (1.0 - theta) * delta <= tol)
-                || (theta.is_finite()
-                    && (theta >= VELOCITY_STALL || delta > previous)
-                    && delta <= floor * scale);
-            if converged {
-                // The forces at the solution: the impulse and the step's residual. Its
-                // correction costs no force evaluation and is applied too: a linear iteration
-                // stopped on its contraction estimate leaves a remainder of one sign along
-                // the orbit (measured: Kepler, Legendre n = 24, h = 0.5, T = 20 000 drifts to
-                // 1.5e-8 and ΔE = −2.8e-13 without it), the correction shrinks it by the
-                // contraction factor. The impulse keeps the forces before it (they differ
-                // by O(h²|H|) times a correction at the round-off level).
-                stats.residual = self.velocity_residual(lag, ws, vt, p);
-                stats.gradient_evaluations += self.tables().m;
-                if let Some(vs) = ws.velocity.as_mut() {
-                    vs.correct(linear, kt, h, d);
-                }
-                if !start_dense {
-                    if linear == Linear::Dense {
-                        ws.auto.velocity_dense.failure();
-                    } else {
-                        ws.auto.velocity_dense.calm_solve();
+                Linear::Frozen
+            },
+            factored: false,
+            fresh: false,
+            refrozen: false,
+        };
+        let first = iteration.termination();
+        crate::newton::drive(&mut iteration, &first).is_ok()
+    }
+}
+
+/// One velocity-form Newton solve: the problem and its current linear solve.
+struct VelocityNewton<'a, B: Basis, Q: Quadrature, L: Lagrangian> {
+    gvi: &'a GalerkinIntegrator<B, Q>,
+    lag: &'a L,
+    ws: &'a mut Workspace,
+    vt: &'a VelocityTables,
+    p: &'a [f64],
+    stats: &'a mut StepStats,
+    /// The residual of the chosen guess (iteration 0).
+    initial_residual: f64,
+    /// The step started with the dense matrix (`Auto`'s memory; not recorded again).
+    start_dense: bool,
+    linear: Linear,
+    /// The current linear solve's matrix belongs to this step …
+    factored: bool,
+    /// … and was built at the last iterate.
+    fresh: bool,
+    /// The frozen Hessian was refrozen once.
+    refrozen: bool,
+}
+
+impl<B: Basis, Q: Quadrature, L: Lagrangian> VelocityNewton<'_, B, Q, L> {
+    /// Exact Newton converges quadratically: a slow contraction at small increments is its
+    /// round-off floor (the nodal solver's `floor_tolerance`); the frozen Hessian's linear
+    /// iteration gets the floor only much closer to round-off. Both trust the contraction
+    /// estimate below [`VELOCITY_STALL`] (a frozen Hessian that contracts that fast is near
+    /// Newton's own rate here, the Newton matrix being M plus an O(h²) term).
+    fn termination(&self) -> Termination {
+        let opts = self.gvi.options();
+        let floor = match self.linear {
+            Linear::Frozen => VELOCITY_FLOOR,
+            Linear::Dense | Linear::Krylov => opts.floor_tolerance,
+        };
+        Termination::new(
+            opts.max_iterations,
+            opts.tolerance,
+            Some(VELOCITY_STALL),
+            floor,
+            VELOCITY_STALL,
+        )
+    }
+}
+
+impl<B: Basis, Q: Quadrature, L: Lagrangian> NewtonIteration for VelocityNewton<'_, B, Q, L> {
+    fn residual(&mut self, iteration: usize) -> f64 {
+        let res = if iteration == 0 {
+            self.initial_residual
+        } else {
+            self.stats.gradient_evaluations += self.gvi.tables().m;
+            self.gvi
+                .velocity_residual(self.lag, self.ws, self.vt, self.p)
+        };
+        self.stats.residual = res;
+        res
+    }
+
+    fn correct(&mut self, iteration: usize) -> Result<(Correction, Termination), NewtonFailure> {
+        let (gvi, lag, vt) = (self.gvi, self.lag, self.vt);
+        let h = gvi.step_size();
+        let ws = &mut *self.ws;
+        let fail = |reason: &str| NewtonFailure {
+            residual: self.stats.residual,
+            iterations: iteration,
+            reason: reason.into(),
+        };
+        let (Some(vs), Some(kt)) = (ws.velocity.as_mut(), vt.kron.as_ref()) else {
+            return Err(fail("no velocity form"));
+        };
+        if !self.factored {
+            // At this iterate: the step's guess, or where the iteration stalled.
+            self.stats.factorizations += 1;
+            match (self.linear, vs.dense.as_mut()) {
+                (Linear::Dense, Some(dn)) => {
+                    lag.force_jacobian_at_points(&ws.stage.qj, &mut ws.stage.hall);
+                    ws.stage.hall_stale = false;
+                    self.stats.hessian_evaluations += gvi.tables().m;
+                    let sep = ws.separable.as_ref();
+                    assemble_dense(vt, &gvi.tables().weights, h, ws.d, &ws.stage.hall, sep, dn);
+                    let size = vt.k * ws.d;
+                    if dn.lu.refactor(&dn.jac[..size * size]).is_err() {
+                        return Err(fail("singular Newton matrix"));
                     }
                 }
-                self.finish_velocity_form(ws, vt);
-                return true;
-            }
-            let stalled = theta.is_finite() && theta > VELOCITY_STALL;
-            match linear {
-                Linear::Frozen if stalled && !refrozen => {
-                    factored = false;
-                    refrozen = true;
-                }
-                Linear::Frozen if stalled => {
-                    // The frozen Hessian is too far from the step's even when refrozen: exact
-                    // Newton in the same form, where the system is small enough.
-                    if vs.dense.is_none() {
-                        return false;
+                _ => {
+                    self.stats.hessian_evaluations +=
+                        gvi.mean_force_jacobian(lag, &mut ws.stage, &mut vs.kron);
+                    if vs.kron.factor(kt, h).is_err() {
+                        return Err(fail("singular frozen matrix"));
                     }
-                    linear = Linear::Dense;
-                    factored = false;
-                    stats.fallbacks += 1;
                 }
-                Linear::Dense if stalled && fresh => return false,
-                // A matrix from an earlier iterate that no longer contracts fast: rebuild it.
-                Linear::Dense if theta.is_finite() && theta > opts.reuse_contraction => {
-                    factored = false;
-                }
-                _ => {}
             }
-            fresh = false;
-            previous = delta;
+            self.factored = true;
+            self.fresh = true;
         }
+        let d = ws.d;
+        vs.correct(self.linear, kt, h, d);
+        self.stats.iterations += 1;
+        let delta = max_abs(&vs.delta);
+        let scale = max_abs(&vs.c).max(f64::MIN_POSITIVE);
+        Ok((Correction { size: delta, scale }, self.termination()))
+    }
+
+    fn adapt(&mut self, progress: &Progress) -> Adapt {
+        let theta = progress.theta;
+        let stalled = theta.is_finite() && theta > VELOCITY_STALL;
+        let has_dense = self.ws.velocity.as_ref().is_some_and(|v| v.dense.is_some());
+        let opts = self.gvi.options();
+        let fresh = std::mem::replace(&mut self.fresh, false);
+        match self.linear {
+            Linear::Frozen if stalled && !self.refrozen => {
+                self.factored = false;
+                self.refrozen = true;
+                Adapt::Restart
+            }
+            // The frozen Hessian is too far from the step's even when refrozen: exact Newton
+            // in the same form, where the system is small enough; otherwise the nodal solvers
+            // take the step.
+            Linear::Frozen if stalled && !has_dense => Adapt::GiveUp,
+            Linear::Frozen if stalled => {
+                self.linear = Linear::Dense;
+                self.factored = false;
+                self.stats.fallbacks += 1;
+                Adapt::Restart
+            }
+            Linear::Dense if stalled && fresh => Adapt::GiveUp,
+            // A matrix from an earlier iterate that no longer contracts fast: rebuild it.
+            Linear::Dense if theta.is_finite() && theta > opts.reuse_contraction => {
+                self.factored = false;
+                Adapt::Restart
+            }
+            _ => Adapt::Continue,
+        }
+    }
+
+    fn finish(&mut self, _: ConvergedBy) -> Result<(), NewtonFailure> {
+        // The forces at the solution: the impulse and the step's residual. Its correction
+        // costs no force evaluation and is applied too: a linear iteration stopped on its
+        // contraction estimate leaves a remainder of one sign along the orbit (measured:
+        // Kepler, Legendre n = 24, h = 0.5, T = 20 000 drifts to 1.5e-8 and ΔE = −2.8e-13
+        // without it), the correction shrinks it by the contraction factor. The impulse keeps
+        // the forces before it (they differ by O(h²|H|) times a correction at the round-off
+        // level).
+        let (gvi, vt) = (self.gvi, self.vt);
+        self.stats.residual = gvi.velocity_residual(self.lag, self.ws, vt, self.p);
+        self.stats.gradient_evaluations += gvi.tables().m;
+        let (h, d) = (gvi.step_size(), self.ws.d);
+        if let (Some(vs), Some(kt)) = (self.ws.velocity.as_mut(), vt.kron.as_ref()) {
+            vs.correct(self.linear, kt, h, d);
+        }
+        if !self.start_dense {
+            if self.linear == Linear::Dense {
+                self.ws.auto.velocity_dense.failure();
+            } else {
+                self.ws.auto.velocity_dense.calm_solve();
+            }
+        }
+        gvi.finish_velocity_form(self.ws, vt);
+        Ok(())
     }
 }

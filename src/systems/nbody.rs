@@ -382,8 +382,9 @@ fn for_each_node<F>(
     let x_len = if x.is_some() { d } else { 0 };
     let x = x.unwrap_or(&[]);
     let x_of = |j: usize| &x[j * x_len..(j + 1) * x_len];
+    let parallel = bodies >= PARALLEL_BODIES;
     #[cfg(feature = "parallel")]
-    if bodies >= PARALLEL_BODIES {
+    if parallel {
         use rayon::prelude::*;
         out.par_chunks_exact_mut(out_len)
             .take(nodes)
@@ -391,7 +392,7 @@ fn for_each_node<F>(
             .for_each(|(j, oj)| f(&q[j * d..(j + 1) * d], x_of(j), oj));
         return;
     }
-    let _ = bodies;
+    let _ = parallel; // serial without the `parallel` feature
     for (j, oj) in out.chunks_exact_mut(out_len).take(nodes).enumerate() {
         f(&q[j * d..(j + 1) * d], x_of(j), oj);
     }
