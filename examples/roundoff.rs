@@ -9,6 +9,7 @@
 //! kinetic products in the residuals instead of the default double-double ones).
 
 use galerkin_vi::prelude::*;
+use galerkin_vi::integrator::DenseOptions;
 use std::time::Instant;
 
 /// An f64 from the environment (for experiments with the Newton options), or `default`.
@@ -70,7 +71,10 @@ fn main() -> Result<(), GviError> {
                             "GVI_FLOOR",
                             NewtonOptions::default().floor_tolerance,
                         ),
-                        reuse_jacobian: std::env::var("GVI_NO_REUSE").is_err(),
+                        dense: DenseOptions {
+                            reuse_jacobian: std::env::var("GVI_NO_REUSE").is_err(),
+                            ..DenseOptions::default()
+                        },
                         exact_kinetic: std::env::var("GVI_ROUNDED_KINETIC").is_err(),
                         tolerance: env_f64("GVI_TOL", NewtonOptions::default().tolerance),
                         ..NewtonOptions::default()

@@ -45,7 +45,7 @@ fn with_solver(
 }
 
 /// [`with_solver`] with the fast-body self-block threshold `rate`
-/// (`NewtonOptions::self_block_rate`; `f64::MAX`: none).
+/// (`StructuredOptions::self_block_rate`; `f64::MAX`: none).
 fn with_solver_rate(
     basis: BasisKind,
     n: usize,
@@ -54,10 +54,8 @@ fn with_solver_rate(
     rate: f64,
 ) -> GalerkinIntegrator<AnyBasis, QuadratureRule> {
     let gvi = with_solver(basis, n, h, solver);
-    let options = NewtonOptions {
-        self_block_rate: rate,
-        ..*gvi.options()
-    };
+    let mut options = *gvi.options();
+    options.structured.self_block_rate = rate;
     gvi.with_options(options)
 }
 
@@ -451,7 +449,7 @@ fn steps_the_velocity_form_cannot_solve_go_to_the_nodal_solvers() {
     assert!(dm <= 1e-10 && da <= 1e-10, "{dm:e} {da:e}");
 }
 
-/// The fast bodies' exact self-blocks (`NewtonOptions::self_block_rate`): at the paper's
+/// The fast bodies' exact self-blocks (`StructuredOptions::self_block_rate`): at the paper's
 /// h = 100 d Mercury ((h ω)² ≈ 50) and Venus (≈ 8) turn through a large angle per step, the
 /// frozen mean Hessian leaves out most of their Jacobian, and the frozen iteration stalls and
 /// falls back to exact Newton. With their time-varying self-blocks in the preconditioner it
@@ -467,7 +465,7 @@ fn exact_self_blocks_of_the_fast_bodies_make_the_frozen_iteration_contract() {
             .integrate(&nbody, init.t0, &init.q, &init.p, steps)
             .unwrap()
     };
-    let default_rate = NewtonOptions::default().self_block_rate;
+    let default_rate = NewtonOptions::default().structured.self_block_rate;
     let reference = run(StageSolver::Exact, default_rate);
     let fallbacks = |t: &Trajectory| t.stats.iter().map(|s| s.fallbacks).sum::<usize>();
     let per_step = |t: &Trajectory| t.newton_iterations() as f64 / steps as f64;
@@ -513,7 +511,7 @@ fn the_fastest_bodies_get_the_self_blocks_when_there_are_many() {
             .integrate(&ring, 0.0, &init.q, &init.p, steps)
             .unwrap()
     };
-    let rate = NewtonOptions::default().self_block_rate;
+    let rate = NewtonOptions::default().structured.self_block_rate;
     let reference = run(StageSolver::NewtonKrylov, f64::MAX);
     let frozen = run(StageSolver::Kronecker, rate);
     let fallbacks: usize = frozen.stats.iter().map(|s| s.fallbacks).sum();

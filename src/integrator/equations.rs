@@ -172,8 +172,9 @@ impl<'a, B: Basis, Q: Quadrature, L: Lagrangian> StepEquations<'a, B, Q, L> {
         p_k: &'a [f64],
         stats: &'a mut StepStats,
     ) -> Self {
+        // The guess's residual, if the workspace has it, stays for a built-in solver's first
+        // iteration (the integrator clears it before a custom solver runs).
         ws.newton.last_lo.iter_mut().for_each(|x| *x = 0.0);
-        ws.newton.residual_ready = None;
         StepEquations {
             gvi,
             lag,

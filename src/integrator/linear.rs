@@ -5,7 +5,7 @@
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Linear {
     /// Dense LU of the exact Jacobian (kept while it contracts by
-    /// `NewtonOptions::reuse_contraction`): quadratic convergence.
+    /// `DenseOptions::reuse_contraction`): quadratic convergence.
     Dense,
     /// The Kronecker solve of the frozen-Hessian Jacobian (simplified Newton): linear
     /// convergence.

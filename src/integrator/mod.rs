@@ -55,7 +55,9 @@ mod workspace;
 
 pub use discrete_action::DiscreteLagrangian;
 pub use equations::{Correction, StageEquations, StageSolve};
-pub use newton::{InitialGuess, NewtonOptions, StepFailure, StepStats};
+pub use newton::{
+    DenseOptions, InitialGuess, NewtonOptions, StepFailure, StepStats, StructuredOptions,
+};
 pub use solver::StageSolver;
 pub use stepper::Stepper;
 pub use tangent::{StepJacobian, TangentWorkspace};

@@ -4,9 +4,10 @@
 //! `guess`.
 
 use super::dd::dd_add;
-pub use super::options::{InitialGuess, NewtonOptions, StepFailure, StepStats};
+pub use super::options::{
+    DenseOptions, InitialGuess, NewtonOptions, StepFailure, StepStats, StructuredOptions,
+};
 use super::solver::StageSolver;
-use super::stage::Mode;
 use super::{GalerkinIntegrator, Workspace};
 use crate::basis::Basis;
 use crate::lagrangian::Lagrangian;
@@ -234,9 +235,12 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         Ok(stats)
     }
 
-    /// The stage equations of an initial-value step from the iterate in `ws.newton.coeffs`, by the
-    /// integrator's custom stage solver if it has one, else by the built-in `solver`. A custom solver's result is re-evaluated here, so the impulse and ∂S/∂Q in the
-    /// workspace belong to the iterate it returns.
+    /// The stage equations of an initial-value step from the iterate in `ws.newton.coeffs`,
+    /// through the public solver interface: the integrator's custom [`StageSolve`] if it has
+    /// one, else the built-in `solver` (itself a `StageSolve`), each given the same
+    /// [`StageEquations`]. A custom solver's result is re-evaluated here, so the impulse and
+    /// ∂S/∂Q in the workspace belong to the iterate it returns; the built-in solvers end on
+    /// that evaluation already.
     fn solve_stage_equations<L: Lagrangian>(
         &self,
         lag: &L,
@@ -245,12 +249,21 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         stats: &mut StepStats,
         solver: StageSolver,
     ) -> std::result::Result<(), StepFailure> {
-        let Some(custom) = self.stage_solver.clone() else {
-            return self.newton(lag, ws, Mode::InitialValue, p, stats, solver);
+        use super::equations::{StageEquations, StageSolve, StepEquations};
+        let custom = self.stage_solver.as_deref();
+        if custom.is_some() {
+            // A custom solver evaluates its own residuals: the guess's is not reused.
+            ws.newton.residual_ready = None;
+        }
+        let chosen: &dyn StageSolve = match custom {
+            Some(c) => c,
+            None => &solver,
         };
-        use super::equations::{StageEquations, StepEquations};
         let mut equations = StepEquations::new(self, lag, ws, p, stats);
-        custom.solve(&mut equations)?;
+        chosen.solve(&mut equations)?;
+        let Some(custom) = custom else {
+            return Ok(());
+        };
         let residual = equations.residual();
         if !residual.is_finite() {
             ws.newton.lu_valid = false;

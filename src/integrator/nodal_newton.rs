@@ -63,9 +63,9 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         // Simplified Newton: keep the factorised Jacobian (from an earlier iteration or the
         // previous step) while the iteration contracts fast; refactor at the current iterate
         // (full Newton) as soon as it does not.
-        let reuse = opts.reuse_jacobian && mode == Mode::InitialValue;
+        let reuse = opts.dense.reuse_jacobian && mode == Mode::InitialValue;
         let have_lu =
-            reuse && opts.reuse_across_steps && ws.newton.lu_valid && ws.newton.lu.dim() == size;
+            reuse && opts.dense.reuse_across_steps && ws.newton.lu_valid && ws.newton.lu.dim() == size;
         // The structured solvers (initial-value steps of separable Lagrangians): the
         // Kronecker solver freezes the Hessian per step (refrozen once if the iteration
         // contracts slowly); Newton–Krylov freezes it for its preconditioner only. Either
@@ -342,7 +342,7 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> NewtonIteration for NodalNewton<'_,
             }
             Linear::Dense => {
                 // A reused (stale) Jacobian that does not contract quickly is replaced.
-                let slow = theta.is_finite() && theta > self.gvi.options().reuse_contraction;
+                let slow = theta.is_finite() && theta > self.gvi.options().dense.reuse_contraction;
                 if !self.reuse || slow || growing || (!self.fresh && it >= 2 && !theta.is_finite())
                 {
                     self.have_lu = false;

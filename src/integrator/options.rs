@@ -26,14 +26,6 @@ pub struct NewtonOptions {
     pub initial_guess: InitialGuess,
     /// Substeps of the RK4 predictor guess (`None`: max(n, 8)).
     pub predictor_substeps: Option<usize>,
-    /// Simplified Newton: reuse the factorised Jacobian across iterations and steps while
-    /// the iteration contracts by at least `reuse_contraction` per iteration.
-    pub reuse_jacobian: bool,
-    /// Contraction factor above which a reused Jacobian is refactorised (full Newton).
-    pub reuse_contraction: f64,
-    /// Also start each step with the previous step's factorisation (pays off when h is small
-    /// compared with the time scale, so that the Newton matrix changes little per step).
-    pub reuse_across_steps: bool,
     /// Accumulate q and p across steps with compensated (Kahan–Babuška/TwoSum) summation of
     /// the step increments, in [`integrate`](crate::integrator::GalerkinIntegrator::integrate) and the
     /// [`GalerkinMethod`](crate::baselines::GalerkinMethod) adapter (docs/DESIGN.md §4). Costs 2D
@@ -62,17 +54,14 @@ pub struct NewtonOptions {
     /// Jacobian, or the Kronecker-structured frozen-Hessian Jacobian.
     #[serde(default)]
     pub solver: StageSolver,
-    /// The structured solvers' preconditioner treats a block of coordinates (a body of an
-    /// N-body system) exactly, with its time-varying self-block instead of the frozen mean,
-    /// when h² max |μ| exceeds this rate, μ the eigenvalues of the block's mean force Jacobian
-    /// relative to its mass (h² |μ| ≈ (h ω)² for a body of orbital frequency ω). Default 4:
-    /// at the paper's h = 100 d that is Mercury and Venus ((h ω)² ≈ 50 and 8), which makes the
-    /// frozen iteration contract where the frozen mean stalls (docs/solvers.md). At most
-    /// eight blocks, the fastest, are treated exactly. Set to
-    /// `f64::MAX` to turn it off. Concerns the nodal stage equations of systems with
-    /// coordinate blocks only (N-body); the map does not change.
-    #[serde(default = "default_self_block_rate")]
-    pub self_block_rate: f64,
+    /// Options of the dense exact-Newton solve: the `exact` solver, `auto` up to a Newton system
+    /// of 64 unknowns, and every dense fallback.
+    #[serde(default)]
+    pub dense: DenseOptions,
+    /// Options of the structured solves: `kronecker`, `newton-krylov`, `fixed-point` and `auto`
+    /// above 64 unknowns.
+    #[serde(default)]
+    pub structured: StructuredOptions,
 }
 
 fn default_self_block_rate() -> f64 {
@@ -91,13 +80,60 @@ impl Default for NewtonOptions {
             floor_tolerance: 1e-10,
             initial_guess: InitialGuess::BestResidual,
             predictor_substeps: None,
-            reuse_jacobian: true,
-            reuse_contraction: 0.1,
-            reuse_across_steps: false,
             exact_kinetic: true,
             compensated: true,
             solver: StageSolver::Auto,
-            self_block_rate: super::self_blocks::FAST_RATE,
+            dense: DenseOptions::default(),
+            structured: StructuredOptions::default(),
+        }
+    }
+}
+
+/// Options of the dense exact-Newton solve (the `exact` solver and every dense fallback).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct DenseOptions {
+    /// Simplified Newton: reuse the factorised Jacobian across iterations and steps while
+    /// the iteration contracts by at least `reuse_contraction` per iteration.
+    pub reuse_jacobian: bool,
+    /// Contraction factor above which a reused Jacobian is refactorised (full Newton).
+    pub reuse_contraction: f64,
+    /// Also start each step with the previous step's factorisation (pays off when h is small
+    /// compared with the time scale, so that the Newton matrix changes little per step).
+    pub reuse_across_steps: bool,
+}
+
+impl Default for DenseOptions {
+    fn default() -> Self {
+        DenseOptions {
+            reuse_jacobian: true,
+            reuse_contraction: 0.1,
+            reuse_across_steps: false,
+        }
+    }
+}
+
+/// Options of the structured solves (`kronecker`, `newton-krylov`, `fixed-point`, and `auto`
+/// above 64 unknowns).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct StructuredOptions {
+    /// The structured solvers' preconditioner treats a block of coordinates (a body of an
+    /// N-body system) exactly, with its time-varying self-block instead of the frozen mean,
+    /// when h² max |μ| exceeds this rate, μ the eigenvalues of the block's mean force Jacobian
+    /// relative to its mass (h² |μ| ≈ (h ω)² for a body of orbital frequency ω). Default 4:
+    /// at the paper's h = 100 d that is Mercury and Venus ((h ω)² ≈ 50 and 8), which makes the
+    /// frozen iteration contract where the frozen mean stalls (docs/solvers.md). At most
+    /// eight blocks, the fastest, are treated exactly. Set to
+    /// `f64::MAX` to turn it off. Concerns the nodal stage equations of systems with
+    /// coordinate blocks only (N-body); the map does not change.
+    pub self_block_rate: f64,
+}
+
+impl Default for StructuredOptions {
+    fn default() -> Self {
+        StructuredOptions {
+            self_block_rate: default_self_block_rate(),
         }
     }
 }

@@ -14,7 +14,7 @@
 //! ((n−1)b)², factorised once per freeze; the other blocks keep the Kronecker solve (which
 //! is block diagonal per body already, so the two combine into one block-Jacobi
 //! preconditioner). A block is treated exactly when h² max |μ| exceeds the rate
-//! (`NewtonOptions::self_block_rate`, default [`FAST_RATE`]), μ the eigenvalues of its frozen
+//! (`StructuredOptions::self_block_rate`, default [`FAST_RATE`]), μ the eigenvalues of its frozen
 //! block relative to its mass; at most [`MAX_SELF_BLOCKS`] blocks, the fastest.
 
 use crate::linalg::{Lu, Strided, gemm};
@@ -48,10 +48,10 @@ pub(crate) struct SelfBlocks {
 
 impl SelfBlocks {
     /// Buffers for k unknown blocks, m nodes, D coordinates in blocks of b (none when b = D).
-    /// `rate`: the threshold on h² max |μ| ([`NewtonOptions::self_block_rate`]); m = 0 or
+    /// `rate`: the threshold on h² max |μ| ([`StructuredOptions::self_block_rate`]); m = 0 or
     /// b = D: no self-blocks.
     ///
-    /// [`NewtonOptions::self_block_rate`]: super::NewtonOptions::self_block_rate
+    /// [`StructuredOptions::self_block_rate`]: super::StructuredOptions::self_block_rate
     pub(crate) fn new(k: usize, m: usize, d: usize, b: usize, rate: f64) -> Self {
         let blocks = if b < d && b > 0 && m > 0 && rate < f64::MAX {
             (d / b).min(MAX_SELF_BLOCKS)

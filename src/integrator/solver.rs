@@ -43,7 +43,7 @@ pub enum StageSolver {
     /// the step, solved through the Kronecker structure of the stage Jacobian
     /// (O(n²D + nD²) per iteration, O(nD³) per step; separable Lagrangians). For systems with
     /// coordinate blocks (N-body) the fastest bodies, those with h² |μ| above
-    /// [`NewtonOptions::self_block_rate`](super::NewtonOptions::self_block_rate), are solved
+    /// [`StructuredOptions::self_block_rate`](super::StructuredOptions::self_block_rate), are solved
     /// with their exact time-varying self-blocks instead of the frozen mean (at most eight;
     /// Mercury and Venus in the paper's 10-body run). A step it fails is retried with exact
     /// Newton, as for every structured solver.

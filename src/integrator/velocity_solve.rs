@@ -330,7 +330,7 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> NewtonIteration for VelocityNewton<
             }
             Linear::Dense if stalled && fresh => Adapt::GiveUp,
             // A matrix from an earlier iterate that no longer contracts fast: rebuild it.
-            Linear::Dense if theta.is_finite() && theta > opts.reuse_contraction => {
+            Linear::Dense if theta.is_finite() && theta > opts.dense.reuse_contraction => {
                 self.factored = false;
                 Adapt::Restart
             }

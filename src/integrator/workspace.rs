@@ -136,7 +136,7 @@ impl Workspace {
                 &sep.mass,
                 lagrangian.coordinate_blocks(),
                 m,
-                gvi.options().self_block_rate,
+                gvi.options().structured.self_block_rate,
             ),
             _ => None,
         };
