@@ -44,6 +44,7 @@ pub mod method;
 pub mod newton;
 pub mod periodic;
 pub mod quadrature;
+pub mod refinement;
 pub mod stats;
 pub mod symmetries;
 pub mod systems;
