@@ -928,16 +928,13 @@ fn refinement_study_over_the_users_family() {
 /// of the user's basis records its name and `user_basis: true`; after deserialising,
 /// `position_at`, `velocity_at` and `momentum_at` are `BasisNotAttached` (never a curve in a
 /// wrong basis); after `attach_basis(Bernstein::new)` the dense output is the Bernstein
-/// curve of the stored coefficients, bit for bit, and the original's to the last bit of
-/// the coefficients; attaching a basis with another name, or the right name with another n,
-/// is `Mismatch`.
+/// curve of the stored coefficients and the original's, bit for bit; attaching a basis with
+/// another name, or the right name with another n, is `Mismatch`.
 ///
-/// Not bit for bit with the original: serde_json without its `float_roundtrip` feature
-/// parses some 17-digit numbers one ulp off (measured: 2 of the 22 position coordinates of
-/// this run, e.g. −1.5190563216724209 read back as −1.5190563216724207), so the round trip
-/// moves coefficients by ≤ 1 ulp and the dense output by 2.2e-16 in q (bound 1e-15) and
-/// 7.1e-15 in q̇ and p (bound 1e-13: q̇ = Σ Q_i φ_i'/h weighs a coefficient's ulp by
-/// |φ_i'|/h, up to 2(n − 1)/h = 44).
+/// Bit for bit needs serde_json's `float_roundtrip` feature (a dev-dependency feature here):
+/// without it serde_json parses some 17-digit numbers one ulp off (measured: 2 of the 22
+/// position coordinates of this run, e.g. −1.5190563216724209 read back as
+/// −1.5190563216724207), which moved the dense output by 2.2e-16 in q and 7.1e-15 in q̇.
 #[test]
 fn serialisation_needs_the_users_basis_attached() {
     let (kepler, q0, p0, _) = kepler_problem();
@@ -980,10 +977,10 @@ fn serialisation_needs_the_users_basis_attached() {
         back.momentum_at(&kepler, 1.0),
         Err(GviError::BasisNotAttached { .. })
     ));
-    // The step-end states need no basis; JSON moves them by at most one ulp.
+    // The step-end states need no basis; the round trip is exact.
     let state_ulps = ulps(&back.q, &traj.q).max(ulps(&back.p, &traj.p));
     let coefficient_ulps = ulps(&back.coefficients, &traj.coefficients);
-    assert!(state_ulps <= 1 && coefficient_ulps <= 1);
+    assert_eq!((state_ulps, coefficient_ulps), (0, 0));
     // Wrong name, wrong n, or the family's own error: refused, and still not attached.
     assert!(matches!(
         back.attach_basis(ChebyshevLagrange::new),
@@ -1009,7 +1006,7 @@ fn serialisation_needs_the_users_basis_attached() {
             back.curve(k).unwrap().state_at(&bernstein, t).unwrap()
         );
         assert_eq!(q, back.position_at(t).unwrap());
-        // … and the original's dense output to the last bit of the coefficients.
+        // … and the original's dense output, bit for bit.
         worst_q = worst_q.max(max_diff(&q, &traj.position_at(t).unwrap()));
         worst_v = worst_v
             .max(max_diff(&v, &traj.velocity_at(t).unwrap()))
@@ -1023,10 +1020,7 @@ fn serialisation_needs_the_users_basis_attached() {
          {coefficient_ulps} ulp; dense output after attach_basis within {worst_q:.1e} (q), \
          {worst_v:.1e} (q̇, p)"
     );
-    assert!(
-        worst_q < 1e-15 && worst_v < 1e-13,
-        "{worst_q:e} {worst_v:e}"
-    );
+    assert!(worst_q == 0.0 && worst_v == 0.0, "{worst_q:e} {worst_v:e}");
 }
 
 // ---------------------------------------------------------------------------------------
