@@ -45,6 +45,7 @@ pub mod newton;
 pub mod periodic;
 pub mod quadrature;
 pub mod refinement;
+pub mod solve;
 pub mod stats;
 pub mod symmetries;
 pub mod systems;
@@ -54,6 +55,7 @@ pub use error::{GviError, Result};
 pub use integrator::{GalerkinIntegrator, IntegrationFailure, NewtonOptions, StepJacobian};
 pub use lagrangian::{Lagrangian, Mechanical};
 pub use num_dual::DualNum;
+pub use solve::{Solution, SolveFailure, solve};
 pub use trajectory::Trajectory;
 
 /// The names most programs need.
@@ -63,7 +65,9 @@ pub mod prelude {
     pub use crate::geometry::{MomentumMap, Rotation, Translation, symplecticity_defect};
     pub use crate::integrator::{GalerkinIntegrator, InitialGuess, NewtonOptions, StageSolver};
     pub use crate::lagrangian::{Lagrangian, Mechanical};
+    pub use crate::method::{InitialState, MethodSpec};
     pub use crate::quadrature::{GaussLegendre, Quadrature, QuadratureKind, QuadratureRule};
+    pub use crate::solve::{Solution, SolveFailure, solve};
     pub use crate::systems::{HarmonicOscillator, Kepler, NBody, Pendulum, System};
     pub use crate::trajectory::Trajectory;
     pub use crate::{DualNum, GviError};

@@ -22,7 +22,7 @@
 //! ```
 
 use crate::basis::BasisKind;
-use crate::error::Result;
+use crate::error::{GviError, Result};
 use crate::quadrature::QuadratureKind;
 use serde::{Deserialize, Serialize};
 
@@ -94,6 +94,107 @@ impl MethodSpec {
             ..*gvi.options()
         };
         Ok(gvi.with_options(options))
+    }
+
+    /// Whether n is chosen per step from `ladder` (`tol` given): a tolerance-driven run
+    /// ([`crate::adaptive`]). [`crate::solve::solve`] runs either kind; the uses that need one
+    /// map for every step ([`crate::solve::solve_streaming`], [`crate::solve::solve_rigid_body`],
+    /// [`MethodSpec::require_fixed_n`]) refuse it.
+    pub fn chooses_n(&self) -> bool {
+        self.tol.is_some()
+    }
+
+    /// The largest n a run of this method may use: the top of the ladder (default
+    /// [`crate::adaptive::DEFAULT_LADDER`]) when n is chosen per step, else `n`. For memory
+    /// estimates before a run.
+    pub fn largest_n(&self) -> usize {
+        if !self.chooses_n() {
+            return self.n;
+        }
+        self.ladder
+            .as_ref()
+            .and_then(|l| l.iter().max().copied())
+            .unwrap_or_else(|| {
+                crate::adaptive::DEFAULT_LADDER
+                    .iter()
+                    .copied()
+                    .max()
+                    .unwrap_or(0)
+            })
+    }
+
+    /// Check the settings against each other: `auto_h` chooses h from the tolerance, so it
+    /// needs `tol`.
+    ///
+    /// Errors: [`GviError::InvalidInput`] named `auto_h`.
+    pub fn validate(&self) -> Result<()> {
+        if self.auto_h && self.tol.is_none() {
+            return Err(GviError::InvalidInput {
+                name: "auto_h".into(),
+                reason: "choosing h needs a tolerance (tol)".into(),
+            });
+        }
+        Ok(())
+    }
+
+    /// The settings of the tolerance-driven run this method names (`None` without `tol`):
+    /// its tolerance, basis, quadrature (at each rung's default points; `quad_points` is for
+    /// fixed n), h, ladder and control. The stage solver is the method's unless that is `auto`,
+    /// in which case it stays the controller's `exact` (its costs were tuned with it, see
+    /// [`AdaptiveOptions::solver`](crate::adaptive::AdaptiveOptions::solver)).
+    pub fn adaptive_options(&self) -> Option<crate::adaptive::AdaptiveOptions> {
+        let tol = self.tol?;
+        let mut opts =
+            crate::adaptive::AdaptiveOptions::new(tol, self.basis, self.quadrature, self.h);
+        if let Some(ladder) = &self.ladder {
+            opts.ladder = ladder.clone();
+        }
+        if let Some(control) = self.control {
+            opts.control = control;
+        }
+        if self.solver != crate::integrator::StageSolver::Auto {
+            opts.solver = self.solver;
+        }
+        Some(opts)
+    }
+
+    /// Refuse a tolerance-driven method for a use that needs one map for every step (a
+    /// tangent map, an ensemble, a streamed run, the Lie group integrator); `purpose` names
+    /// that use in the error.
+    ///
+    /// Errors: those of [`validate`](Self::validate); [`GviError::Unsupported`] when n is
+    /// chosen per step ([`chooses_n`](Self::chooses_n)).
+    ///
+    /// ```
+    /// use galerkin_vi::method::MethodSpec;
+    /// let mut method = MethodSpec::spectral(16, 1.0, 10);
+    /// assert!(method.require_fixed_n("a tangent map").is_ok());
+    /// method.tol = Some(1e-8);
+    /// let e = method.require_fixed_n("a tangent map").unwrap_err();
+    /// assert!(e.to_string().starts_with("a tangent map needs a fixed n"));
+    /// ```
+    pub fn require_fixed_n(&self, purpose: &str) -> Result<()> {
+        self.validate()?;
+        match self.tol {
+            Some(tol) => Err(GviError::Unsupported(format!(
+                "{purpose} needs a fixed n, but tol = {tol:e} chooses n per step; give n \
+                 instead of tol"
+            ))),
+            None => Ok(()),
+        }
+    }
+
+    /// The Lie group integrator on SO(3) this method names (basis, n, quadrature, points, h
+    /// and `retraction`, default exp), for rigid bodies ([`crate::lie`]).
+    pub fn lie_integrator(&self) -> Result<crate::lie::LieGalerkin> {
+        Ok(crate::lie::LieGalerkin::from_kinds(
+            self.basis,
+            self.n,
+            self.quadrature,
+            self.quad_points,
+            self.h,
+        )?
+        .with_retraction(self.retraction.unwrap_or_default()))
     }
 }
 

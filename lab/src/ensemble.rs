@@ -483,14 +483,7 @@ pub fn run_members(
     progress: Option<&ProgressBar>,
 ) -> Result<Ensemble> {
     let m = &scene.method;
-    if m.tol.is_some() {
-        return Err(LabError::InvalidArgument {
-            name: "tol".into(),
-            reason: "ensembles run at fixed n (the tangent map is that of the fixed-n method); \
-                     remove the scene's tol"
-                .into(),
-        });
-    }
+    m.require_fixed_n("an ensemble (its tangent map is that of one fixed-n method)")?;
     let system = scene.euclidean()?;
     let gvi = m.integrator()?;
     let symmetries = system.symmetries();

@@ -16,7 +16,7 @@ use crate::error::Result;
 use crate::plot::{Chart, Series};
 use crate::scene::{BuiltScene, BuiltSystem, Scene};
 use galerkin_vi::Lagrangian;
-use galerkin_vi::adaptive::{AdaptiveOptions, integrate_adaptive};
+use galerkin_vi::solve::{AdaptiveReport, Solution, solve};
 use galerkin_vi::systems::{AnySystem, System};
 use galerkin_vi::trajectory::Trajectory;
 use serde::Serialize;
@@ -181,16 +181,11 @@ pub fn run_scene(scene: &BuiltScene, options: RunOptions) -> Result<RunResult> {
     }
 }
 
-/// Per-step outputs of a tolerance-driven run for the table.
-struct AdaptiveColumns {
-    indicators: Vec<f64>,
-    estimates: Vec<Option<f64>>,
-    warnings: Vec<String>,
-    evaluations: usize,
-}
-
 /// Run a built scene's initial state and method on its (Euclidean) system; the state was
-/// checked against it by [`crate::scene::Scene::build`].
+/// checked against it by [`crate::scene::Scene::build`]. The library's
+/// [`galerkin_vi::solve::solve`] decides how (fixed n, or n chosen per step with `tol`, h
+/// chosen with `auto_h`); the table adds the n, indicator and estimate columns when the
+/// solution has a tolerance-driven report.
 fn run_system(system: &AnySystem, scene: &BuiltScene, options: RunOptions) -> Result<RunResult> {
     let m = &scene.method;
     let init = &scene.initial;
@@ -198,55 +193,9 @@ fn run_system(system: &AnySystem, scene: &BuiltScene, options: RunOptions) -> Re
     let d = system.dim();
     let exact = system.exact_solution(init.t0, &init.q, &init.p)?;
     let start = Instant::now();
-    let mut adaptive: Option<AdaptiveColumns> = None;
-    let mut step_choice = None;
-    if m.auto_h && m.tol.is_none() {
-        return Err(crate::error::LabError::InvalidArgument {
-            name: "auto_h".into(),
-            reason: "choosing h needs a tolerance (tol)".into(),
-        });
-    }
-    let (h, steps) = (m.h, m.steps);
-    monitor::check_time_span(init.t0, h, steps)?;
-    let outcome = match m.tol {
-        None => gvi.integrate(system, init.t0, &init.q, &init.p, m.steps),
-        Some(tol) => {
-            let mut opts = AdaptiveOptions::new(tol, m.basis, m.quadrature, m.h);
-            if let Some(l) = &m.ladder {
-                opts.ladder = l.clone();
-            }
-            if let Some(c) = m.control {
-                opts.control = c;
-            }
-            if m.solver != galerkin_vi::integrator::StageSolver::Auto {
-                opts.solver = m.solver;
-            }
-            let mut steps = steps;
-            if m.auto_h {
-                let c = galerkin_vi::adaptive::choose_step(
-                    system,
-                    &opts,
-                    init.t0,
-                    &init.q,
-                    &init.p,
-                    h * steps as f64,
-                )?;
-                (opts.h, steps) = (c.h, c.steps);
-                step_choice = Some(c);
-            }
-            integrate_adaptive(system, &opts, init.t0, &init.q, &init.p, steps).map(|run| {
-                adaptive = Some(AdaptiveColumns {
-                    indicators: run.indicators,
-                    estimates: run.estimates,
-                    warnings: run.warnings,
-                    evaluations: run.gradient_evaluations,
-                });
-                run.trajectory
-            })
-        }
-    };
-    let (mut trajectory, failure) = match outcome {
-        Ok(t) => (t, None),
+    monitor::check_time_span(init.t0, m.h, m.steps)?;
+    let (solution, failure) = match solve(system, init, m) {
+        Ok(s) => (s, None),
         Err(f) => match f.partial {
             Some(partial) => (*partial, Some(f.error.into())),
             None => return Err(f.error.into()),
@@ -262,11 +211,16 @@ fn run_system(system: &AnySystem, scene: &BuiltScene, options: RunOptions) -> Re
     if exact.is_some() {
         columns.push("position_error".into());
     }
-    if m.tol.is_some() {
+    if solution.adaptive.is_some() {
         columns.push("n".into());
         columns.push("indicator".into());
         columns.push("estimate".into());
     }
+    let Solution {
+        mut trajectory,
+        adaptive,
+        step_choice,
+    } = solution;
     let mut monitor = Monitor::new(system, &init.q, &init.p, init.t0)?;
     let mut rows = Vec::with_capacity(trajectory.q.len());
     let mut failure = failure;
@@ -320,15 +274,23 @@ fn run_system(system: &AnySystem, scene: &BuiltScene, options: RunOptions) -> Re
         let hi = trajectory.step_n.iter().copied().max().unwrap_or(0);
         (lo, hi)
     });
-    let method = match (m.tol, n_range) {
-        (Some(tol), Some((lo, hi))) => format!(
+    let method = match (&adaptive, n_range) {
+        (Some(AdaptiveReport { tol, .. }), Some((lo, hi))) => format!(
             "{} basis, n chosen per step in {lo}…{hi} for tol = {tol:e}, {} (default points), h = {}, {} solver",
             m.basis,
             m.quadrature,
             fmt_number(trajectory.h),
             m.solver
         ),
-        _ => format!(
+        // A tolerance-driven run that failed at its first step.
+        (Some(AdaptiveReport { tol, .. }), None) => format!(
+            "{} basis, n chosen per step for tol = {tol:e}, {} (default points), h = {}, {} solver",
+            m.basis,
+            m.quadrature,
+            fmt_number(trajectory.h),
+            m.solver
+        ),
+        (None, _) => format!(
             "{} basis n = {}, {} with {} points, h = {}, {} solver",
             m.basis,
             m.n,
@@ -339,7 +301,7 @@ fn run_system(system: &AnySystem, scene: &BuiltScene, options: RunOptions) -> Re
         ),
     };
     let (mut warnings, force_evaluations) = match &adaptive {
-        Some(a) => (a.warnings.clone(), a.evaluations),
+        Some(a) => (a.warnings.clone(), a.gradient_evaluations),
         None => (Vec::new(), trajectory.gradient_evaluations()),
     };
     warnings.extend(monitor.warnings());
@@ -394,7 +356,7 @@ fn run_system(system: &AnySystem, scene: &BuiltScene, options: RunOptions) -> Re
             format!(
                 "{}: n chosen per step (tol = {:e})",
                 scene.name,
-                m.tol.unwrap_or(f64::NAN)
+                adaptive.as_ref().map_or(f64::NAN, |a| a.tol)
             ),
             "t (step midpoint)",
             "n",

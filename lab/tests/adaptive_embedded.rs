@@ -412,10 +412,11 @@ fn scene_files_choose_h_from_tol() {
     assert_eq!(traj.steps(), choice.steps);
     assert!((choice.h * choice.steps as f64 - 40.0).abs() < 1e-9);
     assert!(result.summary.max_position_error.unwrap() <= 2.2e-8);
+    // Refused by the library's `solve` (`MethodSpec::validate`), before any step.
     let scene = Scene::from_toml_str("inline", &text("auto_h = true")).unwrap();
     assert!(matches!(
         run_scene(&scene.build().unwrap(), RunOptions::default()),
-        Err(LabError::InvalidArgument { .. })
+        Err(LabError::Core(GviError::InvalidInput { name, .. })) if name == "auto_h"
     ));
 }
 

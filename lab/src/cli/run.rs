@@ -164,7 +164,8 @@ pub fn run(args: RunArgs) -> Result<(), LabError> {
         if matches!(&scene.system, BuiltSystem::Euclidean(s) if s.as_nbody().is_some()) {
             outputs.push(("the inner-bodies chart", sibling(p, "-inner", "orbits")));
         }
-        if scene.method.tol.is_some() {
+        // Checked before the run, so from the method: a run that chooses n per step draws it.
+        if scene.method.chooses_n() {
             outputs.push(("the n chart", sibling(p, "-n", "run")));
         }
     }
@@ -182,8 +183,9 @@ pub fn run(args: RunArgs) -> Result<(), LabError> {
 
     // Rigid bodies run on SO(3) by their own integrator (galerkin_vi::lie), in memory.
     let on_so3 = matches!(scene.system, BuiltSystem::RigidBody(_));
+    // A run that chooses n per step keeps its trajectory (the library does not stream it).
     let streamed =
-        args.plot.is_none() && args.format == Format::Csv && scene.method.tol.is_none() && !on_so3;
+        args.plot.is_none() && args.format == Format::Csv && !scene.method.chooses_n() && !on_so3;
     let samples = RunOptions::default().curve_samples_per_step;
     let (summary, failure) = if streamed {
         let outcome = match &args.output {
@@ -217,16 +219,8 @@ pub fn run(args: RunArgs) -> Result<(), LabError> {
 /// Refuse an in-memory run (chart, JSON or --tol) whose estimated memory is absurd.
 fn refuse_if_too_big(scene: &BuiltScene, args: &RunArgs) -> Result<(), LabError> {
     let d = scene.initial.q.len();
-    let n = match scene.method.tol {
-        // A tolerance-driven run may use the largest n of its ladder.
-        Some(_) => scene
-            .method
-            .ladder
-            .as_ref()
-            .and_then(|l| l.iter().max().copied())
-            .unwrap_or(64),
-        None => scene.method.n,
-    };
+    // A tolerance-driven run may use the largest n of its ladder.
+    let n = scene.method.largest_n();
     let columns = 2 + 2 * d + 6;
     let per_step = bytes_per_step(columns, n, d, args.format == Format::Json);
     let estimate = per_step * scene.method.steps as f64;

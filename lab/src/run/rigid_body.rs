@@ -12,20 +12,18 @@ use crate::run::{RunResult, RunSummary};
 use crate::scene::BuiltScene;
 use galerkin_vi::lie::body::RigidBody;
 use galerkin_vi::lie::elliptic::FreeBodyExact;
-use galerkin_vi::lie::integrator::{LieGalerkin, LieTrajectory};
-use galerkin_vi::lie::so3::{self, Mat3, Retraction};
+use galerkin_vi::lie::integrator::{LieState, LieTrajectory};
+use galerkin_vi::lie::so3::{self, Mat3};
+use galerkin_vi::solve::{RigidBodySolution, rigid_body_initial_state, solve_rigid_body};
 use std::time::Instant;
 
 pub use crate::scene::AnyRigidBody;
 
 /// R₀ and μ₀ from a built scene's `[initial]` (rotation vector, body momentum; its lengths
-/// and finiteness were checked by [`crate::scene::Scene::build`]).
+/// and finiteness were checked by [`crate::scene::Scene::build`]): the library's convention,
+/// [`rigid_body_initial_state`].
 pub fn initial_state(scene: &BuiltScene) -> Result<(Mat3<f64>, [f64; 3])> {
-    let init = &scene.initial;
-    crate::error::ensure_len("initial q (rotation vector)", 3, init.q.len())?;
-    crate::error::ensure_len("initial p (body momentum)", 3, init.p.len())?;
-    let r0 = Retraction::Exp.map(&[init.q[0], init.q[1], init.q[2]]);
-    Ok((r0, [init.p[0], init.p[1], init.p[2]]))
+    Ok(rigid_body_initial_state(&scene.initial)?)
 }
 
 /// Run a built rigid-body scene.
@@ -37,19 +35,15 @@ pub fn run_rigid_body(body: &AnyRigidBody, scene: &BuiltScene) -> Result<RunResu
 }
 
 fn run_body<S: RigidBody>(body: &S, scene: &BuiltScene) -> Result<RunResult> {
-    let m = &scene.method;
-    if m.tol.is_some() || m.auto_h {
-        return Err(GviError::Unsupported(
-            "tolerance-driven runs are not available for rigid bodies; give n".into(),
-        )
-        .into());
-    }
-    let gvi = LieGalerkin::from_kinds(m.basis, m.n, m.quadrature, m.quad_points, m.h)?
-        .with_retraction(m.retraction.unwrap_or_default());
-    let (r0, mu0) = initial_state(scene)?;
     let start = Instant::now();
-    let traj = gvi.integrate(body, scene.initial.t0, &r0, &mu0, m.steps)?;
+    // The library refuses a tolerance-driven method here (the Lie group integrator runs at
+    // fixed n).
+    let RigidBodySolution {
+        trajectory: traj,
+        integrator: gvi,
+    } = solve_rigid_body(body, &scene.initial, &scene.method)?;
     let seconds = start.elapsed().as_secs_f64();
+    let LieState { r: r0, mu: mu0 } = traj.states[0];
     let exact = if body.has_potential() {
         None
     } else {

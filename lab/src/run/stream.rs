@@ -8,10 +8,11 @@
 
 use super::{Monitor, RunSummary};
 use crate::error::LabError;
-use crate::error::{GviError, Result};
+use crate::error::Result;
 use crate::scene::BuiltScene;
 use galerkin_vi::Lagrangian;
 use galerkin_vi::basis::Basis;
+use galerkin_vi::solve::{SolveFailure, StreamStep, Streamed, solve_streaming};
 use galerkin_vi::systems::{AnySystem, System};
 use std::io::Write;
 use std::time::Instant;
@@ -37,7 +38,8 @@ pub struct StreamOutcome {
     pub failure: Option<LabError>,
 }
 
-/// Integrate a scene (without `tol`) and write its CSV table to `out` step by step.
+/// Integrate a scene (without `tol`: the library refuses to stream a tolerance-driven run)
+/// and write its CSV table to `out` step by step.
 /// `curve_samples_per_step` as in [`super::RunOptions`].
 pub fn stream_scene(
     scene: &BuiltScene,
@@ -69,24 +71,11 @@ fn stream_system(
 ) -> Result<StreamOutcome> {
     let m = &scene.method;
     let init = &scene.initial;
-    if m.tol.is_some() {
-        return Err(GviError::Unsupported(
-            "a tolerance-driven run is not streamed (it keeps the whole trajectory)".into(),
-        )
-        .into());
-    }
+    // For the summary; built first so that its parameter errors come first, as in-memory.
     let gvi = m.integrator()?;
     // Lengths, finiteness and steps ≥ 1 were checked when the scene was built.
     let d = system.dim();
-    let steps = m.steps;
-    if steps > galerkin_vi::integrator::MAX_STEPS {
-        return Err(GviError::InvalidStepCount {
-            steps,
-            reason: format!("need 1 ≤ steps ≤ {}", galerkin_vi::integrator::MAX_STEPS),
-        }
-        .into());
-    }
-    super::monitor::check_time_span(init.t0, m.h, steps)?;
+    super::monitor::check_time_span(init.t0, m.h, m.steps)?;
     let exact = system.exact_solution(init.t0, &init.q, &init.p)?;
     let mut monitor = Monitor::new(system, &init.q, &init.p, init.t0)?;
     let io = |source| LabError::Io {
@@ -102,74 +91,38 @@ fn stream_system(
     if exact.is_some() {
         header.push("position_error".into());
     }
-    writeln!(out, "{}", header.join(",")).map_err(io)?;
 
     let start = Instant::now();
-    let mut ws = gvi.workspace(system)?;
     let n = gvi.n();
-    let h = gvi.step_size();
-    let (mut q, mut p) = (init.q.clone(), init.p.clone());
-    let (mut q_next, mut p_next) = (vec![0.0; d], vec![0.0; d]);
-    let (mut q_err, mut p_err) = (vec![0.0; d], vec![0.0; d]);
     let (mut phi, mut dphi, mut qc) = (vec![0.0; n], vec![0.0; n], vec![0.0; d]);
     let mut row = Vec::with_capacity(header.len());
     let (mut iterations, mut evaluations, mut done) = (0usize, 0usize, 0usize);
     let mut curve_error: Option<f64> = (exact.is_some() && samples > 0).then_some(0.0);
-    let mut failure: Option<LabError> = None;
-    let mut emit = |row: &mut Vec<f64>, k: usize, q: &[f64], p: &[f64], mon: &mut Monitor| {
-        let t = init.t0 + k as f64 * h;
-        row.clear();
-        row.push(k as f64);
-        row.push(t);
-        row.extend_from_slice(q);
-        row.extend_from_slice(p);
-        mon.observe(system, exact.as_ref(), k, t, q, p, row)?;
-        write_row(out, row).map_err(io)
-    };
-    emit(&mut row, 0, &init.q, &init.p, &mut monitor)?;
-    for k in 0..steps {
-        let result = if gvi.options().compensated {
-            gvi.step_compensated(system, &mut ws, &mut q, &mut q_err, &mut p, &mut p_err)
-        } else {
-            gvi.step(system, &mut ws, &q, &p, &mut q_next, &mut p_next)
-                .inspect(|_| {
-                    std::mem::swap(&mut q, &mut q_next);
-                    std::mem::swap(&mut p, &mut p_next);
-                })
-        };
-        let stats = match result {
-            Ok(stats) => stats,
-            Err(f) => {
-                failure = Some(
-                    GviError::NewtonFailure {
-                        step: k,
-                        t: init.t0 + k as f64 * h,
-                        residual: f.residual,
-                        iterations: f.iterations,
-                        reason: f.reason,
-                    }
-                    .into(),
-                );
-                break;
-            }
-        };
-        match emit(&mut row, k + 1, &q, &p, &mut monitor) {
-            Ok(()) => {}
-            Err(e @ LabError::Io { .. }) => return Err(e),
-            Err(e) => {
-                failure = Some(e);
-                break;
-            }
+    // The library refuses a tolerance-driven method (it keeps the whole trajectory) before
+    // the first visit, so the header is written only for a run that starts.
+    let visit = |s: StreamStep<'_>| -> Result<()> {
+        if s.step == 0 {
+            writeln!(out, "{}", header.join(",")).map_err(io)?;
         }
+        row.clear();
+        row.push(s.step as f64);
+        row.push(s.t);
+        row.extend_from_slice(s.q);
+        row.extend_from_slice(s.p);
+        monitor.observe(system, exact.as_ref(), s.step, s.t, s.q, s.p, &mut row)?;
+        write_row(out, &row).map_err(io)?;
+        let (Some(curve), Some(stats)) = (s.curve, s.stats) else {
+            return Ok(());
+        };
         iterations += stats.iterations;
         evaluations += stats.gradient_evaluations;
         done += 1;
         if let (Some(ex), Some(worst)) = (&exact, curve_error.as_mut()) {
             // Sample this step's curve while its coefficients are in the workspace.
-            let c = ws.coefficients();
-            for s in 0..samples {
-                let tau = s as f64 / samples as f64;
-                gvi.basis().eval(tau, &mut phi, &mut dphi);
+            let (c, k, h) = (curve.coefficients(), s.step - 1, curve.h());
+            for j in 0..samples {
+                let tau = j as f64 / samples as f64;
+                s.basis.eval(tau, &mut phi, &mut dphi);
                 qc.iter_mut().for_each(|x| *x = 0.0);
                 for i in 0..n {
                     for r in 0..d {
@@ -186,7 +139,29 @@ fn stream_system(
                 *worst = worst.max(e);
             }
         }
-    }
+        Ok(())
+    };
+    let failure = match solve_streaming(system, init, m, visit) {
+        Ok(Streamed { stopped: None, .. }) => None,
+        // An unwritable output, or an initial state the monitor refuses, ends the run as an
+        // error; a later non-finite state as a failure with the rows before it written.
+        Ok(Streamed {
+            stopped: Some(e @ LabError::Io { .. }),
+            ..
+        })
+        | Ok(Streamed {
+            steps: 0,
+            stopped: Some(e),
+        }) => return Err(e),
+        Ok(Streamed {
+            stopped: Some(e), ..
+        }) => Some(e),
+        Err(SolveFailure {
+            error,
+            partial: Some(_),
+        }) => Some(error.into()),
+        Err(SolveFailure { error, .. }) => return Err(error.into()),
+    };
     out.flush().map_err(io)?;
     let seconds = start.elapsed().as_secs_f64();
     let method = format!(

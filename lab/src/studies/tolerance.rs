@@ -1,11 +1,11 @@
 //! `gvi tolerance-study`: does a tolerance-driven run ([`galerkin_vi::adaptive`]) meet the requested
 //! tolerance, and is it cheaper than the cheapest fixed n that meets it?
 //!
-//! For every requested tolerance and every error control, the scene is run with
-//! [`integrate_adaptive`] (the scene's basis, quadrature, h and steps) and its max position
-//! error over the step ends (max-norm) is measured against a reference; every fixed n from the
-//! smallest to the largest rung of the ladder is run once with the same h and steps, and the
-//! cheapest one (force evaluations, [`Trajectory::gradient_evaluations`]) whose error meets
+//! For every requested tolerance and every error control, the scene is run with [`solve`]
+//! (the scene's basis, quadrature, h and steps with that `tol`, ladder and control) and its
+//! max position error over the step ends (max-norm) is measured against a reference; every
+//! fixed n from the smallest to the largest rung of the ladder is run once with the same h and
+//! steps, and the cheapest one (force evaluations, [`Trajectory::gradient_evaluations`]) whose error meets
 //! the tolerance is the competitor. The reference is the exact solution where one is known,
 //! for N-body scenes Gauss collocation with 6 stages at h/K (K as in
 //! [`crate::nbody_report`]: the shortest two-body period spans ≥ 256 reference steps, and at
@@ -22,9 +22,11 @@ use crate::error::Result;
 use crate::plot::{Chart, Series};
 use crate::scene::BuiltScene;
 use crate::table;
-use galerkin_vi::adaptive::{AdaptiveOptions, DEFAULT_LADDER, ErrorControl, integrate_adaptive};
+use galerkin_vi::adaptive::{DEFAULT_LADDER, ErrorControl};
 use galerkin_vi::baselines::GaussCollocationBaseline;
-use galerkin_vi::integrator::GalerkinIntegrator;
+use galerkin_vi::integrator::{GalerkinIntegrator, StageSolver};
+use galerkin_vi::method::MethodSpec;
+use galerkin_vi::solve::{Solution, solve};
 use galerkin_vi::systems::{NBody, System};
 use galerkin_vi::trajectory::Trajectory;
 use serde::Serialize;
@@ -275,15 +277,26 @@ fn study_system<S: System>(
             _ => None,
         };
         for &control in &config.controls {
-            let mut opts = AdaptiveOptions::new(tol, m.basis, m.quadrature, m.h);
-            opts.ladder = config.ladder.clone();
-            opts.control = control;
+            // The scene's basis, quadrature, h and steps with this tolerance, ladder and
+            // control (the controller's own stage solver).
+            let method = MethodSpec {
+                tol: Some(tol),
+                ladder: Some(config.ladder.clone()),
+                control: Some(control),
+                auto_h: false,
+                solver: StageSolver::Auto,
+                ..m.clone()
+            };
             let clock = std::time::Instant::now();
-            let result = integrate_adaptive(system, &opts, init.t0, &init.q, &init.p, m.steps);
+            let result = solve(system, init, &method);
             let seconds = clock.elapsed().as_secs_f64();
             let row = match result {
-                Ok(run) => {
-                    let t = &run.trajectory;
+                Ok(Solution {
+                    trajectory: t,
+                    adaptive: Some(run),
+                    ..
+                }) => {
+                    let t = &t;
                     let error = max_error(t, reference);
                     let n_lo = t.step_n.iter().copied().min().unwrap_or(0);
                     let n_hi = t.step_n.iter().copied().max().unwrap_or(0);
@@ -304,7 +317,9 @@ fn study_system<S: System>(
                         oracle_budget,
                     }
                 }
-                Err(_) => ToleranceRow {
+                // A failed run (or, which `solve` never returns for a method with `tol`, one
+                // without a tolerance-driven report).
+                _ => ToleranceRow {
                     tol,
                     control,
                     error: f64::NAN,
