@@ -5,8 +5,11 @@
 //! every stage solver on the other systems (oscillator, pendulum, Hénon–Heiles, a magnetic and a
 //! double-pendulum expression Lagrangian (non-separable), a double well differentiated by AD, the
 //! figure-eight three-body choreography and the outer solar system); a few tolerance-driven
-//! (adaptive n) runs; Lie group runs on SO(3). A combination that fails (e.g. the trapezoid rule
-//! with a polynomial basis) records its error message.
+//! (adaptive n) runs; Lie group runs on SO(3); periodic orbits (`periodic::solve`: the
+//! figure-eight at prescribed energy and at fixed period, the oscillator and the pendulum, and
+//! negative controls); the Gauss collocation baseline (s = 2 … 4, its three entry points). A
+//! combination that fails (e.g. the trapezoid rule with a polynomial basis) records its error
+//! message.
 //!
 //! One line per case: its id, then `ok` and `name[index]=value|bits` tokens — the state after
 //! the first step (`q1`, `p1`: the one-step map itself) and at the end (`q`, `p`), a few
@@ -23,10 +26,16 @@
 //! Run: `cargo run --release --example record_maps -p galerkin-vi > maps.txt`
 
 use galerkin_vi::adaptive::{AdaptiveOptions, integrate_adaptive};
+use galerkin_vi::baselines::{
+    GaussCollocationBaseline, OneStepMethod, States, StaticKernel, integrate_one_step,
+};
 use galerkin_vi::basis::BasisKind;
 use galerkin_vi::integrator::StageSolver;
 use galerkin_vi::lie::so3::{Mat3, Retraction};
 use galerkin_vi::lie::{FreeRigidBody, HeavyTop, LieGalerkin, LieTrajectory, RigidBody};
+use galerkin_vi::periodic::{
+    self, FourierCurve, Layout, PeriodCondition, PeriodicOptions, PeriodicSolution, Symmetry,
+};
 use galerkin_vi::quadrature::QuadratureKind;
 use galerkin_vi::systems::{ExpressionLagrangian, HarmonicOscillator, Kepler, NBody, Pendulum};
 use galerkin_vi::{DualNum, GalerkinIntegrator, Lagrangian, NewtonOptions, Trajectory};
@@ -485,12 +494,257 @@ fn lie_cases(out: &mut Vec<String>) -> Res<()> {
     Ok(())
 }
 
+/// The recorded values of a periodic solution: every coefficient, the period, the action, the
+/// energy and its spread, the residual history; the iterations and nodes as text.
+fn periodic_tokens(line: &mut String, sol: &PeriodicSolution) {
+    let _ = write!(line, " iterations={} nodes={}", sol.iterations, sol.nodes);
+    push_vector(line, "c", &sol.curve.coefficients);
+    let scalars = [
+        sol.curve.period,
+        sol.action,
+        sol.energy,
+        sol.energy_spread,
+        sol.residual,
+        sol.tail,
+    ];
+    push_vector(line, "T,S,E,spread,res,tail", &scalars);
+    push_vector(line, "history", &sol.residual_history);
+}
+
+fn periodic_run<L: Lagrangian>(
+    out: &mut Vec<String>,
+    id: &str,
+    lag: &L,
+    guess: FourierCurve,
+    (condition, symmetries, options): (PeriodCondition, &[Symmetry], &PeriodicOptions),
+) {
+    let id = format!("periodic/{id}");
+    let line = match periodic::solve(lag, guess, condition, symmetries, options) {
+        Ok(sol) => {
+            let mut line = format!("{id} ok");
+            periodic_tokens(&mut line, &sol);
+            line
+        }
+        Err(e) => error_line(&id, "solve", &e),
+    };
+    out.push(line);
+}
+
+/// Periodic orbits by Newton on the discrete action (src/periodic): the figure-eight from the
+/// module's lemniscate guess at Simó's energy and, from the solution, at fixed period; the
+/// oscillator's and the pendulum's period from the energy; negative controls (a collision
+/// curve that is no orbit, no orbit at positive energy, the iteration limit, too few modes).
+fn periodic_cases(out: &mut Vec<String>) -> Res<()> {
+    let nb = NBody::new(vec![1.0; 3], 1.0, 2)?;
+    let layout = Layout::Choreography {
+        bodies: 3,
+        body_dim: 2,
+    };
+    let symmetries = Symmetry::nbody(2);
+    let defaults = PeriodicOptions::default();
+    let energy = PeriodCondition::Energy(-1.287_141_991_8);
+    let lemniscate = |modes: usize| -> Res<FourierCurve> {
+        let mut guess = FourierCurve::zeros(modes, layout.clone(), 6.0)?;
+        guess.set_mode(1, &[0.0, 0.0], &[1.0, 0.0])?;
+        guess.set_mode(2, &[0.0, 0.0], &[0.0, 0.35])?;
+        Ok(guess)
+    };
+    for modes in [16, 30] {
+        periodic_run(
+            out,
+            &format!("figure-eight/K{modes}/energy"),
+            &nb,
+            lemniscate(modes)?,
+            (energy, &symmetries, &defaults),
+        );
+    }
+    if let Ok(sol) = periodic::solve(&nb, lemniscate(30)?, energy, &symmetries, &defaults) {
+        let mut at_period = sol.curve;
+        at_period.period = 6.32591398;
+        periodic_run(
+            out,
+            "figure-eight/K30/fixed-period",
+            &nb,
+            at_period,
+            (PeriodCondition::Fixed, &symmetries, &defaults),
+        );
+    }
+    // Negative controls: a guess through collisions (a stationary point that is no orbit, or
+    // a failure), positive energy (no orbit), one iteration, the tail test at K = 6.
+    let mut far = FourierCurve::zeros(16, layout.clone(), 6.0)?;
+    far.set_mode(1, &[0.0, 0.0], &[1.0, 0.0])?;
+    periodic_run(
+        out,
+        "figure-eight/collision-guess/energy",
+        &nb,
+        far.clone(),
+        (energy, &symmetries, &defaults),
+    );
+    periodic_run(
+        out,
+        "figure-eight/collision-guess/positive-energy",
+        &nb,
+        far,
+        (PeriodCondition::Energy(0.5), &symmetries, &defaults),
+    );
+    let one = PeriodicOptions {
+        max_iterations: 1,
+        ..defaults
+    };
+    periodic_run(
+        out,
+        "figure-eight/K30/one-iteration",
+        &nb,
+        lemniscate(30)?,
+        (energy, &symmetries, &one),
+    );
+    let tail = PeriodicOptions {
+        tail_tolerance: Some(1e-6),
+        ..defaults
+    };
+    periodic_run(
+        out,
+        "figure-eight/K6/tail-test",
+        &nb,
+        lemniscate(6)?,
+        (energy, &symmetries, &tail),
+    );
+    // One degree of freedom: the oscillator (period 2π at every energy) and the pendulum at
+    // amplitude 2.5 (energy −cos 2.5).
+    let ho = HarmonicOscillator::new(1.0, 1.0)?;
+    let mut guess = FourierCurve::zeros(4, Layout::Orbit { dim: 1 }, 5.0)?;
+    guess.set_mode(1, &[0.7], &[0.1])?;
+    guess.set_mode(2, &[0.05], &[0.0])?;
+    periodic_run(
+        out,
+        "harmonic/K4/energy",
+        &ho,
+        guess,
+        (
+            PeriodCondition::Energy(0.5),
+            &[Symmetry::TimeShift],
+            &defaults,
+        ),
+    );
+    let pendulum = Pendulum::unit();
+    let mut guess = FourierCurve::zeros(24, Layout::Orbit { dim: 1 }, 9.0)?;
+    guess.set_mode(1, &[2.3], &[0.0])?;
+    guess.set_mode(3, &[0.15], &[0.0])?;
+    periodic_run(
+        out,
+        "pendulum/K24/energy",
+        &pendulum,
+        guess,
+        (
+            PeriodCondition::Energy(-(2.5f64).cos()),
+            &[Symmetry::TimeShift],
+            &defaults,
+        ),
+    );
+    Ok(())
+}
+
+/// The state after the first step, at the middle and at the end of a baseline run, and the
+/// work counters as text (they change if an iteration takes another path).
+fn states_tokens(line: &mut String, (qs, ps): &States) {
+    let steps = qs.len() - 1;
+    for (name, k) in [("1", 1), ("mid", steps / 2), ("end", steps)] {
+        push_vector(line, &format!("q{name}"), &qs[k]);
+        push_vector(line, &format!("p{name}"), &ps[k]);
+    }
+}
+
+/// `steps` steps of [`StaticKernel::advance`] (the fixed-size kernel of the peer studies).
+fn gauss_static<L: Lagrangian, const D: usize>(
+    g: &mut GaussCollocationBaseline<'_, L>,
+    (q0, p0): (&[f64], &[f64]),
+    steps: usize,
+) -> Res<States> {
+    let mut q: [f64; D] = q0.try_into()?;
+    let mut p: [f64; D] = p0.try_into()?;
+    let (mut qs, mut ps) = (vec![q.to_vec()], vec![p.to_vec()]);
+    let mut fsal = None;
+    for k in 0..steps {
+        g.advance(k as f64 * g.step_size(), &mut q, &mut p, &mut fsal)?;
+        qs.push(q.to_vec());
+        ps.push(p.to_vec());
+    }
+    Ok((qs, ps))
+}
+
+/// Gauss collocation with s stages through its three entry points: `step` (fixed point, then
+/// simplified Newton), `integrate_compensated` (the increments) and the static kernel.
+fn gauss_run<L: Lagrangian>(
+    out: &mut Vec<String>,
+    system: &str,
+    lag: &L,
+    (s, h, steps): (usize, f64, usize),
+    (q0, p0): (&[f64], &[f64]),
+) {
+    for entry in ["step", "compensated", "static"] {
+        let id = format!("gauss/{system}/s{s}/h{h}/s{steps}/{entry}");
+        let mut g = match GaussCollocationBaseline::new(lag, s, h) {
+            Ok(g) => g,
+            Err(e) => {
+                out.push(error_line(&id, "construct", &e));
+                continue;
+            }
+        };
+        let run: Res<States> = match entry {
+            "step" => integrate_one_step(&mut g, q0, p0, steps).map_err(Into::into),
+            "compensated" => g
+                .integrate_compensated(q0, p0, steps, 1)
+                .map_err(Into::into),
+            _ => match q0.len() {
+                1 => gauss_static::<L, 1>(&mut g, (q0, p0), steps),
+                _ => gauss_static::<L, 2>(&mut g, (q0, p0), steps),
+            },
+        };
+        let line = match run {
+            Ok(states) => {
+                let mut line = format!(
+                    "{id} ok evaluations={} iterations={}",
+                    g.force_evaluations(),
+                    g.iterations()
+                );
+                states_tokens(&mut line, &states);
+                line
+            }
+            Err(e) => error_line(&id, "integrate", &*e),
+        };
+        out.push(line);
+    }
+}
+
+/// The Gauss collocation baseline (src/baselines): Kepler (e = 0.6) at a small step (the
+/// fixed-point iteration), at larger ones (simplified Newton near the pericentre; at h = 1 it
+/// diverges: a negative control), the oscillator at h = 5 (the fixed point diverges: Newton),
+/// the pendulum at a large amplitude.
+fn gauss_cases(out: &mut Vec<String>) -> Res<()> {
+    let kepler = Kepler::new(1.0)?;
+    let (q0, p0) = Kepler::paper_initial_state();
+    for s in 2..=4 {
+        for (h, steps) in [(0.05, 200), (0.25, 80), (0.5, 40), (1.0, 20)] {
+            gauss_run(out, "kepler", &kepler, (s, h, steps), (&q0, &p0));
+        }
+    }
+    let ho = HarmonicOscillator::unit();
+    for s in [2, 3] {
+        gauss_run(out, "harmonic", &ho, (s, 5.0, 20), (&[1.0], &[0.0]));
+    }
+    let pendulum = Pendulum::unit();
+    gauss_run(out, "pendulum", &pendulum, (3, 1.0, 40), (&[2.5], &[0.0]));
+    Ok(())
+}
+
 fn main() -> Res<()> {
     let mut lines = Vec::new();
     kepler_cases(&mut lines)?;
     other_systems(&mut lines)?;
     adaptive_cases(&mut lines)?;
     lie_cases(&mut lines)?;
+    periodic_cases(&mut lines)?;
+    gauss_cases(&mut lines)?;
     let mut stdout = std::io::stdout().lock();
     for line in &lines {
         writeln!(stdout, "{line}")?;

@@ -104,6 +104,13 @@ impl MethodSpec {
         self.tol.is_some()
     }
 
+    /// The quadrature points of the fixed-n integrator this method names: `quad_points`, or
+    /// the quadrature's default for n (what [`integrator`](Self::integrator) builds).
+    pub fn quadrature_points(&self) -> usize {
+        self.quad_points
+            .unwrap_or_else(|| self.quadrature.default_points(self.n))
+    }
+
     /// The largest n a run of this method may use: the top of the ladder (default
     /// [`crate::adaptive::DEFAULT_LADDER`]) when n is chosen per step, else `n`. For memory
     /// estimates before a run.

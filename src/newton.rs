@@ -203,10 +203,49 @@ pub fn drive<P: NewtonIteration + ?Sized>(
     problem: &mut P,
     first: &Termination,
 ) -> Result<(ConvergedBy, usize), NewtonFailure> {
-    let fail = |residual: f64, iterations: usize, reason: &str| NewtonFailure {
+    run(problem, first).map_err(|stop| match stop {
+        Stop::Driver {
+            residual,
+            iterations,
+            reason,
+        } => NewtonFailure {
+            residual,
+            iterations,
+            reason: reason.to_string(),
+        },
+        Stop::Problem(failure) => failure,
+    })
+}
+
+/// Whether `problem` converges: [`drive`] for a caller to whom a failure is an outcome, not an
+/// error — a fixed-point iteration that hands over to Newton when it stops contracting (the
+/// Gauss collocation baseline). The same iteration and termination; only the driver's own
+/// failures build no [`NewtonFailure`], so that the hand-over allocates nothing (the
+/// baselines' steps are allocation-free: lab/tests/allocation.rs).
+pub fn converges<P: NewtonIteration + ?Sized>(problem: &mut P, first: &Termination) -> bool {
+    run(problem, first).is_ok()
+}
+
+/// Why [`run`] stopped without converging: a test of the driver (its reason static), or the
+/// problem's own failure.
+enum Stop {
+    Driver {
+        residual: f64,
+        iterations: usize,
+        reason: &'static str,
+    },
+    Problem(NewtonFailure),
+}
+
+/// The loop of [`drive`] and [`converges`].
+fn run<P: NewtonIteration + ?Sized>(
+    problem: &mut P,
+    first: &Termination,
+) -> Result<(ConvergedBy, usize), Stop> {
+    let fail = |residual: f64, iterations: usize, reason: &'static str| Stop::Driver {
         residual,
         iterations,
-        reason: reason.to_string(),
+        reason,
     };
     let mut termination = *first;
     let mut previous = f64::INFINITY;
@@ -224,13 +263,15 @@ pub fn drive<P: NewtonIteration + ?Sized>(
             .residual_tolerance
             .is_some_and(|tol| residual <= tol)
         {
-            problem.finish(ConvergedBy::Residual)?;
+            problem
+                .finish(ConvergedBy::Residual)
+                .map_err(Stop::Problem)?;
             return Ok((ConvergedBy::Residual, it));
         }
         if it >= termination.max_iterations {
             return Err(fail(residual, it, "iteration limit reached"));
         }
-        let (correction, applies) = problem.correct(it)?;
+        let (correction, applies) = problem.correct(it).map_err(Stop::Problem)?;
         termination = applies;
         it += 1;
         let (delta, scale) = (correction.size, correction.scale);
@@ -250,7 +291,7 @@ pub fn drive<P: NewtonIteration + ?Sized>(
             growing: delta > previous,
         };
         if let Some(by) = termination.converged(&progress) {
-            problem.finish(by)?;
+            problem.finish(by).map_err(Stop::Problem)?;
             return Ok((by, it));
         }
         if let Some(d) = termination.divergence
@@ -342,5 +383,8 @@ mod tests {
             err.reason.contains("diverge") || err.reason.contains("non-finite"),
             "{err:?}"
         );
+        // `converges` runs the same iteration without building the failure.
+        p.x = 1.0;
+        assert!(!converges(&mut p, &t));
     }
 }

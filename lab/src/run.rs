@@ -189,7 +189,6 @@ pub fn run_scene(scene: &BuiltScene, options: RunOptions) -> Result<RunResult> {
 fn run_system(system: &AnySystem, scene: &BuiltScene, options: RunOptions) -> Result<RunResult> {
     let m = &scene.method;
     let init = &scene.initial;
-    let gvi = m.integrator()?;
     let d = system.dim();
     let exact = system.exact_solution(init.t0, &init.q, &init.p)?;
     let start = Instant::now();
@@ -294,8 +293,8 @@ fn run_system(system: &AnySystem, scene: &BuiltScene, options: RunOptions) -> Re
             "{} basis n = {}, {} with {} points, h = {}, {} solver",
             m.basis,
             m.n,
-            gvi.rule().family,
-            gvi.rule().len(),
+            m.quadrature,
+            m.quadrature_points(),
             fmt_number(m.h),
             m.solver
         ),

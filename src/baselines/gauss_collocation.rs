@@ -16,6 +16,10 @@ use super::{CanonicalParts, OneStepMethod, StaticKernel, force_static};
 use crate::error::{GviError, Result};
 use crate::lagrangian::Lagrangian;
 use crate::linalg::Lu;
+use crate::newton::{
+    Adapt, ConvergedBy, Correction, Divergence, NewtonFailure, NewtonIteration, Progress,
+    Termination, converges, drive,
+};
 use crate::quadrature::{GaussLegendre, Quadrature};
 
 /// The largest number of stages accepted.
@@ -23,6 +27,20 @@ pub const MAX_GAUSS_STAGES: usize = 8;
 
 /// Iteration cap of the simplified Newton solve.
 const MAX_ITERATIONS: usize = 60;
+
+/// Iteration cap of the fixed-point iteration (then simplified Newton takes over).
+const FIXED_POINT_ITERATIONS: usize = 30;
+
+/// The fixed-point iteration converged when max |ΔZ| ≤ this · max(|q|); …
+const FIXED_POINT_TOLERANCE: f64 = 1e-15;
+
+/// … or, once it stopped contracting (θ above [`FIXED_POINT_STALL`]), at the round-off floor,
+/// max |ΔZ| ≤ this · max(|q|).
+const FIXED_POINT_FLOOR: f64 = 1e-14;
+
+/// Contraction per iteration above which the fixed-point iteration has stopped contracting
+/// (from its third iteration on): it hands over to simplified Newton unless at the floor.
+const FIXED_POINT_STALL: f64 = 0.5;
 
 /// s-stage Gauss–Legendre collocation (order 2s, symplectic, A-stable) for q̇ = M⁻¹p,
 /// ṗ = −∇V(q).
@@ -249,57 +267,16 @@ impl<L: Lagrangian> GaussCollocationBaseline<'_, L> {
             iterations,
             reason: format!("Gauss collocation (s = {s}): {reason}"),
         };
-        let amax = |v: &[f64]| v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        let mut previous = f64::INFINITY;
-        let mut converged = false;
-        let mut refresh = true;
-        for it in 1..=MAX_ITERATIONS {
-            self.eval_forces(q);
-            self.iterations += 1;
-            // Residual R = h² (A² ⊗ I) M⁻¹F − Z.
-            for i in 0..s {
-                for r in 0..d {
-                    let sum: f64 = (0..s)
-                        .map(|j| self.a2[i * s + j] * self.minv_f[j * d + r])
-                        .sum();
-                    self.res[i * d + r] = h * h * sum - self.z[i * d + r];
-                }
-            }
-            let residual = amax(&self.res);
-            if singular {
-                return Err(fail(residual, it, "singular iteration matrix"));
-            }
-            // The increment, in place of the residual.
-            self.lu.solve_in_place(&mut self.res, &mut self.scratch);
-            let size_delta = amax(&self.res);
-            if !size_delta.is_finite() {
-                return Err(fail(residual, it, "non-finite iterate"));
-            }
-            for k in 0..size {
-                self.z[k] += self.res[k];
-            }
-            // Converged at round-off: the increment is at machine level of q (then the forces of
-            // the last iterate are the converged ones), or it has stopped decreasing while
-            // already small compared with q and Z (then the forces are re-evaluated: Z can be
-            // h² times larger than the forces it carries).
-            let zmax = self.z.iter().fold(scale, |m, x| m.max(x.abs()));
-            let tiny = size_delta <= 1e-15 * scale;
-            if tiny || (size_delta >= previous && size_delta < 1e-10 * zmax) {
-                converged = true;
-                // At machine level the forces of the last iterate are the converged ones.
-                refresh = !tiny && size_delta != 0.0;
-                break;
-            }
-            if it > 8 && size_delta > 2.0 * previous {
-                return Err(fail(residual, it, "iteration diverges"));
-            }
-            previous = size_delta;
-        }
-        if !converged {
-            return Err(fail(previous, MAX_ITERATIONS, "iteration limit"));
-        }
-        if refresh {
-            self.eval_forces(q);
+        let mut newton = StageNewton {
+            g: self,
+            q,
+            singular,
+            scale,
+            residual: f64::NAN,
+        };
+        let first = newton.termination(scale);
+        if let Err(f) = drive(&mut newton, &first) {
+            return Err(fail(f.residual, f.iterations, &f.reason));
         }
         self.finish(dq_out, dp_out);
         if dq_out.iter().chain(dp_out.iter()).any(|x| !x.is_finite()) {
@@ -312,40 +289,30 @@ impl<L: Lagrangian> GaussCollocationBaseline<'_, L> {
     /// non-stiff problems (no Jacobian, no factorisation). Returns false — leaving the
     /// simplified Newton iteration to do the work — when it does not contract fast.
     fn fixed_point(&mut self, q: &[f64]) -> bool {
-        let (d, s, h) = (self.parts.d, self.s, self.h);
         self.z.iter_mut().for_each(|x| *x = 0.0);
         let scale = q.iter().fold(1e-300f64, |m, x| m.max(x.abs()));
-        let mut previous = f64::INFINITY;
-        for it in 0..30 {
-            self.eval_forces(q);
-            self.iterations += 1;
-            let mut change = 0.0f64;
-            for i in 0..s {
-                for r in 0..d {
-                    let sum: f64 = (0..s)
-                        .map(|j| self.a2[i * s + j] * self.minv_f[j * d + r])
-                        .sum();
-                    let z = h * h * sum;
-                    change = change.max((z - self.z[i * d + r]).abs());
-                    self.z[i * d + r] = z;
-                }
+        let mut iteration = FixedPoint::new(Stages { g: self, q }, scale);
+        // A stall is a hand-over, not an error: `converges` builds no failure (no allocation).
+        converges(&mut iteration, &fixed_point_termination(0))
+    }
+
+    /// One application of the fixed-point map, Z ← h² (A² ⊗ M⁻¹) F(Z); returns max |ΔZ|.
+    fn fixed_point_update(&mut self, q: &[f64]) -> f64 {
+        let (d, s, h) = (self.parts.d, self.s, self.h);
+        self.eval_forces(q);
+        self.iterations += 1;
+        let mut change = 0.0f64;
+        for i in 0..s {
+            for r in 0..d {
+                let sum: f64 = (0..s)
+                    .map(|j| self.a2[i * s + j] * self.minv_f[j * d + r])
+                    .sum();
+                let z = h * h * sum;
+                change = change.max((z - self.z[i * d + r]).abs());
+                self.z[i * d + r] = z;
             }
-            if !change.is_finite() || (it >= 2 && change > 0.5 * previous) {
-                // Not contracting (large step or stiff): stop at the round-off floor if
-                // already there, otherwise hand over to Newton.
-                if change.is_finite() && change <= 1e-14 * scale {
-                    self.eval_forces(q);
-                    return true;
-                }
-                return false;
-            }
-            if change <= 1e-15 * scale {
-                self.eval_forces(q);
-                return true;
-            }
-            previous = change;
         }
-        false
+        change
     }
 
     /// The increments from the converged stage values (forces already evaluated).
@@ -450,34 +417,16 @@ impl<L: Lagrangian> StaticKernel for GaussCollocationBaseline<'_, L> {
         let mut f = [[0.0; D]; MAX_GAUSS_STAGES];
         let mut minv_f = [[0.0; D]; MAX_GAUSS_STAGES];
         let scale = q.iter().fold(1e-300f64, |m, x| m.max(x.abs()));
-        let mut previous = f64::INFINITY;
-        let mut converged = false;
-        for it in 0..30 {
-            self.eval_forces_static(q, &v0, &z, &mut f, &mut minv_f);
-            self.iterations += 1;
-            let mut change = 0.0f64;
-            for i in 0..s {
-                for r in 0..D {
-                    let sum: f64 = (0..s).map(|j| self.a2[i * s + j] * minv_f[j][r]).sum();
-                    let zn = h * h * sum;
-                    change = change.max((zn - z[i][r]).abs());
-                    z[i][r] = zn;
-                }
-            }
-            if !change.is_finite() || (it >= 2 && change > 0.5 * previous) {
-                if change.is_finite() && change <= 1e-14 * scale {
-                    self.eval_forces_static(q, &v0, &z, &mut f, &mut minv_f);
-                    converged = true;
-                }
-                break;
-            }
-            if change <= 1e-15 * scale {
-                self.eval_forces_static(q, &v0, &z, &mut f, &mut minv_f);
-                converged = true;
-                break;
-            }
-            previous = change;
-        }
+        let stages = StaticStages {
+            g: &mut *self,
+            q,
+            v0: &v0,
+            z: &mut z,
+            f: &mut f,
+            minv_f: &mut minv_f,
+        };
+        let mut iteration = FixedPoint::new(stages, scale);
+        let converged = converges(&mut iteration, &fixed_point_termination(0));
         if !converged {
             // As the general step: the simplified Newton iteration from Z = 0.
             self.v0.copy_from_slice(&v0);
@@ -499,6 +448,250 @@ impl<L: Lagrangian> StaticKernel for GaussCollocationBaseline<'_, L> {
             q[r] += h * v0[r] + h * h * dq;
             p[r] += h * dp;
         }
+        Ok(())
+    }
+}
+
+/// The largest double below a positive `x`: `|δ| ≤ below(x)` is `|δ| < x` (the driver's floor
+/// test is `≤`, this solver's `<`).
+fn below(x: f64) -> f64 {
+    debug_assert!(x > 0.0);
+    f64::from_bits(x.to_bits() - 1)
+}
+
+/// The contraction above which the simplified Newton increment has stopped decreasing: the
+/// largest double below 1, so that `θ >` it means `|δ| ≥ |δ_prev|` (a quotient of doubles below
+/// 1 is at most the double below 1).
+const NEWTON_FLOOR_THETA: f64 = f64::from_bits(1f64.to_bits() - 1);
+
+/// The simplified Newton iteration on the stage equations Z = h² (A² ⊗ M⁻¹) F(Z) as a
+/// [`NewtonIteration`] run by the crate's Newton driver ([`crate::newton::drive`]): the
+/// residual R = h² (A² ⊗ I) M⁻¹F − Z and the LU of I − h² (A² ⊗ M⁻¹ ∂f(q)), factorised once
+/// per step (Hairer, Lubich & Wanner, *Geometric Numerical Integration*, §VIII.6).
+struct StageNewton<'g, 'a, L: Lagrangian> {
+    g: &'g mut GaussCollocationBaseline<'a, L>,
+    q: &'g [f64],
+    /// The iteration matrix is singular (reported at the first correction, after a residual).
+    singular: bool,
+    /// max(|q|) (at least 1e-300).
+    scale: f64,
+    /// The last residual's max-norm.
+    residual: f64,
+}
+
+impl<L: Lagrangian> StageNewton<'_, '_, L> {
+    /// Converged at round-off: the increment is at machine level of q (`tiny`, the driver's
+    /// tolerance test), or it has stopped decreasing (θ ≥ 1) while already small compared
+    /// with q and Z (the floor test, 1e-10 · `zmax`). The two tests have different scales, so
+    /// the corrections are reported with scale 1 and the scales are folded into the tolerance
+    /// and the floor (the largest doubles below the thresholds where this solver's tests are
+    /// strict), which keeps the maps bit for bit those of the hand-written loop this replaces.
+    /// Diverging: an increment more than twice the previous one after 8 iterations.
+    fn termination(&self, zmax: f64) -> Termination {
+        Termination {
+            divergence: Some(Divergence {
+                after: 8,
+                growth: 2.0,
+            }),
+            ..Termination::new(
+                MAX_ITERATIONS,
+                1e-15 * self.scale,
+                None,
+                below(1e-10 * zmax),
+                NEWTON_FLOOR_THETA,
+            )
+        }
+    }
+
+    fn failure(&self, iteration: usize, reason: &str) -> NewtonFailure {
+        NewtonFailure {
+            residual: self.residual,
+            iterations: iteration + 1,
+            reason: reason.into(),
+        }
+    }
+}
+
+impl<L: Lagrangian> NewtonIteration for StageNewton<'_, '_, L> {
+    fn residual(&mut self, _: usize) -> f64 {
+        let g = &mut *self.g;
+        let (d, s, h) = (g.parts.d, g.s, g.h);
+        g.eval_forces(self.q);
+        g.iterations += 1;
+        // Residual R = h² (A² ⊗ I) M⁻¹F − Z.
+        for i in 0..s {
+            for r in 0..d {
+                let sum: f64 = (0..s).map(|j| g.a2[i * s + j] * g.minv_f[j * d + r]).sum();
+                g.res[i * d + r] = h * h * sum - g.z[i * d + r];
+            }
+        }
+        self.residual = amax(&g.res);
+        self.residual
+    }
+
+    fn correct(&mut self, iteration: usize) -> Result<(Correction, Termination), NewtonFailure> {
+        if self.singular {
+            return Err(self.failure(iteration, "singular iteration matrix"));
+        }
+        let g = &mut *self.g;
+        // The increment, in place of the residual.
+        g.lu.solve_in_place(&mut g.res, &mut g.scratch);
+        let size = amax(&g.res);
+        if !size.is_finite() {
+            return Err(self.failure(iteration, "non-finite iterate"));
+        }
+        for (z, dz) in g.z.iter_mut().zip(&g.res) {
+            *z += dz;
+        }
+        let zmax = g.z.iter().fold(self.scale, |m, x| m.max(x.abs()));
+        let correction = Correction { size, scale: 1.0 };
+        Ok((correction, self.termination(zmax)))
+    }
+
+    /// At machine level (the tolerance test) the forces of the last iterate are the
+    /// converged ones; at the floor they are re-evaluated: Z can be h² times larger than the
+    /// forces it carries.
+    fn finish(&mut self, by: ConvergedBy) -> Result<(), NewtonFailure> {
+        if by == ConvergedBy::Floor {
+            self.g.eval_forces(self.q);
+        }
+        Ok(())
+    }
+}
+
+/// max |x| (NaN entries ignored, as `f64::max` does: a NaN increment shows in the next
+/// residual and in the final state check).
+fn amax(v: &[f64]) -> f64 {
+    v.iter().fold(0.0f64, |m, x| m.max(x.abs()))
+}
+
+/// The stage values a fixed-point iteration runs on: the general step's buffers or the
+/// static kernel's fixed-size arrays.
+trait StageMap {
+    /// One application of the map Z ← h² (A² ⊗ M⁻¹) F(Z); returns max |ΔZ|.
+    fn update(&mut self) -> f64;
+    /// The forces at the converged Z.
+    fn refresh(&mut self);
+}
+
+/// The general step's stages ([`GaussCollocationBaseline::fixed_point_update`]).
+struct Stages<'g, 'a, L: Lagrangian> {
+    g: &'g mut GaussCollocationBaseline<'a, L>,
+    q: &'g [f64],
+}
+
+impl<L: Lagrangian> StageMap for Stages<'_, '_, L> {
+    fn update(&mut self) -> f64 {
+        self.g.fixed_point_update(self.q)
+    }
+    fn refresh(&mut self) {
+        self.g.eval_forces(self.q);
+    }
+}
+
+/// The static kernel's stages (`StaticKernel::advance`), fixed-size.
+struct StaticStages<'g, 'a, L: Lagrangian, const D: usize> {
+    g: &'g mut GaussCollocationBaseline<'a, L>,
+    q: &'g [f64; D],
+    v0: &'g [f64; D],
+    z: &'g mut [[f64; D]; MAX_GAUSS_STAGES],
+    f: &'g mut [[f64; D]; MAX_GAUSS_STAGES],
+    minv_f: &'g mut [[f64; D]; MAX_GAUSS_STAGES],
+}
+
+impl<L: Lagrangian, const D: usize> StageMap for StaticStages<'_, '_, L, D> {
+    #[inline(always)]
+    fn update(&mut self) -> f64 {
+        let g = &mut *self.g;
+        g.eval_forces_static(self.q, self.v0, self.z, self.f, self.minv_f);
+        g.iterations += 1;
+        let (s, h) = (g.s, g.h);
+        let mut change = 0.0f64;
+        for i in 0..s {
+            for r in 0..D {
+                let sum: f64 = (0..s).map(|j| g.a2[i * s + j] * self.minv_f[j][r]).sum();
+                let zn = h * h * sum;
+                change = change.max((zn - self.z[i][r]).abs());
+                self.z[i][r] = zn;
+            }
+        }
+        change
+    }
+    fn refresh(&mut self) {
+        self.g
+            .eval_forces_static(self.q, self.v0, self.z, self.f, self.minv_f);
+    }
+}
+
+/// The termination of the fixed-point iteration after `corrections` iterations: converged
+/// when max |ΔZ| ≤ 1e-15 · max(|q|), or — from the third iteration on, once it stopped
+/// contracting (θ > ½) — at the round-off floor 1e-14 · max(|q|). (The first two increments
+/// are not compared: the first is Z itself.)
+fn fixed_point_termination(corrections: usize) -> Termination {
+    let floor = if corrections > 2 {
+        FIXED_POINT_FLOOR
+    } else {
+        0.0
+    };
+    Termination::new(
+        FIXED_POINT_ITERATIONS,
+        FIXED_POINT_TOLERANCE,
+        None,
+        floor,
+        FIXED_POINT_STALL,
+    )
+}
+
+/// The fixed-point iteration Z ← h² (A² ⊗ M⁻¹) F(Z) from Z = 0 as a [`NewtonIteration`] (the
+/// simplified Newton iteration with the identity for its matrix): cheap for small steps of
+/// non-stiff problems. It gives up — leaving simplified Newton to do the work — when it stops
+/// contracting above the floor, when an increment is not finite, or at its iteration limit.
+struct FixedPoint<M: StageMap> {
+    map: M,
+    /// max(|q|) (at least 1e-300): the scale of the tolerance and the floor.
+    scale: f64,
+    /// The last increment.
+    last: f64,
+}
+
+impl<M: StageMap> FixedPoint<M> {
+    fn new(map: M, scale: f64) -> Self {
+        FixedPoint {
+            map,
+            scale,
+            last: 0.0,
+        }
+    }
+}
+
+impl<M: StageMap> NewtonIteration for FixedPoint<M> {
+    /// The map is applied once per iteration, in `correct` (the increment G(Z) − Z is the
+    /// residual of the iterate before it); this reports the last increment (0 before the
+    /// first), so that stopping at the iteration limit costs no further force evaluation.
+    fn residual(&mut self, _: usize) -> f64 {
+        self.last
+    }
+
+    fn correct(&mut self, iteration: usize) -> Result<(Correction, Termination), NewtonFailure> {
+        self.last = self.map.update();
+        let correction = Correction {
+            size: self.last,
+            scale: self.scale,
+        };
+        Ok((correction, fixed_point_termination(iteration + 1)))
+    }
+
+    fn adapt(&mut self, progress: &Progress) -> Adapt {
+        let stalled = progress.growing || progress.theta > FIXED_POINT_STALL;
+        if progress.iteration > 2 && stalled {
+            Adapt::GiveUp
+        } else {
+            Adapt::Continue
+        }
+    }
+
+    fn finish(&mut self, _: ConvergedBy) -> Result<(), NewtonFailure> {
+        self.map.refresh();
         Ok(())
     }
 }

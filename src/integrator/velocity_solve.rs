@@ -200,7 +200,9 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             refrozen: false,
         };
         let first = iteration.termination();
-        crate::newton::drive(&mut iteration, &first).is_ok()
+        // A step the velocity form does not solve goes to the nodal solvers: an outcome, not an
+        // error, so `converges` (which builds no failure message: no allocation per step).
+        crate::newton::converges(&mut iteration, &first)
     }
 }
 
@@ -264,10 +266,12 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> NewtonIteration for VelocityNewton<
         let (gvi, lag, vt) = (self.gvi, self.lag, self.vt);
         let h = gvi.step_size();
         let ws = &mut *self.ws;
-        let fail = |reason: &str| NewtonFailure {
+        // The caller only learns whether the velocity form solved the step (`converges`), so
+        // a failure carries no message (and allocates nothing).
+        let fail = |_why: &str| NewtonFailure {
             residual: self.stats.residual,
             iterations: iteration,
-            reason: reason.into(),
+            reason: String::new(),
         };
         let (Some(vs), Some(kt)) = (ws.velocity.as_mut(), vt.kron.as_ref()) else {
             return Err(fail("no velocity form"));

@@ -18,6 +18,7 @@ use super::so3::{self, Mat3, Retraction};
 use crate::basis::{AnyBasis, Basis, BasisKind, CurveFit};
 use crate::error::{GviError, Result};
 use crate::linalg::Lu;
+use crate::newton::{Correction, NewtonFailure, NewtonIteration, Termination, drive};
 use crate::quadrature::{QuadratureKind, QuadratureRule};
 use num_dual::Dual64;
 
@@ -282,8 +283,6 @@ impl<B: Basis> LieGalerkin<B> {
         t: f64,
     ) -> Result<(LieState, usize)> {
         self.initial_guess(body, state, ws);
-        let mut prev = f64::INFINITY;
-        let mut iterations = 0;
         let fail = |residual: f64, iterations: usize, reason: &str| GviError::NewtonFailure {
             step,
             t,
@@ -291,35 +290,18 @@ impl<B: Basis> LieGalerkin<B> {
             iterations,
             reason: reason.into(),
         };
-        loop {
-            if iterations >= self.options.max_iterations {
-                let r = ws.res.iter().fold(0.0f64, |a, x| a.max(x.abs()));
-                return Err(fail(r, iterations, "iteration limit"));
-            }
-            self.assemble(body, state, ws);
-            let rnorm = ws.res.iter().fold(0.0f64, |a, x| a.max(x.abs()));
-            if !rnorm.is_finite() {
-                return Err(fail(rnorm, iterations, "non-finite residual"));
-            }
-            let dim = ws.x.len();
-            if ws.lu.refactor(&ws.jac[..dim * dim]).is_err() {
-                return Err(fail(rnorm, iterations, "singular Jacobian"));
-            }
-            ws.res.iter_mut().for_each(|r| *r = -*r);
-            ws.lu.solve_in_place(&mut ws.res, &mut ws.scratch);
-            let mut dnorm = 0.0f64;
-            let mut xnorm = 1.0f64;
-            for (x, d) in ws.x.iter_mut().zip(&ws.res) {
-                *x += d;
-                dnorm = dnorm.max(d.abs());
-                xnorm = xnorm.max(x.abs());
-            }
-            iterations += 1;
-            if dnorm <= self.options.tolerance * xnorm || (dnorm < 1e-9 && dnorm >= 0.5 * prev) {
-                break;
-            }
-            prev = dnorm;
-        }
+        let mut newton = LieNewton {
+            lie: self,
+            body,
+            state,
+            ws,
+            residual: f64::NAN,
+        };
+        let first = self.termination(1.0);
+        let iterations = match drive(&mut newton, &first) {
+            Ok((_, iterations)) => iterations,
+            Err(f) => return Err(fail(f.residual, f.iterations, &f.reason)),
+        };
         // ν at the converged curve (μ_k for a free body), then the update.
         let n = self.n();
         let mut nu = state.mu;
@@ -348,6 +330,26 @@ impl<B: Basis> LieGalerkin<B> {
             return Err(fail(f64::NAN, iterations, "non-finite state"));
         }
         Ok((next, iterations))
+    }
+
+    /// The termination of the step's Newton solve (exact Jacobian, quadratic convergence):
+    /// converged when the max-norm correction is at most `tolerance · max(1, ‖Ξ‖_∞)`, or at
+    /// the round-off floor when it is below 1e-9 (absolute) and no longer halves.
+    ///
+    /// The two tests have different scales (relative to ‖Ξ‖ ≥ 1, absolute), so the
+    /// corrections are reported with scale 1 and `xnorm` is folded into the tolerance; the
+    /// floor and its θ are the largest doubles below 1e-9 and ½, so that the driver's
+    /// `|δ| ≤ floor` and `θ > floor_theta` are exactly this solver's `|δ| < 1e-9` and
+    /// `|δ| ≥ ½|δ_prev|` (a quotient of doubles below ½ is at most the double below ½), and
+    /// the maps are bit for bit those of the hand-written loop this replaces.
+    fn termination(&self, xnorm: f64) -> Termination {
+        Termination::new(
+            self.options.max_iterations,
+            self.options.tolerance * xnorm,
+            None,
+            ROUNDOFF_FLOOR,
+            FLOOR_THETA,
+        )
     }
 
     /// ξ(c_j) for node j from the current coefficients (Ξ_0 = 0).
@@ -536,5 +538,60 @@ impl<B: Basis> LieGalerkin<B> {
         self.fit
             .values_to_coefficients_with(&mut ws.values, 3, &mut ws.col, &mut ws.scratch);
         ws.x.copy_from_slice(&ws.values[3..3 * n]);
+    }
+}
+
+/// Below 1e-9 a correction that no longer halves is at the round-off floor of the step's
+/// residual: the largest double below 1e-9, so that `|δ| ≤` it means `|δ| < 1e-9`.
+const ROUNDOFF_FLOOR: f64 = f64::from_bits(1e-9f64.to_bits() - 1);
+
+/// The contraction above which a correction no longer halves: the largest double below ½,
+/// so that `θ >` it means `|δ| ≥ ½|δ_prev|`.
+const FLOOR_THETA: f64 = f64::from_bits(0.5f64.to_bits() - 1);
+
+/// The step's Newton solve as a [`NewtonIteration`] run by the crate's Newton driver
+/// ([`crate::newton::drive`]): the residual and the exact Jacobian of the discrete
+/// Euler–Poincaré equations (`LieGalerkin::assemble`), solved by dense LU.
+struct LieNewton<'a, B: Basis, S: RigidBody> {
+    lie: &'a LieGalerkin<B>,
+    body: &'a S,
+    state: &'a LieState,
+    ws: &'a mut Workspace,
+    /// The last residual's max-norm.
+    residual: f64,
+}
+
+impl<B: Basis, S: RigidBody> NewtonIteration for LieNewton<'_, B, S> {
+    fn residual(&mut self, _: usize) -> f64 {
+        self.lie.assemble(self.body, self.state, self.ws);
+        self.residual = self.ws.res.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        self.residual
+    }
+
+    fn correct(&mut self, iteration: usize) -> Result<(Correction, Termination), NewtonFailure> {
+        let ws = &mut *self.ws;
+        let dim = ws.x.len();
+        if ws.lu.refactor(&ws.jac[..dim * dim]).is_err() {
+            return Err(NewtonFailure {
+                residual: self.residual,
+                iterations: iteration,
+                reason: "singular Jacobian".into(),
+            });
+        }
+        ws.res.iter_mut().for_each(|r| *r = -*r);
+        ws.lu.solve_in_place(&mut ws.res, &mut ws.scratch);
+        let mut dnorm = 0.0f64;
+        let mut xnorm = 1.0f64;
+        for (x, d) in ws.x.iter_mut().zip(&ws.res) {
+            *x += d;
+            dnorm = dnorm.max(d.abs());
+            xnorm = xnorm.max(x.abs());
+        }
+        // Scale 1: `xnorm` is in the tolerance (see `LieGalerkin::termination`).
+        let correction = Correction {
+            size: dnorm,
+            scale: 1.0,
+        };
+        Ok((correction, self.lie.termination(xnorm)))
     }
 }

@@ -11,10 +11,11 @@
 //! orbits through Lagrange's circular one).
 
 pub use super::action::PeriodCondition;
-use super::action::{Tables, default_nodes, evaluate};
+use super::action::{Evaluation, Tables, default_nodes, evaluate};
 use super::curve::{FourierCurve, basis_len};
 use crate::error::{GviError, Result, ensure_finite};
 use crate::lagrangian::Lagrangian;
+use crate::newton::{ConvergedBy, Correction, NewtonFailure, NewtonIteration, Termination, drive};
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 
 /// A continuous symmetry of the action, whose generator is removed from every Newton step.
@@ -210,7 +211,7 @@ pub fn solve<L: Lagrangian>(
     symmetries: &[Symmetry],
     options: &PeriodicOptions,
 ) -> Result<PeriodicSolution> {
-    let mut curve = guess;
+    let curve = guess;
     crate::error::ensure_len("configuration dimension", lag.dim(), curve.layout.dim())?;
     ensure_finite("periodic guess", &curve.coefficients)?;
     ensure_finite("period", &[curve.period])?;
@@ -232,106 +233,202 @@ pub fn solve<L: Lagrangian>(
     let tables = Tables::new(&curve.layout, curve.modes, nodes);
     let p = curve.coefficients.len();
     let energy_unknown = matches!(condition, PeriodCondition::Energy(_));
-    let nu = p + usize::from(energy_unknown);
-    let mut history = Vec::new();
-    let fail = |residual: f64, iterations: usize, reason: String| GviError::PeriodicNotConverged {
+    let mut problem = PeriodicNewton {
+        lag,
+        curve,
+        tables: &tables,
+        nodes,
+        condition,
+        symmetries,
+        options,
+        p,
+        nu: p + usize::from(energy_unknown),
+        energy_unknown,
+        eval: None,
+        zbasis: Vec::new(),
+        residual: f64::NAN,
+        history: Vec::new(),
+        tail: f64::NAN,
+        failure: None,
+    };
+    let termination = problem.termination();
+    match drive(&mut problem, &termination) {
+        Ok((_, iterations)) => {
+            let Some(eval) = problem.eval else {
+                unreachable!("the driver converges only after a residual evaluation")
+            };
+            Ok(PeriodicSolution {
+                action: eval.action,
+                energy: eval.energy,
+                energy_spread: eval.energy_spread,
+                residual: problem.residual,
+                residual_history: problem.history,
+                iterations,
+                nodes,
+                tail: problem.tail,
+                curve: problem.curve,
+            })
+        }
+        // The problem's own failures carry their error; the driver's own is the iteration
+        // limit (its non-finite tests are preceded by the problem's, which name the cause).
+        // The limit's message names the limit, as before the driver.
+        Err(f) => Err(problem.failure.take().unwrap_or_else(|| {
+            let reason = if f.iterations >= options.max_iterations {
+                format!("iteration limit {} reached", options.max_iterations)
+            } else {
+                f.reason
+            };
+            not_converged(f.residual, f.iterations, reason)
+        })),
+    }
+}
+
+/// [`GviError::PeriodicNotConverged`] with the residual, the iterations and the reason.
+fn not_converged(residual: f64, iterations: usize, reason: String) -> GviError {
+    GviError::PeriodicNotConverged {
         residual,
         iterations,
         reason,
-    };
-    for iteration in 0..=options.max_iterations {
-        let eval = evaluate(lag, &curve, &tables, nodes, condition, true);
+    }
+}
+
+/// One periodic solve as a [`NewtonIteration`] run by the crate's Newton driver
+/// ([`crate::newton::drive`]): the residual is the projected gradient of the discrete action,
+/// the linear solve the minimum-norm step in the complement of the symmetry directions
+/// ([`newton_step`]), safeguarded for crude guesses.
+///
+/// Convergence is on the residual alone (`residual_tolerance`): the correction tests are off,
+/// because near a degenerate stationary point (a family of orbits, the cut-off eigenvalues)
+/// a small step says nothing about the gradient. The failures the solver names itself — a
+/// non-finite action, divergence of the residual, a missing or zero Hessian, the solution's
+/// tail and energy checks — are kept in `failure` with their [`GviError`] and surface as a
+/// [`NewtonFailure`] to stop the driver.
+struct PeriodicNewton<'a, L: Lagrangian> {
+    lag: &'a L,
+    curve: FourierCurve,
+    tables: &'a Tables,
+    nodes: usize,
+    condition: PeriodCondition,
+    symmetries: &'a [Symmetry],
+    options: &'a PeriodicOptions,
+    /// Coefficients, and unknowns (the coefficients and, at prescribed energy, the period).
+    p: usize,
+    nu: usize,
+    energy_unknown: bool,
+    /// The evaluation at the current iterate (its Hessian is taken by the step).
+    eval: Option<Evaluation>,
+    /// Orthonormal basis of the symmetry generators at the current iterate.
+    zbasis: Vec<Vec<f64>>,
+    /// The current residual, and the residual of every iterate so far.
+    residual: f64,
+    history: Vec<f64>,
+    /// Size of the last two modes of the solution (set by `finish`).
+    tail: f64,
+    /// The failure in the solver's own terms, when the problem (not the driver) found it.
+    failure: Option<GviError>,
+}
+
+impl<L: Lagrangian> PeriodicNewton<'_, L> {
+    /// Converged when the residual is at most [`PeriodicOptions::tolerance`]; no test on the
+    /// corrections (tolerance and floor 0, no estimate; a zero step is reported as the
+    /// smallest positive size, see `correct`) and no divergence test on them (the residual's
+    /// is in `correct`).
+    fn termination(&self) -> Termination {
+        Termination {
+            residual_tolerance: Some(self.options.tolerance),
+            ..Termination::new(self.options.max_iterations, 0.0, None, 0.0, f64::INFINITY)
+        }
+    }
+
+    /// Record a failure of the solve and stop the driver with it.
+    fn fail(&mut self, error: GviError) -> NewtonFailure {
+        let failure = match &error {
+            GviError::PeriodicNotConverged {
+                residual,
+                iterations,
+                reason,
+            } => NewtonFailure {
+                residual: *residual,
+                iterations: *iterations,
+                reason: reason.clone(),
+            },
+            other => NewtonFailure {
+                residual: self.residual,
+                iterations: self.history.len().saturating_sub(1),
+                reason: other.to_string(),
+            },
+        };
+        self.failure = Some(error);
+        failure
+    }
+}
+
+impl<L: Lagrangian> NewtonIteration for PeriodicNewton<'_, L> {
+    fn residual(&mut self, iteration: usize) -> f64 {
+        let eval = evaluate(
+            self.lag,
+            &self.curve,
+            self.tables,
+            self.nodes,
+            self.condition,
+            true,
+        );
         // The residual is the gradient with its components along the symmetry generators
         // removed (the phase conditions' Lagrange multipliers): rotations and translations
         // leave the discrete action exactly invariant, but the trapezoid rule is invariant
         // only under time shifts by multiples of T/M, so the gradient keeps an aliasing-size
         // component along the time shift that no step in the complement can (or should) remove.
-        let zbasis = symmetry_basis(&curve, symmetries, nu);
+        self.zbasis = symmetry_basis(&self.curve, self.symmetries, self.nu);
         let mut projected = eval.gradient.clone();
-        for z in &zbasis {
+        for z in &self.zbasis {
             let dot: f64 = z.iter().zip(&projected).map(|(a, b)| a * b).sum();
             projected.iter_mut().zip(z).for_each(|(x, y)| *x -= dot * y);
         }
         let residual = max_norm(&projected);
-        history.push(residual);
-        if !residual.is_finite() || !eval.action.is_finite() {
-            return Err(fail(
+        self.residual = residual;
+        self.history.push(residual);
+        let finite = residual.is_finite() && eval.action.is_finite();
+        self.eval = Some(eval);
+        if !finite {
+            self.fail(not_converged(
                 residual,
                 iteration,
                 "non-finite action or gradient (a collision or a singular curve)".into(),
             ));
+            return f64::NAN;
         }
-        if residual <= options.tolerance {
-            let tail = tail_size(&curve);
-            if let Some(tol) = options.tail_tolerance
-                && tail > tol
-            {
-                return Err(GviError::PeriodicUnderResolved {
-                    modes: curve.modes,
-                    tail,
-                    tolerance: tol,
-                });
-            }
-            let spread = eval.energy_spread / eval.energy.abs().max(1.0);
-            if let Some(tol) = options.energy_spread_tolerance
-                && (spread > tol || spread.is_nan())
-            {
-                return Err(fail(
-                    residual,
-                    iteration,
-                    format!(
-                        "a stationary point of the discrete action that is not an orbit: the \
-                         energy varies by {spread:.2e} (relative) along it, above {tol:.0e} — a \
-                         collision or far too few modes"
-                    ),
-                ));
-            }
-            return Ok(PeriodicSolution {
-                action: eval.action,
-                energy: eval.energy,
-                energy_spread: eval.energy_spread,
-                residual,
-                residual_history: history,
-                iterations: iteration,
-                nodes,
-                tail,
-                curve,
-            });
+        residual
+    }
+
+    fn correct(&mut self, iteration: usize) -> Result<(Correction, Termination), NewtonFailure> {
+        let residual = self.residual;
+        // The residual's divergence test (the driver's tests are on the corrections).
+        if self.history.len() > 3 && residual > 1e6 * self.history[0] {
+            return Err(self.fail(not_converged(residual, iteration, "diverged".into())));
         }
-        if iteration == options.max_iterations {
-            return Err(fail(
-                residual,
-                iteration,
-                format!("iteration limit {} reached", options.max_iterations),
-            ));
-        }
-        if history.len() > 3 && residual > 1e6 * history[0] {
-            return Err(fail(residual, iteration, "diverged".into()));
-        }
-        let Some(h) = eval.hessian else {
-            return Err(fail(residual, iteration, "no Hessian".into()));
+        let Some(h) = self.eval.as_mut().and_then(|eval| eval.hessian.take()) else {
+            return Err(self.fail(not_converged(residual, iteration, "no Hessian".into())));
         };
-        let step = newton_step(
-            h,
-            &eval.gradient,
-            &symmetry_basis(&curve, symmetries, nu),
-            options,
-        );
+        let step = self
+            .eval
+            .as_ref()
+            .and_then(|eval| newton_step(h, &eval.gradient, &self.zbasis, self.options));
         let Some(mut step) = step else {
-            return Err(fail(
+            return Err(self.fail(not_converged(
                 residual,
                 iteration,
                 "the projected Hessian is zero or non-finite".into(),
-            ));
+            )));
         };
         // Safeguards for crude guesses: bounded relative step, positive period.
+        let (p, curve) = (self.p, &mut self.curve);
         let cnorm = curve.coefficients.iter().map(|x| x * x).sum::<f64>().sqrt();
         let snorm = step[..p].iter().map(|x| x * x).sum::<f64>().sqrt();
         let mut scale: f64 = 1.0;
-        if cnorm > 0.0 && snorm > options.max_step * cnorm {
-            scale = options.max_step * cnorm / snorm;
+        if cnorm > 0.0 && snorm > self.options.max_step * cnorm {
+            scale = self.options.max_step * cnorm / snorm;
         }
-        if energy_unknown {
+        if self.energy_unknown {
             let dt = step[p];
             if dt.abs() > 0.5 * curve.period {
                 scale = scale.min(0.5 * curve.period / dt.abs());
@@ -343,11 +440,60 @@ pub fn solve<L: Lagrangian>(
             .iter_mut()
             .zip(&step[..p])
             .for_each(|(c, s)| *c += s);
-        if energy_unknown {
+        if self.energy_unknown {
             curve.period += step[p];
         }
+        // The sizes are reported for the driver's bookkeeping only (its correction tests are
+        // off). A zero step — the gradient in the cut-off eigenspaces — is not convergence
+        // here: it is reported as the smallest positive size, so the iteration goes on to the
+        // residual test, as it did before the driver.
+        let correction = Correction {
+            size: max_norm(&step).max(f64::MIN_POSITIVE),
+            scale: max_norm(&curve.coefficients).max(f64::MIN_POSITIVE),
+        };
+        if !(correction.size.is_finite() && correction.scale.is_finite()) {
+            return Err(self.fail(not_converged(
+                residual,
+                iteration + 1,
+                "non-finite Newton step".into(),
+            )));
+        }
+        Ok((correction, self.termination()))
     }
-    Err(fail(f64::NAN, options.max_iterations, "unreachable".into()))
+
+    /// The solution's own checks: its tail ([`PeriodicOptions::tail_tolerance`]) and the
+    /// energy along it ([`PeriodicOptions::energy_spread_tolerance`]).
+    fn finish(&mut self, _: ConvergedBy) -> Result<(), NewtonFailure> {
+        let Some(eval) = self.eval.as_ref() else {
+            unreachable!("the driver converges only after a residual evaluation")
+        };
+        let (residual, iterations) = (self.residual, self.history.len() - 1);
+        let spread = eval.energy_spread / eval.energy.abs().max(1.0);
+        self.tail = tail_size(&self.curve);
+        if let Some(tol) = self.options.tail_tolerance
+            && self.tail > tol
+        {
+            return Err(self.fail(GviError::PeriodicUnderResolved {
+                modes: self.curve.modes,
+                tail: self.tail,
+                tolerance: tol,
+            }));
+        }
+        if let Some(tol) = self.options.energy_spread_tolerance
+            && (spread > tol || spread.is_nan())
+        {
+            return Err(self.fail(not_converged(
+                residual,
+                iterations,
+                format!(
+                    "a stationary point of the discrete action that is not an orbit: the \
+                     energy varies by {spread:.2e} (relative) along it, above {tol:.0e} — a \
+                     collision or far too few modes"
+                ),
+            )));
+        }
+        Ok(())
+    }
 }
 
 /// The minimum-norm Newton step H δ = −g in the orthogonal complement of the symmetry basis.

@@ -71,8 +71,6 @@ fn stream_system(
 ) -> Result<StreamOutcome> {
     let m = &scene.method;
     let init = &scene.initial;
-    // For the summary; built first so that its parameter errors come first, as in-memory.
-    let gvi = m.integrator()?;
     // Lengths, finiteness and steps ≥ 1 were checked when the scene was built.
     let d = system.dim();
     super::monitor::check_time_span(init.t0, m.h, m.steps)?;
@@ -93,7 +91,7 @@ fn stream_system(
     }
 
     let start = Instant::now();
-    let n = gvi.n();
+    let n = m.n;
     let (mut phi, mut dphi, mut qc) = (vec![0.0; n], vec![0.0; n], vec![0.0; d]);
     let mut row = Vec::with_capacity(header.len());
     let (mut iterations, mut evaluations, mut done) = (0usize, 0usize, 0usize);
@@ -168,8 +166,8 @@ fn stream_system(
         "{} basis n = {}, {} with {} points, h = {}, {} solver (streamed)",
         m.basis,
         m.n,
-        gvi.rule().family,
-        gvi.rule().len(),
+        m.quadrature,
+        m.quadrature_points(),
         super::fmt_number(m.h),
         m.solver
     );
