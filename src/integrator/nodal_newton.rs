@@ -64,8 +64,10 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         // previous step) while the iteration contracts fast; refactor at the current iterate
         // (full Newton) as soon as it does not.
         let reuse = opts.dense.reuse_jacobian && mode == Mode::InitialValue;
-        let have_lu =
-            reuse && opts.dense.reuse_across_steps && ws.newton.lu_valid && ws.newton.lu.dim() == size;
+        let have_lu = reuse
+            && opts.dense.reuse_across_steps
+            && ws.newton.lu_valid
+            && ws.newton.lu.dim() == size;
         // The structured solvers (initial-value steps of separable Lagrangians): the
         // Kronecker solver freezes the Hessian per step (refrozen once if the iteration
         // contracts slowly); Newton–Krylov freezes it for its preconditioner only. Either
