@@ -8,8 +8,8 @@
 //! GVI_FLOOR (tolerances), GVI_NO_REUSE (no simplified Newton), GVI_ROUNDED_KINETIC (rounded
 //! kinetic products in the residuals instead of the default double-double ones).
 
-use galerkin_vi::prelude::*;
 use galerkin_vi::integrator::DenseOptions;
+use galerkin_vi::prelude::*;
 use std::time::Instant;
 
 /// An f64 from the environment (for experiments with the Newton options), or `default`.
