@@ -78,26 +78,19 @@ impl Trajectory {
         dim: usize,
         capacity: usize,
     ) -> Self {
-        let cap = capacity.min(1 << 20);
         let n = basis.len();
-        let bases = OnceLock::new();
-        let _ = bases.set(vec![(n, basis.clone())]);
-        Trajectory {
-            basis: basis.name().to_string(),
-            user_basis: false,
+        let traj = Trajectory::of_kind_name(
+            basis.name(),
             n,
-            quadrature: quadrature.to_string(),
+            quadrature,
             quad_points,
             h,
             t0,
             dim,
-            q: Vec::with_capacity(cap + 1),
-            p: Vec::with_capacity(cap + 1),
-            coefficients: Vec::with_capacity(cap),
-            stats: Vec::with_capacity(cap),
-            step_n: Vec::new(),
-            bases,
-        }
+            capacity,
+        );
+        let _ = traj.bases.set(vec![(n, basis)]);
+        traj
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -113,9 +106,34 @@ impl Trajectory {
         dim: usize,
         capacity: usize,
     ) -> Self {
+        Trajectory::of_kind_name(
+            kind.as_str(),
+            n,
+            quadrature,
+            quad_points,
+            h,
+            t0,
+            dim,
+            capacity,
+        )
+    }
+
+    /// An empty trajectory with room for `capacity` steps (at most 2²⁰ reserved up front) and
+    /// no basis attached yet.
+    #[allow(clippy::too_many_arguments)]
+    fn of_kind_name(
+        basis: &str,
+        n: usize,
+        quadrature: &str,
+        quad_points: usize,
+        h: f64,
+        t0: f64,
+        dim: usize,
+        capacity: usize,
+    ) -> Self {
         let cap = capacity.min(1 << 20);
         Trajectory {
-            basis: kind.as_str().to_string(),
+            basis: basis.to_string(),
             user_basis: false,
             n,
             quadrature: quadrature.to_string(),
