@@ -130,11 +130,15 @@ impl MethodSpec {
             })
     }
 
-    /// Check the settings against each other: `auto_h` chooses h from the tolerance, so it
-    /// needs `tol`.
+    /// Check the settings that need no integrator: h is finite and positive, and `auto_h`
+    /// (which chooses h from the tolerance) has `tol`. The integrator checks the rest (n, the
+    /// quadrature) when it is built.
     ///
-    /// Errors: [`GviError::InvalidInput`] named `auto_h`.
+    /// Errors: [`GviError::InvalidStepSize`]; [`GviError::InvalidInput`] named `auto_h`.
     pub fn validate(&self) -> Result<()> {
+        if !(self.h.is_finite() && self.h > 0.0) {
+            return Err(GviError::InvalidStepSize { h: self.h });
+        }
         if self.auto_h && self.tol.is_none() {
             return Err(GviError::InvalidInput {
                 name: "auto_h".into(),

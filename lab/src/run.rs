@@ -189,6 +189,8 @@ pub fn run_scene(scene: &BuiltScene, options: RunOptions) -> Result<RunResult> {
 fn run_system(system: &AnySystem, scene: &BuiltScene, options: RunOptions) -> Result<RunResult> {
     let m = &scene.method;
     let init = &scene.initial;
+    // The method's own parameter errors (h) come before the time span's, which depends on h.
+    m.validate()?;
     let d = system.dim();
     let exact = system.exact_solution(init.t0, &init.q, &init.p)?;
     let start = Instant::now();

@@ -71,6 +71,8 @@ fn stream_system(
 ) -> Result<StreamOutcome> {
     let m = &scene.method;
     let init = &scene.initial;
+    // The method's own parameter errors (h) come before the time span's, which depends on h.
+    m.validate()?;
     // Lengths, finiteness and steps ≥ 1 were checked when the scene was built.
     let d = system.dim();
     super::monitor::check_time_span(init.t0, m.h, m.steps)?;
