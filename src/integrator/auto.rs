@@ -105,7 +105,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             StageSolver::Auto | StageSolver::Modal => {
                 let krylov = ws.auto.krylov.holding();
                 ws.auto.krylov.calm_solve();
-                if ws.newton.kron.is_none() || (ws.n - 1) * ws.d <= DENSE_SIZE {
+                if !ws.system.structured() || (ws.n - 1) * ws.d <= DENSE_SIZE {
                     StageSolver::Exact
                 } else if krylov {
                     StageSolver::NewtonKrylov
@@ -124,7 +124,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         ws.velocity.is_some()
             && self.tables().velocity.is_some()
             && self.stage_solver.is_none()
-            && !ws.guess.has_warm
+            && !ws.guess.warm_start_pending()
             && match solver {
                 StageSolver::Modal => true,
                 StageSolver::Auto => !ws.auto.velocity_gives_up.holding(),

@@ -86,10 +86,10 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let mut ws = self.workspace(lag)?;
         ws.need_velocities = true;
         let q0 = curve.start();
-        ws.newton.base.copy_from_slice(q0);
+        ws.iterate.set_origin(q0);
         for (i, (row, q)) in ws
-            .newton
-            .coeffs
+            .iterate
+            .increments_mut()
             .chunks_exact_mut(d)
             .zip(curve.coefficients().chunks_exact(d))
             .enumerate()
@@ -123,18 +123,18 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let t = self.tables();
         let (n, m, d, h) = (t.n, t.m, ws.d, self.step_size());
         let coeffs = if coeffs_from_cand {
-            &ws.guess.cand
+            ws.guess.candidate()
         } else {
-            &ws.newton.coeffs
+            ws.iterate.increments()
         };
         ws.stage.curve_from_cand = coeffs_from_cand;
         let (rn, rd) = (Strided::rows(0, n), Strided::rows(0, d));
         // q_k + (Φ ΔQ + δq_k): the small parts first, then the large one.
         for (j, row) in ws.stage.qj.chunks_exact_mut(d).enumerate() {
-            row.copy_from_slice(&ws.newton.base_err);
+            row.copy_from_slice(ws.iterate.origin_lo());
             if !coeffs_from_cand {
                 let phi_last = t.phi[j * n + n - 1];
-                for (x, lo) in row.iter_mut().zip(&ws.newton.last_lo) {
+                for (x, lo) in row.iter_mut().zip(ws.iterate.last_lo()) {
                     *x += phi_last * lo;
                 }
             }
@@ -152,7 +152,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             &mut ws.stage.qj,
             rd,
         );
-        ws.stage.add_to_nodes(&ws.newton.base);
+        ws.stage.add_to_nodes(ws.iterate.origin());
         // Velocities: the separable residual and Jacobian never use them (the kinetic part is
         // the precomputed K ΔQ), only the general path and the value of L_d do.
         if ws.separable.is_none() || ws.need_velocities {
@@ -192,8 +192,8 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         }
     }
 
-    /// ∂S/∂Q_a for every a into `ws.stage.grad`, from the coefficients in `ws.newton.coeffs` (or
-    /// `ws.guess.cand`). Returns the number of first-derivative evaluations.
+    /// ∂S/∂Q_a for every a into `ws.stage.grad`, from the iterate's increments (or
+    /// the candidate guess). Returns the number of first-derivative evaluations.
     pub(super) fn action_gradient<L: Lagrangian>(
         &self,
         lag: &L,
@@ -208,9 +208,9 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             // Kinetic part (1/h) Σ_b K_ab M ΔQ_b with ΔQ_b = Q_b − u_b q_k: constants applied to
             // the increments, never to Q (docs/DESIGN.md §4).
             let coeffs = if cand {
-                &ws.guess.cand
+                ws.guess.candidate()
             } else {
-                &ws.newton.coeffs
+                ws.iterate.increments()
             };
             match &sep.mass_diagonal {
                 // M diagonal (N-body): the same products without the D − 1 zero terms.
@@ -276,7 +276,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 for r in 0..d {
                     let mut s = 0.0;
                     for c in 0..d {
-                        s += sep.mass[r * d + c] * ws.newton.last_lo[c];
+                        s += sep.mass[r * d + c] * ws.iterate.last_lo()[c];
                     }
                     ws.stage.small_rhs[r] = s / h;
                 }
@@ -333,15 +333,16 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let t = self.tables();
         let n = t.n;
         // Start from the straight line between the ends, as increments from q0.
-        ws.newton.base.copy_from_slice(q0);
+        ws.iterate.set_origin(q0);
+        let increments = ws.iterate.increments_mut();
         for i in 0..n {
             for r in 0..d {
-                ws.newton.coeffs[i * d + r] = t.ramp[i] * (q1[r] - q0[r]);
+                increments[i * d + r] = t.ramp[i] * (q1[r] - q0[r]);
             }
         }
-        ws.newton.coeffs[..d].iter_mut().for_each(|x| *x = 0.0);
+        increments[..d].iter_mut().for_each(|x| *x = 0.0);
         for r in 0..d {
-            ws.newton.coeffs[(n - 1) * d + r] = q1[r] - q0[r];
+            increments[(n - 1) * d + r] = q1[r] - q0[r];
         }
         let mut stats = StepStats::default();
         self.newton(

@@ -25,7 +25,6 @@
 //! integrator re-evaluates the residual at the iterate a solver returns, so the step's
 //! momentum and statistics always describe the final iterate.
 
-use super::dd::max_abs;
 use super::stage::Mode;
 use super::{GalerkinIntegrator, NewtonOptions, StageSolver, StepFailure, StepStats, Workspace};
 use crate::basis::Basis;
@@ -174,7 +173,7 @@ impl<'a, B: Basis, Q: Quadrature, L: Lagrangian> StepEquations<'a, B, Q, L> {
     ) -> Self {
         // The guess's residual, if the workspace has it, stays for a built-in solver's first
         // iteration (the integrator clears it before a custom solver runs).
-        ws.newton.last_lo.iter_mut().for_each(|x| *x = 0.0);
+        ws.iterate.clear_last_lo();
         StepEquations {
             gvi,
             lag,
@@ -225,7 +224,7 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> StageEquations for StepEquations<'_
     }
 
     fn iterate(&self) -> &[f64] {
-        &self.ws.newton.coeffs[self.ws.d..]
+        &self.ws.iterate.increments()[self.ws.d..]
     }
 
     fn residual(&mut self) -> f64 {
@@ -238,33 +237,20 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> StageEquations for StepEquations<'_
 
     fn correction(&mut self) -> &mut [f64] {
         let size = self.size();
-        &mut self.ws.newton.rhs[..size]
+        self.ws.system.rhs_mut(size)
     }
 
     fn apply_correction(&mut self) -> Correction {
         let size = self.size();
-        let (n, d) = (self.ws.n, self.ws.d);
-        let last = (n - 1) * d;
-        let separable = self.ws.separable.is_some();
         let ws = &mut *self.ws;
-        for i in 0..size {
-            let k = d + i;
-            if k >= last && separable {
-                let (s, e) = super::dd::two_sum(ws.newton.coeffs[k], ws.newton.rhs[i]);
-                ws.newton.coeffs[k] = s;
-                ws.newton.last_lo[k - last] += e;
-            } else {
-                ws.newton.coeffs[k] += ws.newton.rhs[i];
-            }
-        }
+        let (size, scale) =
+            ws.iterate
+                .apply_correction(ws.system.rhs(size), ws.d, ws.separable.is_some());
         self.stats.iterations += 1;
         self.curve_fresh = false;
         self.hessians_fresh = false;
         self.jacobian_fresh = false;
-        Correction {
-            size: max_abs(&ws.newton.rhs[..size]),
-            scale: max_abs(&ws.newton.coeffs).max(f64::MIN_POSITIVE),
-        }
+        Correction { size, scale }
     }
 
     fn solve_exact(&mut self) -> Result<(), StepFailure> {
@@ -275,26 +261,13 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> StageEquations for StepEquations<'_
                 self.gvi.jacobian(self.lag, self.ws, Mode::InitialValue);
             self.jacobian_fresh = true;
         }
-        let ws = &mut *self.ws;
-        if ws.newton.lu.dim() != size {
-            ws.newton.lu = crate::linalg::Lu::with_capacity(size);
-        }
         self.stats.factorizations += 1;
-        ws.newton.lu_valid = false;
-        if ws
-            .newton
-            .lu
-            .refactor(&ws.newton.jac[..size * size])
-            .is_err()
-        {
+        if self.ws.system.factor(size, false).is_err() {
             self.factored = false;
             return Err(self.failure("singular Jacobian"));
         }
         self.factored = true;
-        let ws = &mut *self.ws;
-        ws.newton
-            .lu
-            .solve_in_place(&mut ws.newton.rhs[..size], &mut ws.newton.scratch[..size]);
+        self.ws.system.solve(size);
         Ok(())
     }
 
@@ -303,10 +276,7 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> StageEquations for StepEquations<'_
             return false;
         }
         let size = self.size();
-        let ws = &mut *self.ws;
-        ws.newton
-            .lu
-            .solve_in_place(&mut ws.newton.rhs[..size], &mut ws.newton.scratch[..size]);
+        self.ws.system.solve(size);
         true
     }
 
@@ -329,15 +299,8 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> StageEquations for StepEquations<'_
     fn solve_frozen(&mut self) -> Result<(), StepFailure> {
         let size = self.size();
         let h = self.gvi.step_size();
-        match (
-            self.frozen,
-            self.gvi.tables().kron.as_ref(),
-            self.ws.newton.kron.as_mut(),
-        ) {
-            (true, Some(kt), Some(kw)) => {
-                kw.solve(kt, h, &mut self.ws.newton.rhs[..size]);
-                Ok(())
-            }
+        match (self.frozen, self.gvi.tables().kron.as_ref()) {
+            (true, Some(kt)) if self.ws.system.kronecker_solve(kt, h, size) => Ok(()),
             _ => Err(self.failure("no frozen Hessian: call freeze_hessian first")),
         }
     }
@@ -373,7 +336,7 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> StageEquations for StepEquations<'_
         let size = self.size();
         let (h, d) = (self.gvi.step_size(), self.ws.d);
         self.ensure_curve();
-        if self.ws.newton.krylov.is_some() && self.ws.separable.is_some() {
+        if self.ws.system.structured() && self.ws.separable.is_some() {
             if !self.hessians_fresh {
                 self.stats.hessian_evaluations += self.gvi.node_force_jacobians(self.lag, self.ws);
                 self.hessians_fresh = true;
@@ -406,7 +369,7 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> StageEquations for StepEquations<'_
                 self.gvi.jacobian(self.lag, self.ws, Mode::InitialValue);
             self.jacobian_fresh = true;
         }
-        let jac = &self.ws.newton.jac[..size * size];
+        let jac = self.ws.system.jacobian(size);
         for (row, yi) in jac.chunks_exact(size).zip(y.iter_mut()) {
             *yi = row.iter().zip(x).map(|(a, b)| a * b).sum();
         }

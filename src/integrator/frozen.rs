@@ -19,7 +19,7 @@ impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIn
     ) -> Result<usize> {
         let t = self.tables();
         let (m, h) = (t.m, self.step_size());
-        let (Some(kt), Some(kw)) = (t.kron.as_ref(), ws.newton.kron.as_mut()) else {
+        let (Some(kt), Some(kw)) = (t.kron.as_ref(), ws.system.kronecker_mut()) else {
             return Err(GviError::Unsupported(
                 "the Kronecker solver needs a separable Lagrangian".into(),
             ));

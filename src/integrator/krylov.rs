@@ -310,14 +310,13 @@ impl Workspace {
         &mut [f64],
     )> {
         let sep = self.separable.as_ref()?;
-        let kw = self.newton.kron.as_mut()?;
-        let kv = self.newton.krylov.as_mut()?;
+        let (kw, kv, rhs) = self.system.krylov_mut()?;
         let operands = Operands {
             mass: &sep.mass,
             mass_diagonal: sep.mass_diagonal.as_deref(),
             hall: &self.stage.hall,
             matrix_free_nodes: self.matrix_free.then_some(&self.stage.qj[..]),
         };
-        Some((kw, kv, operands, &mut self.newton.rhs))
+        Some((kw, kv, operands, rhs))
     }
 }

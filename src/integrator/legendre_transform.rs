@@ -76,8 +76,9 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         Ok(legendre_transforms_of_gradient(&ws))
     }
 
-    /// The Legendre-transform rows of the initial-value residual into `ws.newton.rhs[..D]`, and the
-    /// step's total impulse h Σ_j b_j L_q(c_j) into `ws.newton.impulse` + `ws.newton.impulse_lo`.
+    /// The Legendre-transform rows of the initial-value residual into the first D entries of
+    /// the Newton right-hand side, and the step's total impulse h Σ_j b_j L_q(c_j) into the
+    /// iterate (hi + lo).
     ///
     /// The rows are p_k + impulse − ∂S/∂ΔQ_{n−1} = 0, the form that makes
     /// p_{k+1} = p_k + impulse exactly D₂L_d of the discrete Lagrangian the tables define (q_k
@@ -101,23 +102,25 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let (d, n) = (ws.d, ws.n);
         let last = (n - 1) * d;
         self.impulse(ws);
+        let (impulse, impulse_lo) = ws.iterate.impulse();
+        let p_lo = ws.iterate.momentum_lo();
+        let rows = ws.system.rhs_mut(d);
         for r in 0..d {
-            ws.newton.rhs[r] =
-                (p_k[r] - ws.stage.grad[last + r]) + (ws.newton.impulse[r] + ws.newton.p_err[r]);
+            rows[r] = (p_k[r] - ws.stage.grad[last + r]) + (impulse[r] + p_lo[r]);
         }
         let Some(sep) = &ws.separable else {
             return;
         };
         let x = if ws.stage.curve_from_cand {
-            &ws.guess.cand
+            ws.guess.candidate()
         } else {
-            &ws.newton.coeffs
+            ws.iterate.increments()
         };
         // p_k + impulse …
         for r in 0..d {
-            let (s, e) = two_sum(p_k[r], ws.newton.impulse[r]);
+            let (s, e) = two_sum(p_k[r], impulse[r]);
             ws.stage.dd_hi[r] = s;
-            ws.stage.dd_lo[r] = e + (ws.newton.p_err[r] + ws.newton.impulse_lo[r]);
+            ws.stage.dd_lo[r] = e + (p_lo[r] + impulse_lo[r]);
         }
         // … − Σ_j φ_{n−1}(c_j) h b_j L_q(c_j) (side by side over r, each sum in the order
         // of j) …
@@ -148,11 +151,11 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             if !ws.stage.curve_from_cand {
                 for (c, &i) in kinetic.iter().zip(index) {
                     if i >= last {
-                        e -= c * ws.newton.last_lo[i - last];
+                        e -= c * ws.iterate.last_lo()[i - last];
                     }
                 }
             }
-            ws.newton.rhs[r] = s + e;
+            rows[r] = s + e;
         }
     }
 

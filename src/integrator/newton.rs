@@ -3,7 +3,6 @@
 //! `nodal_newton`, the stage equations and their Jacobian in `stage`, the initial guesses in
 //! `guess`.
 
-use super::dd::dd_add;
 pub use super::options::{
     DenseOptions, InitialGuess, NewtonOptions, StepFailure, StepStats, StructuredOptions,
 };
@@ -38,11 +37,10 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         self.check_workspace(lag, ws, q, p, [q_next.len(), p_next.len()])?;
         let stats = self.solve_step(lag, ws, q, p)?;
         let d = ws.d;
-        let last = (ws.n - 1) * d;
         for r in 0..d {
             // Correctly rounded sums of the state and the double-double increments.
-            q_next[r] = dd_add(q[r], 0.0, ws.newton.coeffs[last + r], ws.newton.last_lo[r]).0;
-            p_next[r] = dd_add(p[r], 0.0, ws.newton.impulse[r], ws.newton.impulse_lo[r]).0;
+            let [(qn, _), (pn, _)] = ws.iterate.advance(r, (q[r], 0.0), (p[r], 0.0));
+            (q_next[r], p_next[r]) = (qn, pn);
         }
         self.finish_step(ws, q_next);
         Ok(stats)
@@ -65,27 +63,14 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         p_err: &mut [f64],
     ) -> std::result::Result<StepStats, StepFailure> {
         self.check_workspace(lag, ws, q, p, [q_err.len(), p_err.len()])?;
-        ws.newton.base_err.copy_from_slice(q_err);
-        ws.newton.p_err.copy_from_slice(p_err);
+        ws.iterate.set_compensation(q_err, p_err);
         let solved = self.solve_step(lag, ws, q, p);
-        ws.newton.base_err.iter_mut().for_each(|x| *x = 0.0);
-        ws.newton.p_err.iter_mut().for_each(|x| *x = 0.0);
+        ws.iterate.clear_compensation();
         let stats = solved?;
         let d = ws.d;
-        let last = (ws.n - 1) * d;
         for r in 0..d {
-            (q[r], q_err[r]) = dd_add(
-                q[r],
-                q_err[r],
-                ws.newton.coeffs[last + r],
-                ws.newton.last_lo[r],
-            );
-            (p[r], p_err[r]) = dd_add(
-                p[r],
-                p_err[r],
-                ws.newton.impulse[r],
-                ws.newton.impulse_lo[r],
-            );
+            [(q[r], q_err[r]), (p[r], p_err[r])] =
+                ws.iterate.advance(r, (q[r], q_err[r]), (p[r], p_err[r]));
         }
         self.finish_step(ws, q);
         Ok(stats)
@@ -96,16 +81,16 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
     pub(super) fn finish_step(&self, ws: &mut Workspace, q_next: &[f64]) {
         let t = self.tables();
         let (n, d) = (t.n, ws.d);
+        let (origin, increments) = (ws.iterate.origin(), ws.iterate.increments());
         let last = ws.last.coefficients_mut();
         for i in 1..n - 1 {
             for r in 0..d {
-                last[i * d + r] = t.unit[i] * ws.newton.base[r] + ws.newton.coeffs[i * d + r];
+                last[i * d + r] = t.unit[i] * origin[r] + increments[i * d + r];
             }
         }
-        last[..d].copy_from_slice(&ws.newton.base);
+        last[..d].copy_from_slice(origin);
         last[(n - 1) * d..].copy_from_slice(q_next);
-        ws.guess.prev.copy_from_slice(&ws.newton.coeffs);
-        ws.guess.has_prev = true;
+        ws.guess.remember(increments);
     }
 
     /// Refuse a workspace made for another integrator or dimension, and states of the wrong
@@ -147,8 +132,8 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         })
     }
 
-    /// Solve the stage equations of one step from (q, p): on success `ws.newton.coeffs` holds the
-    /// increments ΔQ and `ws.newton.impulse` the total impulse h Σ_j b_j L_q(c_j).
+    /// Solve the stage equations of one step from (q, p): on success the iterate holds the
+    /// increments ΔQ and the total impulse h Σ_j b_j L_q(c_j).
     fn solve_step<L: Lagrangian>(
         &self,
         lag: &L,
@@ -156,7 +141,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         q: &[f64],
         p: &[f64],
     ) -> std::result::Result<StepStats, StepFailure> {
-        ws.newton.base.copy_from_slice(q);
+        ws.iterate.set_origin(q);
         let mut stats = StepStats::default();
         if self.velocity_form_applies(ws) {
             let solved = self.solve_velocity_form(lag, ws, q, p, &mut stats);
@@ -169,7 +154,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 }
             }
             if solved {
-                stats.gradient_evaluations += std::mem::take(&mut ws.guess.guess_force_evaluations);
+                stats.gradient_evaluations += ws.guess.take_force_evaluations();
                 return Ok(stats);
             }
             // Not solved (a stall, a non-finite residual): the nodal solvers take the step
@@ -179,7 +164,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let (guess, evals) = self.initial_guess(lag, ws, q, p);
         stats.guess = guess;
         stats.gradient_evaluations += evals;
-        ws.newton.start.copy_from_slice(&ws.newton.coeffs);
+        ws.iterate.save_start();
         let solver = self.options().solver;
         if let Err(first) = self.solve_stage_equations(lag, ws, p, &mut stats, solver) {
             // Fallbacks before giving up. A structured solver that failed hands the step to
@@ -191,8 +176,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             let mut solved = false;
             let retry = if self.stage_solver.is_none() && solver != StageSolver::Exact {
                 stats.fallbacks += 1;
-                ws.newton.coeffs.copy_from_slice(&ws.newton.start);
-                ws.newton.residual_ready = None;
+                ws.iterate.restore_start();
                 solved = self
                     .solve_stage_equations(lag, ws, p, &mut stats, StageSolver::Exact)
                     .is_ok();
@@ -209,7 +193,9 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 if solved || g == guess || !self.make_guess(lag, ws, g, q, p) {
                     continue;
                 }
-                ws.newton.coeffs.copy_from_slice(&ws.guess.cand);
+                ws.iterate
+                    .increments_mut()
+                    .copy_from_slice(ws.guess.candidate());
                 if self
                     .solve_stage_equations(lag, ws, p, &mut stats, retry)
                     .is_ok()
@@ -220,8 +206,8 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 }
             }
             if !solved {
-                ws.guess.has_prev = false;
-                ws.guess.guess_force_evaluations = 0;
+                ws.guess.forget_previous();
+                ws.guess.take_force_evaluations();
                 return Err(StepFailure {
                     iterations: stats.iterations,
                     ..first
@@ -229,13 +215,13 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             }
         }
         // The RK4 predictor's force evaluations are right-hand-side evaluations too.
-        stats.gradient_evaluations += std::mem::take(&mut ws.guess.guess_force_evaluations);
-        // The total impulse h Σ_j b_j L_q(c_j) at the solution is left in ws.newton.impulse by the
+        stats.gradient_evaluations += ws.guess.take_force_evaluations();
+        // The total impulse h Σ_j b_j L_q(c_j) at the solution is left in the iterate by the
         // last residual evaluation.
         Ok(stats)
     }
 
-    /// The stage equations of an initial-value step from the iterate in `ws.newton.coeffs`,
+    /// The stage equations of an initial-value step from the iterate in the workspace,
     /// through the public solver interface: the integrator's custom [`StageSolve`] if it has
     /// one, else the built-in `solver` (itself a `StageSolve`), each given the same
     /// [`StageEquations`]. A custom solver's result is re-evaluated here, so the impulse and
@@ -253,7 +239,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let custom = self.stage_solver.as_deref();
         if custom.is_some() {
             // A custom solver evaluates its own residuals: the guess's is not reused.
-            ws.newton.residual_ready = None;
+            ws.iterate.set_ready_residual(None);
         }
         let chosen: &dyn StageSolve = match custom {
             Some(c) => c,
@@ -266,7 +252,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         };
         let residual = equations.residual();
         if !residual.is_finite() {
-            ws.newton.lu_valid = false;
+            ws.system.invalidate();
             return Err(StepFailure {
                 residual,
                 iterations: stats.iterations,

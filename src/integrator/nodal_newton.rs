@@ -8,7 +8,6 @@
 //! stalled frozen Hessian to Newton–Krylov (`Auto`) or to exact Newton. The driver decides
 //! termination by the [`Termination`] each linear solve names.
 
-use super::dd::{max_abs, two_sum};
 use super::linear::Linear;
 use super::solver::StageSolver;
 use super::stage::Mode;
@@ -39,8 +38,8 @@ const QUADRATIC_ESTIMATE: f64 = 1.0;
 const QUADRATIC_FLOOR_THETA: f64 = 0.5;
 
 impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
-    /// Newton's method on the stage equations of `mode`, from the coefficients in
-    /// `ws.newton.coeffs`; on success the coefficients solve them and `ws.stage.grad` holds
+    /// Newton's method on the stage equations of `mode`, from the iterate's
+    /// increments; on success the coefficients solve them and `ws.stage.grad` holds
     /// ∂S/∂Q at the solution.
     pub(super) fn newton<L: Lagrangian>(
         &self,
@@ -54,7 +53,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let opts = self.options();
         let (n, d) = (ws.n, ws.d);
         let size = mode.count(n) * d;
-        ws.newton.last_lo.iter_mut().for_each(|x| *x = 0.0);
+        ws.iterate.clear_last_lo();
         if size == 0 {
             stats.gradient_evaluations += self.action_gradient(lag, ws, false);
             stats.residual = self.residual(ws, mode, p_k);
@@ -64,18 +63,13 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         // previous step) while the iteration contracts fast; refactor at the current iterate
         // (full Newton) as soon as it does not.
         let reuse = opts.dense.reuse_jacobian && mode == Mode::InitialValue;
-        let have_lu = reuse
-            && opts.dense.reuse_across_steps
-            && ws.newton.lu_valid
-            && ws.newton.lu.dim() == size;
+        let have_lu = reuse && opts.dense.reuse_across_steps && ws.system.reusable(size);
         // The structured solvers (initial-value steps of separable Lagrangians): the
         // Kronecker solver freezes the Hessian per step (refrozen once if the iteration
         // contracts slowly); Newton–Krylov freezes it for its preconditioner only. Either
         // continues with exact dense Newton within the step if it stalls.
-        let structured = mode == Mode::InitialValue
-            && ws.newton.kron.is_some()
-            && ws.newton.krylov.is_some()
-            && self.tables().kron.is_some();
+        let structured =
+            mode == Mode::InitialValue && ws.system.structured() && self.tables().kron.is_some();
         let auto = matches!(solver, StageSolver::Auto | StageSolver::Modal);
         let (linear, fixed_point) = match (structured, self.resolve_solver(ws, solver)) {
             (true, StageSolver::Kronecker) => (Linear::Frozen, false),
@@ -105,7 +99,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let first = iteration.termination();
         let solved = crate::newton::drive(&mut iteration, &first);
         if solved.is_err() {
-            iteration.ws.newton.lu_valid = false;
+            iteration.ws.system.invalidate();
         }
         solved.map(|_| ())
     }
@@ -119,7 +113,7 @@ struct NodalNewton<'a, B: Basis, Q: Quadrature, L: Lagrangian> {
     mode: Mode,
     p_k: &'a [f64],
     stats: &'a mut StepStats,
-    /// Unknowns, and the offset of the first in `ws.newton.coeffs`.
+    /// Unknowns, and the offset of the first in the iterate's increments.
     size: usize,
     u0: usize,
     /// Simplified Newton with the dense matrix (initial-value steps).
@@ -186,9 +180,8 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> NewtonIteration for NodalNewton<'_,
         // The initial guess's residual may already be in the workspace (same point).
         let res = match self
             .ws
-            .newton
-            .residual_ready
-            .take()
+            .iterate
+            .take_ready_residual()
             .filter(|_| iteration == 0)
         {
             Some(r) => r,
@@ -232,19 +225,14 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> NewtonIteration for NodalNewton<'_,
         }
         if !self.have_lu {
             stats.hessian_evaluations += gvi.jacobian(lag, ws, self.mode);
-            if ws.newton.lu.dim() != size {
-                ws.newton.lu = crate::linalg::Lu::with_capacity(size);
-            }
             stats.factorizations += 1;
             if ws
-                .newton
-                .lu
-                .refactor(&ws.newton.jac[..size * size])
+                .system
+                .factor(size, self.mode == Mode::InitialValue)
                 .is_err()
             {
                 return Err(self.failure("singular Jacobian", iteration));
             }
-            ws.newton.lu_valid = self.mode == Mode::InitialValue;
             self.have_lu = true;
             self.fresh = true;
         }
@@ -252,9 +240,7 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> NewtonIteration for NodalNewton<'_,
         let kt = gvi.tables().kron.as_ref();
         match (self.linear, kt) {
             (Linear::Frozen, Some(kt)) => {
-                if let Some(kw) = ws.newton.kron.as_mut() {
-                    kw.solve(kt, h, &mut ws.newton.rhs[..size]);
-                }
+                ws.system.kronecker_solve(kt, h, size);
             }
             (Linear::Krylov, Some(kt)) => {
                 let d = ws.d;
@@ -266,30 +252,13 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> NewtonIteration for NodalNewton<'_,
                     stats.inner_iterations += super::krylov::gmres(&op, kt, kw, kv, rhs);
                 }
             }
-            _ => ws
-                .newton
-                .lu
-                .solve_in_place(&mut ws.newton.rhs[..size], &mut ws.newton.scratch[..size]),
+            _ => ws.system.solve(size),
         }
         stats.iterations += 1;
-        let delta = max_abs(&ws.newton.rhs[..size]);
-        // ΔQ_{n−1} (the increment of q) is kept as hi + lo: the corrections of the last
-        // iterations lie below its ulp, and the compensated Legendre-transform row resolves
-        // them.
-        let last = (ws.n - 1) * ws.d;
-        for i in 0..size {
-            let k = self.u0 + i;
-            if k >= last && ws.separable.is_some() {
-                let (s, e) = two_sum(ws.newton.coeffs[k], ws.newton.rhs[i]);
-                ws.newton.coeffs[k] = s;
-                ws.newton.last_lo[k - last] += e;
-            } else {
-                ws.newton.coeffs[k] += ws.newton.rhs[i];
-            }
-        }
-        // The scale of the unknowns, the increments ΔQ (which the stage equations determine
-        // to a relative accuracy far better than ε|q_k| when h is small).
-        let scale = max_abs(&ws.newton.coeffs).max(f64::MIN_POSITIVE);
+        // ΔQ_{n−1} (the increment of q) is kept as hi + lo.
+        let (delta, scale) =
+            ws.iterate
+                .apply_correction(ws.system.rhs(size), self.u0, ws.separable.is_some());
         Ok((Correction { size: delta, scale }, self.termination()))
     }
 

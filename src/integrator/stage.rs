@@ -40,7 +40,7 @@ impl Mode {
 }
 
 impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
-    /// Residual of the stage equations for `mode` into `ws.newton.rhs` (negated, ready for the
+    /// Residual of the stage equations for `mode` into the Newton right-hand side (negated, ready for the
     /// Newton solve); returns its max-norm.
     pub(super) fn residual(&self, ws: &mut Workspace, mode: Mode, p_k: &[f64]) -> f64 {
         let (d, n) = (ws.d, ws.n);
@@ -50,13 +50,14 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         if mode == Mode::InitialValue {
             self.legendre_transform_rows(ws, p_k);
         }
+        let rhs = ws.system.rhs_mut(rows);
         for i in 0..rows {
             let r = if mode == Mode::InitialValue && i < d {
-                ws.newton.rhs[i]
+                rhs[i]
             } else {
                 ws.stage.grad[off + i]
             };
-            ws.newton.rhs[i] = -r;
+            rhs[i] = -r;
             norm = norm.max(r.abs());
             if !r.is_finite() {
                 norm = f64::INFINITY;
@@ -65,7 +66,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         norm
     }
 
-    /// Assemble the exact Jacobian ∂²S/∂Q_a∂Q_b for `mode` into `ws.newton.jac` (uses the curve values
+    /// Assemble the exact Jacobian ∂²S/∂Q_a∂Q_b for `mode` into the Newton matrix (uses the curve values
     /// left in the workspace by the last gradient evaluation). Returns Hessian evaluations.
     pub(super) fn jacobian<L: Lagrangian>(&self, lag: &L, ws: &mut Workspace, mode: Mode) -> usize {
         let evals = self.jacobian_rows(lag, ws, mode);
@@ -75,7 +76,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             let t = self.tables();
             let (n, d) = (t.n, ws.d);
             let size = (n - 1) * d;
-            let (first, rest) = ws.newton.jac[..size * size].split_at_mut(d * size);
+            let (first, rest) = ws.system.jacobian_mut(size).split_at_mut(d * size);
             for a in 1..n - 1 {
                 let u = t.unit[a];
                 if u != 0.0 {
@@ -101,7 +102,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let cnt = mode.count(n);
         let size = cnt * d;
         let (r0, u0) = (mode.row_offset(), mode.first_unknown());
-        let jac = &mut ws.newton.jac[..size * size];
+        let jac = ws.system.jacobian_mut(size);
         match (&ws.separable, mode) {
             (Some(sep), Mode::InitialValue) => jac.copy_from_slice(&sep.kinetic_jacobian),
             (Some(sep), Mode::BoundaryValue) => {

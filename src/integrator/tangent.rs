@@ -523,7 +523,7 @@ mod tests {
         let nu = 6 * d;
         for r in 0..nu {
             for c in 0..nu {
-                let (a, b) = (hess(r, c + d), ws.newton.jac[r * nu + c]);
+                let (a, b) = (hess(r, c + d), ws.system.jacobian(nu)[r * nu + c]);
                 assert!(
                     (a - b).abs() <= 1e-12 * (1.0 + a.abs()),
                     "({r},{c}): {a} vs {b}"

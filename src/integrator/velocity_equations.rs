@@ -68,7 +68,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 1.0 / h,
                 &vt.from_basis,
                 rn,
-                &ws.guess.cand,
+                ws.guess.candidate(),
                 rd,
                 0.0,
                 &mut vs.c,
@@ -104,7 +104,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         // q_j = q_k + (δq_k + h ι_j0 c_0,lo + h Σ_a ι_ja c_a): the small parts first.
         for (j, row) in ws.stage.qj.chunks_exact_mut(d).enumerate() {
             let w = h * vt.iota[j * k];
-            for ((x, &e), &lo) in row.iter_mut().zip(&ws.newton.base_err).zip(&vs.c0_lo) {
+            for ((x, &e), &lo) in row.iter_mut().zip(ws.iterate.origin_lo()).zip(&vs.c0_lo) {
                 *x = e + w * lo;
             }
         }
@@ -121,7 +121,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             &mut ws.stage.qj,
             rd,
         );
-        ws.stage.add_to_nodes(&ws.newton.base);
+        ws.stage.add_to_nodes(ws.iterate.origin());
         self.weighted_forces(lag, &mut ws.stage);
         // Σ_j ψ_jb (h b_j f_j).
         gemm_transposed(k, m, d, &vt.psi, &ws.stage.scaled, 0.0, &mut vs.delta);
@@ -145,7 +145,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             }
             let (s, e) = two_sum(hi, -p_k[r]);
             ws.stage.dd_hi[r] = s;
-            ws.stage.dd_lo[r] = lo + (e - ws.newton.p_err[r]);
+            ws.stage.dd_lo[r] = lo + (e - ws.iterate.momentum_lo()[r]);
         }
         // The force terms, eight coordinates side by side with their (hi, lo) pairs in
         // registers: each sum runs over j in order (the same bits as one coordinate at a time),
@@ -201,26 +201,15 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             return;
         };
         let (rk, rd) = (Strided::rows(0, k), Strided::rows(0, d));
-        gemm(
-            n,
-            k,
-            d,
-            h,
-            &vt.to_basis,
-            rk,
-            &vs.c,
-            rd,
-            0.0,
-            &mut ws.newton.coeffs,
-            rd,
-        );
+        let (increments, last_lo) = ws.iterate.increments_and_last_lo_mut();
+        gemm(n, k, d, h, &vt.to_basis, rk, &vs.c, rd, 0.0, increments, rd);
         let last = (n - 1) * d;
         for r in 0..d {
             let c0 = vs.c[r];
             let hi = h * c0;
-            ws.newton.coeffs[r] = 0.0;
-            ws.newton.coeffs[last + r] = hi;
-            ws.newton.last_lo[r] = h.mul_add(c0, -hi) + h * vs.c0_lo[r];
+            increments[r] = 0.0;
+            increments[last + r] = hi;
+            last_lo[r] = h.mul_add(c0, -hi) + h * vs.c0_lo[r];
         }
         vs.prev.copy_from_slice(&vs.c);
         vs.has_prev = true;
@@ -228,7 +217,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
     }
 
     /// The total impulse h Σ_j b_j L_q(c_j) of the forces in `ws.stage.lq`, in double-double,
-    /// into `ws.newton.impulse` (hi) and `impulse_lo`.
+    /// into the iterate's impulse (hi + lo).
     pub(super) fn impulse(&self, ws: &mut Workspace) {
         let (t, h, d) = (self.tables(), self.step_size(), ws.d);
         ws.stage.dd_hi.iter_mut().for_each(|x| *x = 0.0);
@@ -242,9 +231,9 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             &mut ws.stage.dd_hi,
             &mut ws.stage.dd_lo,
         );
+        let (impulse, impulse_lo) = ws.iterate.impulse_mut();
         for r in 0..d {
-            (ws.newton.impulse[r], ws.newton.impulse_lo[r]) =
-                two_sum(ws.stage.dd_hi[r], ws.stage.dd_lo[r]);
+            (impulse[r], impulse_lo[r]) = two_sum(ws.stage.dd_hi[r], ws.stage.dd_lo[r]);
         }
     }
 }

@@ -134,9 +134,9 @@ impl VelocityState {
 }
 
 impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
-    /// Solve the step from (q_k, p_k) = (`ws.newton.base`, `p`) in the velocity form. On
+    /// Solve the step from (q_k, p_k) = (the iterate's origin, `p`) in the velocity form. On
     /// success the increments ΔQ (with the low part of ΔQ_{n−1}) and the impulse are in
-    /// `ws.newton`, as the nodal solve leaves them.
+    /// the iterate, as the nodal solve leaves them.
     pub(super) fn solve_velocity_form<L: Lagrangian>(
         &self,
         lag: &L,
@@ -173,7 +173,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 stats.gradient_evaluations += self.tables().m;
             }
         }
-        ws.newton.last_lo.iter_mut().for_each(|x| *x = 0.0);
+        ws.iterate.clear_last_lo();
         if vt.kron.is_none() {
             return false;
         }

@@ -5,8 +5,9 @@
 //! - the constant kinetic part of a separable Lagrangian ([`super::separable`]);
 //! - [`StageScratch`]: the curve and the Lagrangian's derivatives at the quadrature nodes,
 //!   the action gradient (overwritten by every evaluation);
-//! - [`NewtonState`]: the iterate in increments, its compensation terms, the linear solve and
-//!   `Auto`'s rung;
+//! - [`Iterate`]: the Newton iterate in increments, its compensation terms and the impulse;
+//! - [`NewtonSystem`]: the Newton matrix, its factorisation and the structured solvers'
+//!   buffers;
 //! - [`GuessState`]: what the next step's initial guesses need (the previous curve in
 //!   increments, a warm start, the predictor);
 //! - the last completed step's curve, a [`GalerkinCurve`] ([`Workspace::curve`]).
@@ -15,8 +16,9 @@
 //! serves any number of workspaces.
 
 use super::GalerkinIntegrator;
-use super::guess_state::GuessState;
-use super::newton_state::NewtonState;
+use super::guess::GuessState;
+use super::iterate::Iterate;
+use super::newton_system::NewtonSystem;
 use super::separable::Separable;
 use super::stage_scratch::StageScratch;
 use super::velocity_solve::VelocityState;
@@ -47,8 +49,10 @@ pub struct Workspace {
     pub(crate) need_velocities: bool,
     /// Node values and derivatives of the stage equations.
     pub(crate) stage: StageScratch,
-    /// The Newton iterate and the linear solve.
-    pub(crate) newton: NewtonState,
+    /// The Newton iterate, its compensation terms and the impulse.
+    pub(crate) iterate: Iterate,
+    /// The Newton matrix and the linear solves.
+    pub(crate) system: NewtonSystem,
     /// The initial guesses' state.
     pub(crate) guess: GuessState,
     /// The last completed step's curve (absolute coefficients Q_i, the public meaning).
@@ -174,7 +178,8 @@ impl Workspace {
             matrix_free,
             need_velocities: false,
             stage: StageScratch::new(n, m, d, general, block_entries),
-            newton: NewtonState::new(n, d, kron, krylov),
+            iterate: Iterate::new(n, d),
+            system: NewtonSystem::new(n, d, kron, krylov),
             guess: GuessState::new(n, d, substeps),
             last: GalerkinCurve::with_capacity(n, d, h),
             velocity,
@@ -197,10 +202,9 @@ impl Workspace {
     /// Forget the previous step's curve (the next guess will not extrapolate) and any pending
     /// warm start.
     pub fn reset(&mut self) {
-        self.guess.has_prev = false;
-        self.guess.has_warm = false;
-        self.newton.residual_ready = None;
-        self.newton.lu_valid = false;
+        self.guess.forget();
+        self.iterate.set_ready_residual(None);
+        self.system.invalidate();
         if let Some(v) = self.velocity.as_mut() {
             v.has_prev = false;
         }
@@ -220,8 +224,7 @@ impl Workspace {
             coefficients.len(),
         )?;
         crate::error::ensure_finite("warm-start coefficients", coefficients)?;
-        self.guess.warm.copy_from_slice(coefficients);
-        self.guess.has_warm = true;
+        self.guess.set_warm_start(coefficients);
         Ok(())
     }
 

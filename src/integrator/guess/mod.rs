@@ -2,6 +2,10 @@
 //! RK4-predictor curves, and the residual competition that picks among them
 //! ([`InitialGuess`]).
 
+mod state;
+
+pub(super) use state::GuessState;
+
 use super::stage::Mode;
 use super::{GalerkinIntegrator, Workspace};
 use crate::basis::Basis;
@@ -16,7 +20,7 @@ const GUESS_RECHECK: usize = 16;
 const GUESS_SLACK: f64 = 4.0;
 
 impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
-    /// The RK4 predictor into `ws.guess.cand`; false when unavailable (non-separable Lagrangian) or
+    /// The RK4 predictor into the candidate guess; false when unavailable (non-separable Lagrangian) or
     /// not finite.
     fn predict<L: Lagrangian>(&self, lag: &L, ws: &mut Workspace, q: &[f64], p: &[f64]) -> bool {
         let Some(sep) = &ws.separable else {
@@ -161,7 +165,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         ws.guess.cand.iter().all(|x| x.is_finite())
     }
 
-    /// Choose the initial guess into `ws.newton.coeffs`; returns (choice, gradient evaluations).
+    /// Choose the initial guess into the iterate; returns (choice, gradient evaluations).
     pub(super) fn initial_guess<L: Lagrangian>(
         &self,
         lag: &L,
@@ -173,12 +177,13 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             ws.guess.has_warm = false;
             // Absolute coefficients to increments from q_k (ΔQ_0 = 0).
             let (t, d) = (self.tables(), ws.d);
+            let increments = ws.iterate.increments_mut();
             for i in 0..t.n {
                 for r in 0..d {
-                    ws.newton.coeffs[i * d + r] = ws.guess.warm[i * d + r] - t.unit[i] * q[r];
+                    increments[i * d + r] = ws.guess.warm[i * d + r] - t.unit[i] * q[r];
                 }
             }
-            ws.newton.coeffs[..d].iter_mut().for_each(|x| *x = 0.0);
+            increments[..d].iter_mut().for_each(|x| *x = 0.0);
             return (InitialGuess::Warm, 0);
         }
         let choice = self.options().initial_guess;
@@ -189,7 +194,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 self.make_guess(lag, ws, InitialGuess::Linear, q, p);
                 InitialGuess::Linear
             };
-            ws.newton.coeffs.copy_from_slice(&ws.guess.cand);
+            ws.iterate.increments_mut().copy_from_slice(&ws.guess.cand);
             return (g, 0);
         }
         let mut evals = 0;
@@ -197,7 +202,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         // at once if its residual is within GUESS_SLACK of the last competition's: the ranking
         // changes slowly along a trajectory, and the competition costs three more residuals and
         // an RK4 integration (more than the Newton iteration itself at small h). Its residual
-        // is Newton's first (`ws.newton.residual_ready`), so the check costs nothing when it passes.
+        // is Newton's first (the iterate's ready residual), so the check costs nothing when it passes.
         if let Some(winner) = ws.guess.guess_winner
             && ws.guess.guess_age < GUESS_RECHECK
             && self.make_guess(lag, ws, winner, q, p)
@@ -206,8 +211,8 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             let r = self.residual(ws, Mode::InitialValue, p);
             if r <= GUESS_SLACK * ws.guess.guess_reference {
                 ws.guess.guess_age += 1;
-                ws.newton.coeffs.copy_from_slice(&ws.guess.cand);
-                ws.newton.residual_ready = Some(r);
+                ws.iterate.increments_mut().copy_from_slice(&ws.guess.cand);
+                ws.iterate.set_ready_residual(Some(r));
                 return (winner, evals);
             }
         }
@@ -229,13 +234,13 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             }
         }
         if best.1.is_finite() {
-            ws.newton.coeffs.copy_from_slice(&ws.guess.best);
+            ws.iterate.increments_mut().copy_from_slice(&ws.guess.best);
             ws.guess.guess_winner = Some(best.0);
             ws.guess.guess_reference = best.1;
             ws.guess.guess_age = 0;
         } else {
             self.make_guess(lag, ws, InitialGuess::Constant, q, p);
-            ws.newton.coeffs.copy_from_slice(&ws.guess.cand);
+            ws.iterate.increments_mut().copy_from_slice(&ws.guess.cand);
         }
         (best.0, evals)
     }
