@@ -3,7 +3,7 @@
 //!
 //! The choices, in the order a step meets them:
 //!
-//! 1. **The velocity form** ([`super::velocity_form`]) where it is the same map (separable
+//! 1. **The velocity form** ([`super::velocity`]) where it is the same map (separable
 //!    Lagrangians, polynomial bases, a rule exact for the kinetic term), with its frozen
 //!    Hessian, or with its dense exact matrix for the steps that follow two stalls of the
 //!    frozen one ([`AutoState::velocity_dense`]). A step it gives up goes to the nodal solvers;

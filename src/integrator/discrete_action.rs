@@ -127,7 +127,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         } else {
             ws.iterate.increments()
         };
-        ws.stage.curve_from_cand = coeffs_from_cand;
+        ws.stage.set_curve_of_candidate(coeffs_from_cand);
         let (rn, rd) = (Strided::rows(0, n), Strided::rows(0, d));
         // q_k + (Φ ΔQ + δq_k): the small parts first, then the large one.
         for (j, row) in ws.stage.qj.chunks_exact_mut(d).enumerate() {

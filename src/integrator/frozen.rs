@@ -38,7 +38,7 @@ impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIn
             let (d, b) = (kw.dim(), kw.block());
             let stage = &ws.stage;
             let KroneckerWorkParts { exact, mu } = kw.parts();
-            if stage.hall_stale {
+            if !stage.node_jacobians_current() {
                 exact.factor(t, h, &sep.mass, mu, |j, r, s| {
                     stage.hblocks[j * d * b + (r / b) * b * b + (r % b) * b + s % b]
                 });
@@ -64,12 +64,9 @@ impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIn
         let d = kw.dim();
         let dd = d * d;
         kw.hbar.iter_mut().for_each(|x| *x = 0.0);
-        if !stage.hblocks.is_empty()
-            && lag.force_jacobian_diagonal_blocks_at_points(&stage.qj, &mut stage.hblocks)
-        {
+        if stage.evaluate_node_jacobian_blocks(lag) {
             // Only the diagonal blocks of H̄ are used (block-diagonal preconditioner): the
             // same weighted sums of the same entries, without forming the node Jacobians.
-            stage.hall_stale = true;
             let b = kw.block();
             let (bb, blocks) = (b * b, d / b);
             for (j, hj) in stage.hblocks.chunks_exact(d * b).enumerate() {
@@ -83,8 +80,7 @@ impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIn
                 }
             }
         } else {
-            lag.force_jacobian_at_points(&stage.qj, &mut stage.hall);
-            stage.hall_stale = false;
+            stage.evaluate_node_jacobians(lag);
             for (j, hj) in stage.hall.chunks_exact(dd).enumerate() {
                 let w = t.weights[j];
                 for (x, y) in kw.hbar.iter_mut().zip(hj) {
@@ -108,8 +104,7 @@ impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIn
             // The products are evaluated pairwise by the system when GMRES needs them.
             return 0;
         }
-        lag.force_jacobian_at_points(&ws.stage.qj, &mut ws.stage.hall);
-        ws.stage.hall_stale = false;
+        ws.stage.evaluate_node_jacobians(lag);
         self.tables().m
     }
 

@@ -111,7 +111,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let Some(sep) = &ws.separable else {
             return;
         };
-        let x = if ws.stage.curve_from_cand {
+        let x = if ws.stage.curve_of_candidate() {
             ws.guess.candidate()
         } else {
             ws.iterate.increments()
@@ -148,7 +148,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             for (c, &i) in kinetic.iter().zip(index) {
                 dd_acc(&mut s, &mut e, -c, x[i]);
             }
-            if !ws.stage.curve_from_cand {
+            if !ws.stage.curve_of_candidate() {
                 for (c, &i) in kinetic.iter().zip(index) {
                     if i >= last {
                         e -= c * ws.iterate.last_lo()[i - last];

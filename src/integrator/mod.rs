@@ -48,9 +48,7 @@ mod stage;
 mod stage_scratch;
 mod stepper;
 mod tangent;
-mod velocity_equations;
-mod velocity_form;
-mod velocity_solve;
+mod velocity;
 mod workspace;
 
 pub use discrete_action::DiscreteLagrangian;
@@ -59,7 +57,7 @@ pub use newton::{
     DenseOptions, InitialGuess, NewtonOptions, StepFailure, StepStats, StructuredOptions,
 };
 pub use solver::StageSolver;
-pub use stepper::Stepper;
+pub use stepper::{Checkpoint, Stepper};
 pub use tangent::{StepJacobian, TangentWorkspace};
 pub use workspace::{MATRIX_FREE_MIN_DIM, Workspace};
 
@@ -129,7 +127,7 @@ pub(crate) struct Tables {
     pub kron: Option<kronecker::KroneckerTables>,
     /// The velocity form of the stage equations (`None` when it is not the same map: the
     /// Fourier basis, or a rule too weak for the kinetic term).
-    pub velocity: Option<velocity_form::VelocityTables>,
+    pub velocity: Option<velocity::VelocityTables>,
 }
 
 impl GalerkinIntegrator<ChebyshevLagrange, GaussLegendre> {
@@ -523,7 +521,7 @@ impl Tables {
             velocity: None,
         };
         tables.kron = kronecker::KroneckerTables::build(&tables);
-        tables.velocity = velocity_form::VelocityTables::build(rule, &tables);
+        tables.velocity = velocity::VelocityTables::build(rule, &tables);
         Ok(tables)
     }
 }

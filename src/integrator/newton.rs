@@ -150,7 +150,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             } else {
                 ws.auto.velocity_gives_up.failure();
                 if let Some(v) = ws.velocity.as_mut() {
-                    v.has_prev = false;
+                    v.forget_previous();
                 }
             }
             if solved {

@@ -211,7 +211,7 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> NewtonIteration for NodalNewton<'_,
                     stats.hessian_evaluations += evals;
                     self.have_lu = true;
                     self.fresh = true;
-                    if self.linear == Linear::Krylov && ws.stage.hall_stale {
+                    if self.linear == Linear::Krylov && !ws.stage.node_jacobians_current() {
                         // The freeze formed only the diagonal blocks; GMRES needs the node
                         // Jacobians at this iterate.
                         stats.hessian_evaluations += gvi.node_force_jacobians(lag, ws);

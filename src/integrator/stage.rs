@@ -123,8 +123,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             // Potential part Σ_j h b_j φ_a(c_j) φ_b(c_j) L_qq(c_j) as d² weighted Gram
             // products Φᵀ diag(g_rs) Φ (one GEMM each) instead of scalar loops (docs/DESIGN.md §4).
             let dd = d * d;
-            lag.force_jacobian_at_points(&ws.stage.qj, &mut ws.stage.hall);
-            ws.stage.hall_stale = false;
+            ws.stage.evaluate_node_jacobians(lag);
             if d <= 4 && dd <= m {
                 // Few coordinates: all d² blocks in one pass over the nodes (the same products
                 // and the same order of summation as the per-block products below).

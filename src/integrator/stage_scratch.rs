@@ -4,9 +4,13 @@
 //!
 //! Written by every evaluation of the discrete action's derivatives
 //! ([`super::discrete_action`]) and read by the residual, the Newton matrix, the structured
-//! solvers and the Legendre-transform rows. Nothing here outlives one evaluation except
-//! `hall_stale` (whether `hall` belongs to the current iterate); all of it is sized once, by
-//! [`StageScratch::new`], so that a step allocates nothing.
+//! solvers and the Legendre-transform rows. Nothing here outlives one evaluation except two
+//! facts about it, which are private and kept by methods: whether `hall` holds the node
+//! Jacobians at the current curve ([`StageScratch::evaluate_node_jacobians`]) and whether the
+//! curve is the candidate guess's. The buffers are the evaluation kernels' operands, not
+//! solver state (the state is in [`super::iterate`], [`super::newton_system`] and the guess
+//! module); all of them are sized once, by [`StageScratch::new`], so that a step allocates
+//! nothing.
 
 /// Node values, derivatives and products of one evaluation of the stage equations
 /// (m quadrature nodes, n basis functions, D coordinates).
@@ -21,7 +25,7 @@ pub(crate) struct StageScratch {
     /// L_v at the nodes (m×D).
     pub lv: Vec<f64>,
     /// Whether the last curve evaluation used the Newton state's candidate (else its iterate).
-    pub curve_from_cand: bool,
+    curve_from_cand: bool,
     /// ∂S/∂Q_a for every a (n×D).
     pub grad: Vec<f64>,
     /// Weighted forces h b_j L_q(c_j) (m×D).
@@ -31,7 +35,7 @@ pub(crate) struct StageScratch {
     /// L_qq at every node (m×D×D).
     pub hall: Vec<f64>,
     /// `hall` is not at the iterate of the last freeze (which formed only diagonal blocks).
-    pub hall_stale: bool,
+    hall_stale: bool,
     /// Diagonal b×b blocks of the node force Jacobians (m·D·b), when the system provides them
     /// and the frozen-Hessian preconditioner uses only those; empty otherwise.
     pub hblocks: Vec<f64>,
@@ -65,6 +69,41 @@ pub(crate) struct StageScratch {
 }
 
 impl StageScratch {
+    /// L_qq at every node of the curve in `qj` into `hall`, which is then current.
+    pub(crate) fn evaluate_node_jacobians<L: crate::lagrangian::Lagrangian>(&mut self, lag: &L) {
+        lag.force_jacobian_at_points(&self.qj, &mut self.hall);
+        self.hall_stale = false;
+    }
+
+    /// Only the diagonal b×b blocks of L_qq at the nodes into `hblocks`, when the workspace
+    /// keeps them and the system provides them (else false, nothing done); `hall` is then
+    /// not current.
+    pub(crate) fn evaluate_node_jacobian_blocks<L: crate::lagrangian::Lagrangian>(
+        &mut self,
+        lag: &L,
+    ) -> bool {
+        let done = !self.hblocks.is_empty()
+            && lag.force_jacobian_diagonal_blocks_at_points(&self.qj, &mut self.hblocks);
+        if done {
+            self.hall_stale = true;
+        }
+        done
+    }
+
+    /// Whether `hall` holds the node Jacobians at the curve in `qj` (not only their blocks).
+    pub(crate) fn node_jacobians_current(&self) -> bool {
+        !self.hall_stale
+    }
+
+    /// Record whether the curve in `qj` is the candidate guess's (else the iterate's).
+    pub(crate) fn set_curve_of_candidate(&mut self, candidate: bool) {
+        self.curve_from_cand = candidate;
+    }
+
+    /// Whether the curve in `qj` is the candidate guess's (else the iterate's).
+    pub(crate) fn curve_of_candidate(&self) -> bool {
+        self.curve_from_cand
+    }
     /// q_j ← q_j + q_k at every node: the curve's constant part added last, after the small
     /// parts (increments and compensation terms), so that they are not rounded away.
     pub(crate) fn add_to_nodes(&mut self, base: &[f64]) {

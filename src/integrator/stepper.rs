@@ -186,6 +186,103 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> Stepper<'_, B, Q, L> {
     pub fn uses_matrix_free_products(&self) -> bool {
         self.workspace.uses_matrix_free_products()
     }
+
+    /// Save everything the next steps depend on: the state with its compensation terms, the
+    /// step count, and the workspace's memory (the last curve, the guesses' history, a
+    /// reusable factorisation, `Auto`'s rung). [`restore`](Self::restore) puts it back, and
+    /// the steps taken after it are then bit for bit those taken after the checkpoint — e.g.
+    /// to step past an event, look, and go back. A checkpoint owns copies of the buffers:
+    /// taking and restoring one allocate (the steps themselves still do not).
+    pub fn checkpoint(&self) -> Checkpoint {
+        Checkpoint {
+            t0: self.t0,
+            steps: self.steps,
+            q: self.q.clone(),
+            p: self.p.clone(),
+            q_err: self.q_err.clone(),
+            p_err: self.p_err.clone(),
+            workspace: self.workspace.clone(),
+        }
+    }
+
+    /// Return to a [`checkpoint`](Self::checkpoint) of a stepper of the same integrator and
+    /// dimension.
+    ///
+    /// Errors: [`GviError::Mismatch`] for a checkpoint of another integrator (basis, n,
+    /// quadrature, h) or dimension; the stepper is then unchanged.
+    pub fn restore(&mut self, checkpoint: &Checkpoint) -> Result<()> {
+        if checkpoint.workspace.made_for != self.workspace.made_for {
+            return Err(GviError::Mismatch {
+                expected: format!("a checkpoint of {}", self.workspace.made_for),
+                got: format!("one of {}", checkpoint.workspace.made_for),
+            });
+        }
+        self.t0 = checkpoint.t0;
+        self.steps = checkpoint.steps;
+        self.q.copy_from_slice(&checkpoint.q);
+        self.p.copy_from_slice(&checkpoint.p);
+        self.q_err.copy_from_slice(&checkpoint.q_err);
+        self.p_err.copy_from_slice(&checkpoint.p_err);
+        self.workspace.restore_from(&checkpoint.workspace);
+        Ok(())
+    }
+
+    /// Start again from (q, p) at time t: the step count is zero, the compensation terms are
+    /// cleared and the guesses forget the previous curve, so the steps are those of a new
+    /// stepper from that state (the workspace is reused).
+    ///
+    /// Errors: wrong lengths or non-finite values; the stepper is then unchanged.
+    pub fn set_state(&mut self, t: f64, q: &[f64], p: &[f64]) -> Result<()> {
+        if !t.is_finite() {
+            return Err(GviError::NonFinite {
+                what: "time t".into(),
+                value: t,
+            });
+        }
+        self.integrator.check_state(self.lagrangian, q, p)?;
+        self.t0 = t;
+        self.steps = 0;
+        self.q.copy_from_slice(q);
+        self.p.copy_from_slice(p);
+        self.q_err.iter_mut().for_each(|x| *x = 0.0);
+        self.p_err.iter_mut().for_each(|x| *x = 0.0);
+        self.workspace.start_afresh();
+        Ok(())
+    }
+
+    /// The current time and state (t_k, q_k, p_k), taking the stepper.
+    pub fn into_state(self) -> (f64, Vec<f64>, Vec<f64>) {
+        (self.time(), self.q, self.p)
+    }
+}
+
+/// A saved [`Stepper`] state: see [`Stepper::checkpoint`] and [`Stepper::restore`].
+#[derive(Debug, Clone)]
+pub struct Checkpoint {
+    t0: f64,
+    steps: usize,
+    q: Vec<f64>,
+    p: Vec<f64>,
+    q_err: Vec<f64>,
+    p_err: Vec<f64>,
+    workspace: Workspace,
+}
+
+impl Checkpoint {
+    /// Steps completed at the checkpoint.
+    pub fn steps(&self) -> usize {
+        self.steps
+    }
+
+    /// Position q_k at the checkpoint.
+    pub fn position(&self) -> &[f64] {
+        &self.q
+    }
+
+    /// Momentum p_k at the checkpoint.
+    pub fn momentum(&self) -> &[f64] {
+        &self.p
+    }
 }
 
 #[cfg(test)]
@@ -260,5 +357,89 @@ mod tests {
         let gvi = GalerkinIntegrator::spectral(10, 0.5).unwrap();
         assert!(gvi.stepper(&kepler, f64::NAN, &q0, &p0).is_err());
         assert!(gvi.stepper(&kepler, 0.0, &q0[..1], &p0).is_err());
+    }
+
+    /// Steps after a restored checkpoint are bit for bit the steps taken after it, because
+    /// the workspace's memory (the guesses' history) comes back too; a stepper re-seeded with
+    /// `set_state` takes a fresh stepper's steps. Negative controls: a state alone, without
+    /// the guess memory, starts the next step from another guess (the Newton iterations
+    /// differ), and a checkpoint of another integrator is refused.
+    #[test]
+    fn a_restored_checkpoint_replays_the_same_steps() {
+        let kepler = Kepler::new(1.0).unwrap();
+        let (q0, p0) = Kepler::paper_initial_state();
+        for compensated in [true, false] {
+            // The extrapolated guess needs the previous curve (without it: the linear one).
+            let options = NewtonOptions {
+                compensated,
+                solver: StageSolver::Exact,
+                initial_guess: InitialGuess::Extrapolate,
+                ..NewtonOptions::default()
+            };
+            let gvi = GalerkinIntegrator::spectral(10, 0.5)
+                .unwrap()
+                .with_options(options);
+            let mut stepper = gvi.stepper(&kepler, 0.0, &q0, &p0).unwrap();
+            for _ in 0..3 {
+                stepper.step().unwrap();
+            }
+            let saved = stepper.checkpoint();
+            assert_eq!(saved.steps(), 3);
+            let mut first = Vec::new();
+            for _ in 0..4 {
+                let stats = stepper.step().unwrap();
+                first.push((
+                    stepper.position().to_vec(),
+                    stepper.momentum().to_vec(),
+                    stats,
+                ));
+            }
+            stepper.restore(&saved).unwrap();
+            assert_eq!(stepper.time(), 1.5);
+            for (q, p, stats) in &first {
+                let again = stepper.step().unwrap();
+                assert_eq!(stepper.position(), &q[..]);
+                assert_eq!(stepper.momentum(), &p[..]);
+                assert_eq!(again.iterations, stats.iterations);
+                assert_eq!(again.guess, stats.guess);
+            }
+            // Re-seeded: a fresh stepper's steps from the checkpoint's state.
+            stepper
+                .set_state(1.5, saved.position(), saved.momentum())
+                .unwrap();
+            let mut fresh = gvi
+                .stepper(&kepler, 1.5, saved.position(), saved.momentum())
+                .unwrap();
+            let mut guesses = Vec::new();
+            for _ in &first {
+                let (a, b) = (stepper.step().unwrap(), fresh.step().unwrap());
+                assert_eq!(stepper.position(), fresh.position());
+                assert_eq!(stepper.momentum(), fresh.momentum());
+                assert_eq!((a.guess, a.iterations), (b.guess, b.iterations));
+                guesses.push(a.guess);
+            }
+            // Negative control: without the memory the first step cannot extrapolate a
+            // previous curve, as the restored checkpoint did.
+            assert_eq!(first[0].2.guess, InitialGuess::Extrapolate);
+            assert_eq!(
+                guesses[0],
+                InitialGuess::Linear,
+                "compensated = {compensated}"
+            );
+        }
+        // A checkpoint of another integrator is refused, the stepper unchanged.
+        let other = GalerkinIntegrator::spectral(10, 0.25).unwrap();
+        let foreign = other.stepper(&kepler, 0.0, &q0, &p0).unwrap().checkpoint();
+        let gvi = GalerkinIntegrator::spectral(10, 0.5).unwrap();
+        let mut stepper = gvi.stepper(&kepler, 0.0, &q0, &p0).unwrap();
+        stepper.step().unwrap();
+        let err = stepper.restore(&foreign).unwrap_err();
+        assert!(matches!(err, GviError::Mismatch { .. }), "{err}");
+        assert_eq!(stepper.steps(), 1);
+        assert!(stepper.set_state(f64::INFINITY, &q0, &p0).is_err());
+        assert!(stepper.set_state(0.0, &q0[..1], &p0).is_err());
+        assert_eq!(stepper.steps(), 1);
+        let (t, q, _) = stepper.into_state();
+        assert_eq!((t, q.len()), (0.5, 2));
     }
 }

@@ -21,7 +21,7 @@ use super::iterate::Iterate;
 use super::newton_system::NewtonSystem;
 use super::separable::Separable;
 use super::stage_scratch::StageScratch;
-use super::velocity_solve::VelocityState;
+use super::velocity::VelocityState;
 use crate::basis::Basis;
 use crate::curve::{GalerkinCurve, GalerkinCurveRef};
 use crate::error::{GviError, Result};
@@ -206,8 +206,21 @@ impl Workspace {
         self.iterate.set_ready_residual(None);
         self.system.invalidate();
         if let Some(v) = self.velocity.as_mut() {
-            v.has_prev = false;
+            v.forget_previous();
         }
+    }
+
+    /// Copy another workspace of the same integrator and dimension into this one (a
+    /// [`Stepper`](super::Stepper) checkpoint's restore).
+    pub(crate) fn restore_from(&mut self, saved: &Workspace) {
+        self.clone_from(saved);
+    }
+
+    /// Forget everything a previous run left: the guesses' history, a pending warm start,
+    /// the ready residual, the reusable factorisation and `Auto`'s memory.
+    pub(crate) fn start_afresh(&mut self) {
+        self.reset();
+        self.auto = Default::default();
     }
 
     /// Start the next step's Newton iteration from the given Galerkin coefficients (n×D, row

@@ -35,8 +35,13 @@
 //! equations are the exact stationarity conditions of the discrete Lagrangian
 //! h[½ Σ_a c_aᵀMc_a − Σ_j b_j V(q_k + h Σ_a ι_ja c_a)] that these tables define.
 
-use super::Tables;
-use super::kronecker::KroneckerTables;
+mod equations;
+mod solve;
+
+pub(crate) use solve::VelocityState;
+
+use crate::integrator::Tables;
+use crate::integrator::kronecker::KroneckerTables;
 use crate::quadrature::QuadratureRule;
 
 /// The largest deviation from the identity of the quadrature's Gram matrix of the velocity

@@ -1,5 +1,5 @@
-//! Newton's method on the stage equations in the velocity form ([`super::velocity_form`];
-//! the equations themselves are in [`super::velocity_equations`]).
+//! Newton's method on the stage equations in the velocity form ([`super`];
+//! the equations themselves are in [`super::equations`]).
 //!
 //! Each step freezes the force Jacobian at H̄ (the quadrature-weighted mean over the curve of
 //! the initial guess) and iterates with the Kronecker solve of I ⊗ M + h² C ⊗ H̄: the Newton
@@ -11,14 +11,14 @@
 //! loses a step the nodal equations would have solved. `Auto` remembers both escalations for
 //! the next steps ([`VelocityState::record`]).
 
-use super::auto;
-use super::dd::{max_abs, two_sum};
-use super::kronecker::KroneckerWork;
-use super::linear::Linear;
-use super::velocity_equations::{DenseNewton, assemble_dense};
-use super::velocity_form::VelocityTables;
-use super::{GalerkinIntegrator, InitialGuess, StepStats, Workspace};
+use super::VelocityTables;
+use super::equations::{DenseNewton, assemble_dense};
 use crate::basis::Basis;
+use crate::integrator::auto;
+use crate::integrator::dd::{max_abs, two_sum};
+use crate::integrator::kronecker::KroneckerWork;
+use crate::integrator::linear::Linear;
+use crate::integrator::{GalerkinIntegrator, InitialGuess, StepStats, Workspace};
 use crate::lagrangian::Lagrangian;
 use crate::linalg::Lu;
 use crate::newton::{
@@ -57,17 +57,17 @@ const VELOCITY_DENSE_SMALL_D: usize = 256;
 #[derive(Debug, Clone)]
 pub(crate) struct VelocityState {
     /// The iterate: velocity modes c_0 … c_{k−1} (k×D).
-    pub c: Vec<f64>,
+    pub(super) c: Vec<f64>,
     /// The low part of c_0 (D): Newton's last corrections lie below its ulp, and
     /// q_{k+1} − q_k = h c_0 is wanted to more than working precision (as the nodal
     /// solve keeps ΔQ_{n−1}; docs/DESIGN.md §4).
-    pub c0_lo: Vec<f64>,
+    pub(super) c0_lo: Vec<f64>,
     /// The previous step's converged modes, for the extrapolated guess.
-    pub prev: Vec<f64>,
+    pub(super) prev: Vec<f64>,
     /// Whether `prev` holds the step just before this one.
-    pub has_prev: bool,
+    pub(super) has_prev: bool,
     /// −F, then the Newton correction (k×D).
-    pub delta: Vec<f64>,
+    pub(super) delta: Vec<f64>,
     /// The frozen-Hessian Kronecker solve of I ⊗ M + h² C ⊗ H̄.
     kron: KroneckerWork,
     /// The exact Newton matrix, dense, for steps where the frozen Hessian stalls (small
@@ -76,13 +76,19 @@ pub(crate) struct VelocityState {
 }
 
 impl VelocityState {
+    /// Forget the previous step's modes (after a failed step, or on request): the next guess
+    /// does not extrapolate them.
+    pub(crate) fn forget_previous(&mut self) {
+        self.has_prev = false;
+    }
+
     /// One correction δ = J⁻¹(−F) from the residual in `delta` (left there) with the frozen
     /// Kronecker matrix or the dense exact one, c ← c + δ with c_0 compensated (TwoSum into
     /// its low part).
     fn correct(
         &mut self,
         linear: Linear,
-        kt: &super::kronecker::KroneckerTables,
+        kt: &crate::integrator::kronecker::KroneckerTables,
         h: f64,
         d: usize,
     ) {
@@ -137,7 +143,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
     /// Solve the step from (q_k, p_k) = (the iterate's origin, `p`) in the velocity form. On
     /// success the increments ΔQ (with the low part of ΔQ_{n−1}) and the impulse are in
     /// the iterate, as the nodal solve leaves them.
-    pub(super) fn solve_velocity_form<L: Lagrangian>(
+    pub(in crate::integrator) fn solve_velocity_form<L: Lagrangian>(
         &self,
         lag: &L,
         ws: &mut Workspace,
@@ -281,8 +287,7 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> NewtonIteration for VelocityNewton<
             self.stats.factorizations += 1;
             match (self.linear, vs.dense.as_mut()) {
                 (Linear::Dense, Some(dn)) => {
-                    lag.force_jacobian_at_points(&ws.stage.qj, &mut ws.stage.hall);
-                    ws.stage.hall_stale = false;
+                    ws.stage.evaluate_node_jacobians(lag);
                     self.stats.hessian_evaluations += gvi.tables().m;
                     let sep = ws.separable.as_ref();
                     assemble_dense(vt, &gvi.tables().weights, h, ws.d, &ws.stage.hall, sep, dn);

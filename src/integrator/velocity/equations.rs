@@ -1,12 +1,12 @@
-//! The velocity form's equations as the iteration of `velocity_solve` uses them: the initial
+//! The velocity form's equations as the iteration of [`super::solve`] uses them: the initial
 //! modes, the residual F(c) = M c_b + h Σ_j b_j ψ_b(c_j) f_j − δ_b0 p_k with its momentum row in
 //! double-double, the dense exact Newton matrix, and the converged modes written back as the
 //! basis's coefficients, the impulse and the state the next step extrapolates from.
 
-use super::dd::{dd_acc, dd_acc_columns, two_sum};
-use super::velocity_form::VelocityTables;
-use super::{GalerkinIntegrator, InitialGuess, Workspace};
+use super::VelocityTables;
 use crate::basis::Basis;
+use crate::integrator::dd::{dd_acc, dd_acc_columns, two_sum};
+use crate::integrator::{GalerkinIntegrator, InitialGuess, Workspace};
 use crate::lagrangian::Lagrangian;
 use crate::linalg::{Lu, Strided, gemm, gemm_transposed};
 use crate::quadrature::Quadrature;
@@ -218,7 +218,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
 
     /// The total impulse h Σ_j b_j L_q(c_j) of the forces in `ws.stage.lq`, in double-double,
     /// into the iterate's impulse (hi + lo).
-    pub(super) fn impulse(&self, ws: &mut Workspace) {
+    pub(in crate::integrator) fn impulse(&self, ws: &mut Workspace) {
         let (t, h, d) = (self.tables(), self.step_size(), ws.d);
         ws.stage.dd_hi.iter_mut().for_each(|x| *x = 0.0);
         ws.stage.dd_lo.iter_mut().for_each(|x| *x = 0.0);
@@ -248,7 +248,7 @@ pub(super) fn assemble_dense(
     h: f64,
     d: usize,
     hall: &[f64],
-    sep: Option<&super::separable::Separable>,
+    sep: Option<&crate::integrator::separable::Separable>,
     dn: &mut DenseNewton,
 ) {
     let k = vt.k;
