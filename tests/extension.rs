@@ -10,7 +10,9 @@
 //! Run: `cargo test --test extension -- --nocapture`.
 
 use galerkin_vi::basis::{Basis, ChebyshevLagrange};
-use galerkin_vi::geometry::{relative_symplecticity_defect, symplecticity_defect};
+use galerkin_vi::geometry::{
+    finite_difference_jacobian, relative_symplecticity_defect, symplecticity_defect,
+};
 use galerkin_vi::integrator::{
     DiscreteLagrangian, StageEquations, StageSolve, StageSolver, StepFailure,
 };
@@ -20,7 +22,6 @@ use galerkin_vi::refinement::{
 };
 use galerkin_vi::systems::{Kepler, System};
 use galerkin_vi::{GalerkinIntegrator, GviError, Lagrangian, NewtonOptions};
-use nalgebra::DMatrix;
 
 #[path = "../examples/extending/user.rs"]
 mod user;
@@ -42,34 +43,6 @@ fn exact_solver() -> NewtonOptions {
         solver: StageSolver::Exact,
         ..NewtonOptions::default()
     }
-}
-
-/// Central-difference Jacobian of a one-step map (q, p) ↦ (q', p'), (q, p) order.
-fn fd_jacobian(
-    step: impl Fn(&[f64], &[f64]) -> (Vec<f64>, Vec<f64>),
-    q: &[f64],
-    p: &[f64],
-) -> DMatrix<f64> {
-    let d = q.len();
-    let eps = 1e-5;
-    let mut j = DMatrix::zeros(2 * d, 2 * d);
-    for c in 0..2 * d {
-        let (mut qa, mut pa, mut qb, mut pb) = (q.to_vec(), p.to_vec(), q.to_vec(), p.to_vec());
-        if c < d {
-            qa[c] += eps;
-            qb[c] -= eps;
-        } else {
-            pa[c - d] += eps;
-            pb[c - d] -= eps;
-        }
-        let (ya, yb) = (step(&qa, &pa), step(&qb, &pb));
-        let fa: Vec<f64> = ya.0.iter().chain(&ya.1).copied().collect();
-        let fb: Vec<f64> = yb.0.iter().chain(&yb.1).copied().collect();
-        for r in 0..2 * d {
-            j[(r, c)] = (fa[r] - fb[r]) / (2.0 * eps);
-        }
-    }
-    j
 }
 
 /// One classical RK4 step of Hamilton's equations of `Magnetic`: q̇ = v, ṗ = L_q(q, v)
@@ -428,13 +401,18 @@ fn tangent_map_is_symplectic_with_everything_user_defined() {
         let t = gvi.integrate(&MAGNETIC, 0.0, q, p, 1).unwrap();
         (t.q[1].clone(), t.p[1].clone())
     };
-    let fd = fd_jacobian(step, &MAG_Q0, &MAG_P0);
+    let fd = finite_difference_jacobian(step, &MAG_Q0, &MAG_P0, 1e-5);
     let jac0 = gvi
         .step_jacobian(&MAGNETIC, &MAG_Q0, &MAG_P0)
         .unwrap()
         .matrix;
     let fd_error = (&fd - &jac0).amax();
-    let rk4 = fd_jacobian(|q, p| rk4_magnetic(&MAGNETIC, q, p, h), &MAG_Q0, &MAG_P0);
+    let rk4 = finite_difference_jacobian(
+        |q, p| rk4_magnetic(&MAGNETIC, q, p, h),
+        &MAG_Q0,
+        &MAG_P0,
+        1e-5,
+    );
     let rk4_defect = relative_symplecticity_defect(&rk4);
     println!(
         "symplecticity: step {worst:.1e}, 20-step tangent map {cumulative:.1e}; FD vs exact {fd_error:.1e}; \

@@ -5,7 +5,9 @@
 //! solver stopped at a loose tolerance), so the tests can fail.
 
 use galerkin_vi::baselines::{OneStepMethod, Rk4};
-use galerkin_vi::geometry::{MomentumMap, Rotation, Translation, relative_symplecticity_defect};
+use galerkin_vi::geometry::{
+    MomentumMap, Rotation, Translation, finite_difference_jacobian, relative_symplecticity_defect,
+};
 use galerkin_vi::integrator::StageSolver;
 use galerkin_vi::prelude::*;
 use galerkin_vi_lab::scene::{InitialState, Scene};
@@ -221,34 +223,6 @@ fn non_separable_lagrangians_use_the_exact_solver() {
     }
 }
 
-/// Central-difference Jacobian of a one-step map (2D×2D).
-fn fd_jacobian(
-    step: impl Fn(&[f64], &[f64]) -> (Vec<f64>, Vec<f64>),
-    q: &[f64],
-    p: &[f64],
-) -> DMatrix<f64> {
-    let d = q.len();
-    let eps = 1e-5;
-    let mut j = DMatrix::zeros(2 * d, 2 * d);
-    for c in 0..2 * d {
-        let (mut qa, mut pa, mut qb, mut pb) = (q.to_vec(), p.to_vec(), q.to_vec(), p.to_vec());
-        if c < d {
-            qa[c] += eps;
-            qb[c] -= eps;
-        } else {
-            pa[c - d] += eps;
-            pb[c - d] -= eps;
-        }
-        let (ya, yb) = (step(&qa, &pa), step(&qb, &pb));
-        let fa: Vec<f64> = ya.0.iter().chain(&ya.1).copied().collect();
-        let fb: Vec<f64> = yb.0.iter().chain(&yb.1).copied().collect();
-        for r in 0..2 * d {
-            j[(r, c)] = (fa[r] - fb[r]) / (2.0 * eps);
-        }
-    }
-    j
-}
-
 /// The map each solver actually computes is symplectic: the relative defect of its
 /// finite-difference Jacobian (truncation ≈ ε²|f‴| ≈ 1e-10, solve noise / ε ≈ 1e-11) stays
 /// below 1e-8, for every solver, on Kepler and on the coupled system. Negative control: RK4
@@ -263,13 +237,18 @@ fn every_solver_computes_a_symplectic_map() {
             let t = gvi.integrate(&kepler, 0.0, q, p, 1).unwrap();
             (t.q[1].clone(), t.p[1].clone())
         };
-        let d = relative_symplecticity_defect(&fd_jacobian(step, &q0, &p0));
+        let d = relative_symplecticity_defect(&finite_difference_jacobian(step, &q0, &p0, 1e-5));
         let gc = with_solver(BasisKind::Legendre, 12, 0.5, solver);
         let step = |q: &[f64], p: &[f64]| {
             let t = gc.integrate(&Coupled, 0.0, q, p, 1).unwrap();
             (t.q[1].clone(), t.p[1].clone())
         };
-        let dc = relative_symplecticity_defect(&fd_jacobian(step, &[0.5, -0.3], &[0.2, 0.4]));
+        let dc = relative_symplecticity_defect(&finite_difference_jacobian(
+            step,
+            &[0.5, -0.3],
+            &[0.2, 0.4],
+            1e-5,
+        ));
         println!("{solver}: Kepler defect {d:.2e}, coupled {dc:.2e}");
         assert!(d <= 1e-8 && dc <= 1e-8, "{solver}: {d:e}, {dc:e}");
     }
@@ -279,7 +258,7 @@ fn every_solver_computes_a_symplectic_map() {
         rk4.step(0.0, q, p, &mut qn, &mut pn).unwrap();
         (qn, pn)
     };
-    let d = relative_symplecticity_defect(&fd_jacobian(step, &q0, &p0));
+    let d = relative_symplecticity_defect(&finite_difference_jacobian(step, &q0, &p0, 1e-5));
     println!("RK4: defect {d:.2e}");
     assert!(d > 1e-8, "RK4 should fail: {d:e}");
 }

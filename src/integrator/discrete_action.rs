@@ -212,7 +212,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             } else {
                 ws.iterate.increments()
             };
-            match &sep.mass_diagonal {
+            match sep.mass_diagonal() {
                 // M diagonal (N-body): the same products without the D − 1 zero terms.
                 Some(diag) => {
                     for (mq, x) in ws.stage.mq.chunks_exact_mut(d).zip(coeffs.chunks_exact(d)) {
@@ -226,7 +226,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                         for r in 0..d {
                             let mut s = 0.0;
                             for c in 0..d {
-                                s += sep.mass[r * d + c] * coeffs[b * d + c];
+                                s += sep.mass()[r * d + c] * coeffs[b * d + c];
                             }
                             ws.stage.mq[b * d + r] = s;
                         }
@@ -276,7 +276,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 for r in 0..d {
                     let mut s = 0.0;
                     for c in 0..d {
-                        s += sep.mass[r * d + c] * ws.iterate.last_lo()[c];
+                        s += sep.mass()[r * d + c] * ws.iterate.last_lo()[c];
                     }
                     ws.stage.small_rhs[r] = s / h;
                 }

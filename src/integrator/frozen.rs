@@ -39,11 +39,11 @@ impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIn
             let stage = &ws.stage;
             let KroneckerWorkParts { exact, mu } = kw.parts();
             if !stage.node_jacobians_current() {
-                exact.factor(t, h, &sep.mass, mu, |j, r, s| {
+                exact.factor(t, h, sep.mass(), mu, |j, r, s| {
                     stage.hblocks[j * d * b + (r / b) * b * b + (r % b) * b + s % b]
                 });
             } else {
-                exact.factor(t, h, &sep.mass, mu, |j, r, s| {
+                exact.factor(t, h, sep.mass(), mu, |j, r, s| {
                     stage.hall[j * d * d + r * d + s]
                 });
             }

@@ -312,8 +312,8 @@ impl Workspace {
         let sep = self.separable.as_ref()?;
         let (kw, kv, rhs) = self.system.krylov_mut()?;
         let operands = Operands {
-            mass: &sep.mass,
-            mass_diagonal: sep.mass_diagonal.as_deref(),
+            mass: sep.mass(),
+            mass_diagonal: sep.mass_diagonal(),
             hall: &self.stage.hall,
             matrix_free_nodes: self.matrix_free.then_some(&self.stage.qj[..]),
         };

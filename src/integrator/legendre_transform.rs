@@ -143,8 +143,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         for r in 0..d {
             let (mut s, mut e) = (ws.stage.dd_hi[r], ws.stage.dd_lo[r]);
             // … − (1/h) Σ_b K_{n−1,b} M ΔQ_b.
-            let row = sep.kinetic_last_start[r]..sep.kinetic_last_start[r + 1];
-            let (kinetic, index) = (&sep.kinetic_last[row.clone()], &sep.kinetic_last_index[row]);
+            let (kinetic, index) = sep.kinetic_last_row(r);
             for (c, &i) in kinetic.iter().zip(index) {
                 dd_acc(&mut s, &mut e, -c, x[i]);
             }

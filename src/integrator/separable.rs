@@ -16,22 +16,22 @@ use nalgebra::DMatrix;
 #[derive(Debug, Clone)]
 pub(crate) struct Separable {
     /// M, row-major D×D.
-    pub mass: Vec<f64>,
+    mass: Vec<f64>,
     /// Factorised M, for v = M⁻¹p.
-    pub mass_lu: Lu,
+    mass_lu: Lu,
     /// (K_ab / h) M for equations a = 0…n−2 and unknowns b = 1…n−1: ((n−1)D)².
-    pub kinetic_jacobian: Vec<f64>,
+    kinetic_jacobian: Vec<f64>,
     /// (K_{n−1,b} / h) M for the last row block against every unknown b = 0…n−1: D×(nD),
     /// the kinetic part of ∂S/∂ΔQ_{n−1} for its compensated evaluation, stored by rows as its
     /// nonzero entries only (for a diagonal M, as in N-body, one in D): the values …
-    pub kinetic_last: Vec<f64>,
+    kinetic_last: Vec<f64>,
     /// … their columns in 0…nD …
-    pub kinetic_last_index: Vec<usize>,
+    kinetic_last_index: Vec<usize>,
     /// … and where row r starts (D + 1 offsets). Skipping the zeros leaves the compensated
     /// sums bit for bit as they were (a zero product adds exactly nothing).
-    pub kinetic_last_start: Vec<usize>,
+    kinetic_last_start: Vec<usize>,
     /// M's diagonal when M is diagonal.
-    pub mass_diagonal: Option<Vec<f64>>,
+    mass_diagonal: Option<Vec<f64>>,
 }
 
 impl Separable {
@@ -97,9 +97,34 @@ impl Separable {
         })
     }
 
+    /// M, row-major D×D.
+    pub(crate) fn mass(&self) -> &[f64] {
+        &self.mass
+    }
+
+    /// M's diagonal when M is diagonal (N-body), else `None`.
+    pub(crate) fn mass_diagonal(&self) -> Option<&[f64]> {
+        self.mass_diagonal.as_deref()
+    }
+
+    /// The kinetic blocks (K_ab / h) M of the initial-value Newton matrix: ((n−1)D)².
+    pub(crate) fn kinetic_jacobian(&self) -> &[f64] {
+        &self.kinetic_jacobian
+    }
+
+    /// Row r of the last row block's kinetic part (K_{n−1,b} / h) M, as its nonzero entries
+    /// and their columns in 0…nD.
+    pub(crate) fn kinetic_last_row(&self, r: usize) -> (&[f64], &[usize]) {
+        let row = self.kinetic_last_start[r]..self.kinetic_last_start[r + 1];
+        (
+            &self.kinetic_last[row.clone()],
+            &self.kinetic_last_index[row],
+        )
+    }
+
     /// x ← M⁻¹ x: a division when M is diagonal (bit for bit what the LU solve of a diagonal
     /// matrix gives, without its O(D²) loops), else the LU solve.
-    pub fn solve_mass(&self, x: &mut [f64], scratch: &mut [f64]) {
+    pub(crate) fn solve_mass(&self, x: &mut [f64], scratch: &mut [f64]) {
         match &self.mass_diagonal {
             Some(m) => x.iter_mut().zip(m).for_each(|(v, m)| *v /= m),
             None => self.mass_lu.solve_in_place(x, scratch),

@@ -104,14 +104,14 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let (r0, u0) = (mode.row_offset(), mode.first_unknown());
         let jac = ws.system.jacobian_mut(size);
         match (&ws.separable, mode) {
-            (Some(sep), Mode::InitialValue) => jac.copy_from_slice(&sep.kinetic_jacobian),
+            (Some(sep), Mode::InitialValue) => jac.copy_from_slice(sep.kinetic_jacobian()),
             (Some(sep), Mode::BoundaryValue) => {
                 for a in 0..cnt {
                     for b in 0..cnt {
                         let k = t.kinetic[(a + r0) * n + b + u0] / h;
                         for r in 0..d {
                             for s in 0..d {
-                                jac[(a * d + r) * size + b * d + s] = k * sep.mass[r * d + s];
+                                jac[(a * d + r) * size + b * d + s] = k * sep.mass()[r * d + s];
                             }
                         }
                     }

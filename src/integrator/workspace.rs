@@ -137,7 +137,7 @@ impl Workspace {
             (Some(kt), Some(sep)) => super::kronecker::KroneckerWork::new(
                 kt,
                 d,
-                &sep.mass,
+                sep.mass(),
                 lagrangian.coordinate_blocks(),
                 m,
                 gvi.options().structured.self_block_rate,
@@ -166,7 +166,7 @@ impl Workspace {
         let substeps = gvi.options().predictor_substeps.unwrap_or(n.max(8));
         let velocity = match (&t.velocity, &separable) {
             (Some(vt), Some(sep)) => {
-                VelocityState::new(vt, d, &sep.mass, lagrangian.coordinate_blocks())
+                VelocityState::new(vt, d, sep.mass(), lagrangian.coordinate_blocks())
             }
             _ => None,
         };

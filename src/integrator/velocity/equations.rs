@@ -131,15 +131,15 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         // Legendre-transform row is summed the same way, `legendre_transform`).
         for r in 0..d {
             let (mut hi, mut lo) = (0.0, 0.0);
-            match &sep.mass_diagonal {
+            match sep.mass_diagonal() {
                 Some(diag) => {
                     dd_acc(&mut hi, &mut lo, diag[r], vs.c[r]);
                     lo += diag[r] * vs.c0_lo[r];
                 }
                 None => {
                     for s in 0..d {
-                        dd_acc(&mut hi, &mut lo, sep.mass[r * d + s], vs.c[s]);
-                        lo += sep.mass[r * d + s] * vs.c0_lo[s];
+                        dd_acc(&mut hi, &mut lo, sep.mass()[r * d + s], vs.c[s]);
+                        lo += sep.mass()[r * d + s] * vs.c0_lo[s];
                     }
                 }
             }
@@ -175,9 +175,11 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 let f = if b == 0 {
                     ws.stage.dd_hi[r] + ws.stage.dd_lo[r]
                 } else {
-                    let mc = match &sep.mass_diagonal {
+                    let mc = match sep.mass_diagonal() {
                         Some(diag) => diag[r] * vs.c[i],
-                        None => (0..d).map(|s| sep.mass[r * d + s] * vs.c[b * d + s]).sum(),
+                        None => (0..d)
+                            .map(|s| sep.mass()[r * d + s] * vs.c[b * d + s])
+                            .sum(),
                     };
                     mc + vs.delta[i]
                 };
@@ -287,7 +289,7 @@ pub(super) fn assemble_dense(
         for b in 0..k {
             for r in 0..d {
                 for s in 0..d {
-                    dn.jac[(b * d + r) * size + b * d + s] += sep.mass[r * d + s];
+                    dn.jac[(b * d + r) * size + b * d + s] += sep.mass()[r * d + s];
                 }
             }
         }
