@@ -35,6 +35,7 @@ pub mod baselines;
 pub mod basis;
 pub mod curve;
 pub mod error;
+pub mod events;
 pub mod geometry;
 pub mod integrator;
 pub mod lagrangian;

@@ -262,7 +262,7 @@ impl Trajectory {
 
     /// The basis of the curves with n functions: the one the integrator used or the user
     /// attached, else (deserialised, built-in) rebuilt from the recorded name.
-    fn basis_with(&self, n: usize) -> Result<&dyn Basis> {
+    pub(crate) fn basis_with(&self, n: usize) -> Result<&dyn Basis> {
         if self.bases.get().is_none() {
             if self.user_basis {
                 return Err(GviError::BasisNotAttached {
