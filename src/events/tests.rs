@@ -218,3 +218,37 @@ fn bad_events_are_typed_errors() {
     assert_eq!(at_start.crossings.len(), 1);
     assert!((at_start.crossings[0].t - PI).abs() < 1e-9);
 }
+
+/// Two equal masses on a relative Kepler orbit (a = 1, e = 0.6, μ = 2) from apoapsis: the
+/// separation dips to 0.4 at periapsis, t = π/√2 ≈ 2.221, inside the step [2, 3] at h = 1,
+/// where the step ends see 0.7 and more. The close-encounter event (r_min = 0.45) stops the run
+/// on the curve with the pair named; the separation there is 0.45 to 1e-9. Negative control:
+/// step ends only (samples_per_step = 1) run through the encounter to T = 6.
+#[test]
+fn a_close_encounter_between_step_ends_stops_the_run() {
+    let nb = NBody::new(vec![1.0, 1.0], 1.0, 2).unwrap();
+    let v = 0.25 * 2f64.sqrt();
+    let (q0, p0) = ([-0.8, 0.0, 0.8, 0.0], [0.0, -v, 0.0, v]);
+    let gvi = spectral(24, 1.0);
+    let run_with = |samples: usize| {
+        let mut events = [close_encounter(&nb, 0.45).unwrap()];
+        let options = EventOptions {
+            samples_per_step: samples,
+            ..EventOptions::default()
+        };
+        integrate_with_events(&gvi, &nb, 0.0, &q0, &p0, 6.0, &mut events, &options).unwrap()
+    };
+    let run = run_with(8);
+    assert!(run.stopped, "{run:?}");
+    let c = &run.crossings[0];
+    assert_eq!(c.step, 2);
+    let (i, j, r) = nb.closest_pair(&c.q).unwrap();
+    assert_eq!((i, j), (0, 1));
+    assert!((r - 0.45).abs() < 1e-9, "{r}");
+    assert!(c.t > 2.0 && c.t < std::f64::consts::PI / 2f64.sqrt());
+    let ends = run_with(1);
+    assert!(!ends.stopped && ends.crossings.is_empty());
+    assert_eq!(ends.t, 6.0);
+    assert!(close_encounter(&nb, 0.0).is_err());
+    assert!(close_encounter(&NBody::new(vec![1.0], 1.0, 2).unwrap(), 0.1).is_err());
+}

@@ -117,6 +117,33 @@ impl NBody {
         self.names.as_ref()?.iter().position(|n| n == name)
     }
 
+    /// The closest pair of bodies of a flattened configuration: (i, j, |xᵢ − xⱼ|) with i < j;
+    /// `None` for fewer than two bodies or a configuration of the wrong length.
+    ///
+    /// ```
+    /// use galerkin_vi::systems::NBody;
+    /// let nb = NBody::new(vec![1.0, 1.0, 1.0], 1.0, 2)?;
+    /// let q = [0.0, 0.0, 3.0, 0.0, 3.0, 0.5];
+    /// assert_eq!(nb.closest_pair(&q), Some((1, 2, 0.5)));
+    /// # Ok::<(), galerkin_vi::GviError>(())
+    /// ```
+    pub fn closest_pair(&self, q: &[f64]) -> Option<(usize, usize, f64)> {
+        let (d, n) = (self.dim, self.masses.len());
+        if n < 2 || q.len() != n * d {
+            return None;
+        }
+        let mut best = (0, 1, f64::INFINITY);
+        for i in 0..n {
+            for j in i + 1..n {
+                let r2: f64 = (0..d).map(|k| (q[i * d + k] - q[j * d + k]).powi(2)).sum();
+                if r2 < best.2 {
+                    best = (i, j, r2);
+                }
+            }
+        }
+        Some((best.0, best.1, best.2.sqrt()))
+    }
+
     /// Total mass Σ mᵢ.
     pub fn total_mass(&self) -> f64 {
         self.masses.iter().sum()
