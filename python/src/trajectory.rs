@@ -236,6 +236,78 @@ impl Trajectory {
         })
     }
 
+    /// The zero crossings of `g(t, q, p)` (a Python callable returning a float; q and p
+    /// numpy arrays of shape (D,)) along the Galerkin curves, located on each step's curve:
+    /// g is sampled `samples_per_step` times per step and a sign change is refined on the
+    /// curve (regula falsi). `direction`: "either", "rising" (g from − to +) or "falling".
+    /// Returns a list of dicts with `t`, `q`, `p` (arrays), `step` and `rising`, in time order.
+    /// An exception raised by g is re-raised; a g that returns NaN is a `NonFiniteError`.
+    #[pyo3(signature = (g, direction = "either", samples_per_step = 8))]
+    fn crossings<'py>(
+        &self,
+        py: Python<'py>,
+        g: &Bound<'py, PyAny>,
+        direction: &str,
+        samples_per_step: usize,
+    ) -> PyResult<Vec<Bound<'py, PyDict>>> {
+        use galerkin_vi::events::{Direction, Event, EventOptions, crossings_on_trajectory};
+        let direction = match direction {
+            "either" => Direction::Either,
+            "rising" => Direction::Rising,
+            "falling" => Direction::Falling,
+            other => {
+                return Err(crate::errors::InvalidInputError::new_err(format!(
+                    "direction: expected 'either', 'rising' or 'falling', got '{other}'"
+                )));
+            }
+        };
+        if !g.is_callable() {
+            return Err(crate::errors::InvalidInputError::new_err(
+                "g: expected a callable g(t, q, p) -> float",
+            ));
+        }
+        // The first exception raised by g (or a non-float result): the scan then sees NaN and
+        // stops, and the exception is raised instead of the scan's error.
+        let raised: std::cell::RefCell<Option<PyErr>> = std::cell::RefCell::new(None);
+        let function = |t: f64, q: &[f64], p: &[f64]| -> f64 {
+            if raised.borrow().is_some() {
+                return f64::NAN;
+            }
+            let args = (t, q.to_vec().into_pyarray(py), p.to_vec().into_pyarray(py));
+            match g.call1(args).and_then(|v| v.extract::<f64>()) {
+                Ok(v) => v,
+                Err(e) => {
+                    *raised.borrow_mut() = Some(e);
+                    f64::NAN
+                }
+            }
+        };
+        let events = [Event::new("g", function).direction(direction)];
+        let options = EventOptions {
+            samples_per_step,
+            ..EventOptions::default()
+        };
+        let found = with_system!(&*self.kind, s => {
+            crossings_on_trajectory(&self.inner, s, &events, &options)
+        });
+        if let Some(e) = raised.borrow_mut().take() {
+            return Err(e);
+        }
+        found
+            .py_err()?
+            .into_iter()
+            .map(|c| {
+                let dict = PyDict::new(py);
+                dict.set_item("t", c.t)?;
+                dict.set_item("q", c.q.into_pyarray(py))?;
+                dict.set_item("p", c.p.into_pyarray(py))?;
+                dict.set_item("step", c.step)?;
+                dict.set_item("rising", c.rising)?;
+                Ok(dict)
+            })
+            .collect()
+    }
+
     /// The invariants at every step end, as a dict name → array (steps + 1).
     #[getter]
     fn invariants<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {

@@ -82,3 +82,39 @@ def test_nbody_two_bodies_conserve_momentum():
     traj = gv.Integrator(n=16, h=0.25).integrate(nb, q0, p0, 40)
     total = traj.p[:, 0::2].sum(axis=1), traj.p[:, 1::2].sum(axis=1)
     assert np.abs(total[0]).max() < 1e-12 and np.abs(total[1]).max() < 1e-12
+
+
+def test_crossings_on_the_curve_find_events_between_step_ends(oscillator):
+    # q = cos t crosses 0 at π/2 + kπ: three times in [0, 10], located on the curves.
+    down = oscillator.crossings(lambda t, q, p: q[0], direction="falling")
+    assert [c["rising"] for c in down] == [False, False]
+    times = [c["t"] for c in oscillator.crossings(lambda t, q, p: q[0])]
+    np.testing.assert_allclose(times, np.pi / 2 + np.pi * np.arange(3), atol=1e-9)
+    # q > 0.99 only within w = 0.1415 of t = 0 and t = 2π: the second visit lies inside the
+    # step [6, 7], where the curve finds both crossings and the step ends alone
+    # (samples_per_step=1) none; they see only the first, t = w, where q(1) < 0.99.
+    level = lambda t, q, p: q[0] - 0.99
+    w = np.arccos(0.99)
+    found = oscillator.crossings(level)
+    np.testing.assert_allclose([c["t"] for c in found], [w, 2 * np.pi - w, 2 * np.pi + w],
+                               atol=1e-9)
+    ends = oscillator.crossings(level, samples_per_step=1)
+    np.testing.assert_allclose([c["t"] for c in ends], [w], atol=1e-9)
+    assert found[1]["q"].shape == (1,) and found[1]["step"] == 6
+
+
+def test_crossings_errors(oscillator):
+    with pytest.raises(gv.InvalidInputError, match="direction"):
+        oscillator.crossings(lambda t, q, p: q[0], direction="up")
+    with pytest.raises(gv.InvalidInputError, match="callable"):
+        oscillator.crossings(3.0)
+    with pytest.raises(gv.InvalidInputError, match="samples_per_step"):
+        oscillator.crossings(lambda t, q, p: q[0], samples_per_step=0)
+    with pytest.raises(gv.NonFiniteError):
+        oscillator.crossings(lambda t, q, p: float("nan"))
+
+    def boom(t, q, p):
+        raise ZeroDivisionError("from g")
+
+    with pytest.raises(ZeroDivisionError, match="from g"):
+        oscillator.crossings(boom)
