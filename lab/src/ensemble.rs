@@ -102,6 +102,21 @@ impl EnsembleOptions {
     }
 }
 
+/// The memory an ensemble of `count` members in dimension `d` with `momenta` momentum maps
+/// needs, estimated before it runs: every member's initial state and result (final state,
+/// errors, failure) and the CSV text of its row (about 25 bytes per number, written twice: the
+/// output and the one-thread comparison), checked against [`crate::memory::LIMIT_BYTES`].
+pub fn ensure_memory(count: usize, d: usize, momenta: usize) -> Result<()> {
+    let state = (16 * d + 2 * 24) as f64;
+    let numbers = (2 * d + 6 + momenta) as f64;
+    let per_member = 2.0 * state + 8.0 * momenta as f64 + 128.0 + 2.0 * 25.0 * numbers;
+    crate::memory::ensure_fits(
+        format!("an ensemble of {count} members"),
+        per_member * count as f64,
+        "the members' rows are held until written; fewer --count",
+    )
+}
+
 /// One member's initial state.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Member {

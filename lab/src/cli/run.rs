@@ -3,7 +3,7 @@
 use super::values;
 use super::write_output;
 use crate::error::LabError;
-use crate::output::{AtomicFile, check_output_path, ensure_distinct};
+use crate::output::{AtomicFile, Plan};
 use crate::run::stream::{bytes_per_step, stream_scene};
 use crate::run::{RunOptions, RunSummary, run_scene};
 use crate::scene::{BuiltScene, BuiltSystem, Overrides, Scene};
@@ -139,7 +139,7 @@ pub fn load_scene(a: &SceneArgs) -> Result<BuiltScene, LabError> {
 
 /// In-memory runs whose estimated memory exceeds this are refused up front (streamed runs
 /// hold one row at a time and have no such limit).
-const MEMORY_LIMIT_BYTES: f64 = 4e9;
+const MEMORY_LIMIT_BYTES: f64 = crate::memory::LIMIT_BYTES;
 
 /// `<stem><suffix>.svg` next to `path`.
 fn sibling(path: &Path, suffix: &str, fallback: &str) -> PathBuf {
@@ -169,17 +169,11 @@ pub fn run(args: RunArgs) -> Result<(), LabError> {
             outputs.push(("the n chart", sibling(p, "-n", "run")));
         }
     }
-    for (_, path) in &outputs {
-        check_output_path(path)?;
+    let mut plan = Plan::new();
+    for (role, path) in &outputs {
+        plan.output(*role, path);
     }
-    let scene_path = Path::new(&args.scene.scene);
-    let inputs: Vec<(&str, &Path)> = if scene_path.is_file() {
-        vec![("scene file", scene_path)]
-    } else {
-        Vec::new()
-    };
-    let out_refs: Vec<(&str, &Path)> = outputs.iter().map(|(r, p)| (*r, p.as_path())).collect();
-    ensure_distinct(&out_refs, &inputs)?;
+    plan.scene(&args.scene.scene).check()?;
 
     // Rigid bodies run on SO(3) by their own integrator (galerkin_vi::lie), in memory.
     let on_so3 = matches!(scene.system, BuiltSystem::RigidBody(_));

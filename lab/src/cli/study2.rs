@@ -2,6 +2,7 @@
 
 use super::run::{SceneArgs, load_scene};
 use crate::error::LabError;
+use crate::output::Plan;
 use crate::studies::compare_refinement::{CompareConfig, compare_refinement};
 use crate::studies::peers::QuadPoints;
 use crate::studies::stability::{Class, StabilityConfig, stability};
@@ -85,14 +86,19 @@ pub fn run_work_precision(args: WorkPrecisionArgs) -> Result<(), LabError> {
         "it sweeps the bases, n and the quadrature point counts (--bases, --ns, \
          --quadratures) with the Gauss–Legendre rule and the auto stage solver",
     )?;
+    let dir = args
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("out/work-precision"));
+    let mut plan = Plan::new();
     match &args.write_reference {
-        Some(path) => crate::output::check_output_path(path)?,
-        None => crate::output::check_output_dir(
-            args.out
-                .as_deref()
-                .unwrap_or(std::path::Path::new("out/work-precision")),
-        )?,
+        Some(path) => plan.output("--write-reference", path),
+        None => plan.output_dir("--out", &dir, &crate::studies::work_precision::FILES),
+    };
+    for path in &args.external {
+        plan.input("--external file", path);
     }
+    plan.scene(&args.run.scene).check()?;
     let scene = load_scene(&args.run)?;
     let mut config = if args.quick {
         WorkPrecisionConfig::quick()
@@ -146,9 +152,6 @@ pub fn run_work_precision(args: WorkPrecisionArgs) -> Result<(), LabError> {
     for (path, points) in external {
         study.merge_external(&path.display().to_string(), points);
     }
-    let dir = args
-        .out
-        .unwrap_or_else(|| PathBuf::from("out/work-precision"));
     let files = study.write(&dir)?;
     eprint!("{}", study.summary());
     for f in files {
@@ -174,7 +177,10 @@ pub struct StabilityArgs {
 
 pub fn run_stability(args: StabilityArgs) -> Result<(), LabError> {
     let dir = args.out.unwrap_or_else(|| PathBuf::from("out/stability"));
-    crate::output::check_output_dir(&dir)?;
+    Plan::new()
+        .output_dir("--out", &dir, &crate::studies::stability::FILES)
+        .scene(&args.run.scene)
+        .check()?;
     // The map sweeps h and n itself and takes its steps from --cell-steps.
     for (flag, given) in [
         ("--h", args.run.h.is_some()),
@@ -274,13 +280,17 @@ pub fn run_compare_refinement(args: CompareRefinementArgs) -> Result<(), LabErro
         &["--n", "--basis", "--quad-points", "--economical"],
         "it sweeps the bases and n with the quadrature's default number of points",
     )?;
-    crate::output::check_output_dir(&dir)?;
+    Plan::new()
+        .output_dir("--out", &dir, &crate::studies::compare_refinement::FILES)
+        .scene(&args.run.scene)
+        .check()?;
     let scene = load_scene(&args.run)?;
     let config = if args.quick {
         CompareConfig::quick()
     } else {
         CompareConfig::full()
     };
+    crate::studies::compare_refinement::ensure_memory(&scene, &config)?;
     let study = compare_refinement(&scene, &config)?;
     let files = study.write(&dir)?;
     eprintln!(

@@ -37,13 +37,17 @@ pub fn count(s: &str) -> Result<usize, String> {
         .ok_or_else(|| format!("'{s}' is not a whole number ≥ 1 (expected a comma-separated list)"))
 }
 
-/// A number of Fourier modes K in 1..=4096.
+/// A number of Fourier modes K, checked by [`crate::periodic::check_modes`] (the check the
+/// scene's `[periodic] modes` gets too).
 pub fn modes(s: &str) -> Result<usize, String> {
     let s = s.trim();
-    s.parse::<usize>()
-        .ok()
-        .filter(|v| (1..=4096).contains(v))
-        .ok_or_else(|| format!("K must be an integer in 1..=4096, got '{s}'"))
+    let k = s.parse::<usize>().map_err(|_| {
+        format!(
+            "K must be an integer in 1..={}, got '{s}'",
+            crate::periodic::MAX_MODES
+        )
+    })?;
+    crate::periodic::check_modes(k)
 }
 
 /// Sweep values: `A:B:STEP` (arithmetic, from min(A, B) to max(A, B)) or `A:B:xF`

@@ -23,6 +23,28 @@ pub enum Style {
     DashedLine,
 }
 
+/// The most points a series keeps: a chart of a long run shows what a chart can show (a few
+/// thousand points per series, an SVG of at most a few MB), not every step. Longer series are
+/// thinned on [`Chart::push`] by [`thin`].
+pub const MAX_POINTS_PER_SERIES: usize = 4000;
+
+/// Every k-th point of `points` (k the smallest stride leaving at most `max`), the last point
+/// kept, so that a line still ends where the data end.
+pub fn thin<T: Copy>(points: &[T], max: usize) -> Vec<T> {
+    let max = max.max(2);
+    if points.len() <= max {
+        return points.to_vec();
+    }
+    let stride = (points.len() - 1).div_ceil(max - 1);
+    let mut out: Vec<T> = points.iter().step_by(stride).copied().collect();
+    if (points.len() - 1) % stride != 0 {
+        if let Some(&last) = points.last() {
+            out.push(last);
+        }
+    }
+    out
+}
+
 /// One data series of a [`Chart`].
 #[derive(Debug, Clone)]
 pub struct Series {
@@ -169,13 +191,16 @@ impl Chart {
         (self.width, self.height) = (width, height);
         self
     }
-    /// Adds a series (builder style).
+    /// Adds a series (builder style; thinned as by [`Chart::push`]).
     pub fn with_series(mut self, s: Series) -> Self {
-        self.series.push(s);
+        self.push(s);
         self
     }
-    /// Adds a series.
-    pub fn push(&mut self, s: Series) {
+    /// Adds a series, thinned to at most [`MAX_POINTS_PER_SERIES`] points ([`thin`]).
+    pub fn push(&mut self, mut s: Series) {
+        if s.points.len() > MAX_POINTS_PER_SERIES {
+            s.points = thin(&s.points, MAX_POINTS_PER_SERIES);
+        }
         self.series.push(s);
     }
 

@@ -133,6 +133,27 @@ impl Reference {
         (horizon / (h / 4.0).min(1.0)).ceil().max(1.0)
     }
 
+    /// The bytes [`Reference::for_system`] would hold (0 for an exact solution), estimated
+    /// without running it, for [`crate::memory::ensure_fits`].
+    pub fn estimated_bytes<S: System>(
+        system: &S,
+        initial: &InitialState,
+        h: f64,
+        horizon: f64,
+    ) -> f64 {
+        let d = system.dim();
+        let steps = Self::estimated_steps(system, initial, h, horizon);
+        if steps == 0.0 {
+            return 0.0;
+        }
+        if system.shortest_time_scale(&initial.q, &initial.p).is_some() && d > 4 {
+            // Sampled 16 times per step h: one position vector per sample.
+            let samples = (horizon / h).ceil().max(1.0) * 16.0;
+            return samples * (8 * d + 24) as f64;
+        }
+        steps * crate::memory::trajectory_bytes_per_step(48, d)
+    }
+
     /// Short description for reports.
     pub fn describe(&self) -> &'static str {
         match self {

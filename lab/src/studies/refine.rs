@@ -23,6 +23,9 @@ use rayon::prelude::*;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
+/// The files [`Refinement::write`] writes into its directory.
+pub const FILES: [&str; 3] = ["refine.csv", "refine.json", "refine.svg"];
+
 /// Which parameter a sweep varies.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -323,15 +326,14 @@ impl RefineStudy {
         chart
     }
 
-    /// Write `refine.csv`, `refine.json` and `refine.svg` into `dir`; returns the paths.
+    /// Write `refine.csv`, `refine.json` and `refine.svg` ([`FILES`]) into `dir`; returns
+    /// the paths.
     pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>> {
-        let csv = dir.join("refine.csv");
+        let [csv, json, svg] = FILES.map(|f| dir.join(f));
         write_file(&csv, &measurements_csv(&self.points)?)?;
-        let json = dir.join("refine.json");
         let text =
             serde_json::to_string_pretty(self).map_err(|e| LabError::Serialize(e.to_string()))?;
         write_file(&json, &text)?;
-        let svg = dir.join("refine.svg");
         self.chart()
             .save_svg(&svg)
             .map_err(|e| LabError::Plot(e.to_string()))?;
