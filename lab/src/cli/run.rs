@@ -130,11 +130,75 @@ impl RunArgs {
     }
 }
 
-/// Load the scene named on the command line, apply the flag overrides and build it (once).
+/// Load the scene named on the command line, apply the flag overrides and build it (once);
+/// flags the built scene would ignore are refused ([`refuse_unused_scene_flags`]).
 pub fn load_scene(a: &SceneArgs) -> Result<BuiltScene, LabError> {
-    Scene::load(&a.scene)?
+    let scene = Scene::load(&a.scene)?
         .with_overrides(&a.overrides()?)
-        .build()
+        .build()?;
+    refuse_unused_scene_flags(a, &scene)?;
+    Ok(scene)
+}
+
+fn ignored(flag: &str, reason: String) -> LabError {
+    LabError::InvalidArgument {
+        name: flag.to_string(),
+        reason,
+    }
+}
+
+/// Refuse the scene flags a built scene would ignore: `--retraction` outside the rigid-body
+/// scenes (only the Lie group integrator has a chart), `--solver` on them (that integrator has
+/// no stage solver to choose).
+pub fn refuse_unused_scene_flags(a: &SceneArgs, scene: &BuiltScene) -> Result<(), LabError> {
+    let rigid = matches!(scene.system, BuiltSystem::RigidBody(_));
+    if a.retraction.is_some() && !rigid {
+        return Err(ignored(
+            "--retraction",
+            format!(
+                "{} is not a rigid-body scene; only those (rigid-body, heavy-top, pendulum-3d, \
+                 type = \"rigid-body\" | \"heavy-top\") run on SO(3) with a retraction",
+                scene.name
+            ),
+        ));
+    }
+    if a.solver.is_some() && rigid {
+        return Err(ignored(
+            "--solver",
+            format!(
+                "{} is a rigid-body scene, run by the Lie group integrator, which has no stage \
+                 solver to choose",
+                scene.name
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Refuse the method flags a `--tol` run would ignore: n is chosen per step from the ladder,
+/// each rung with its quadrature's default points, so `--n`, `--quad-points` and
+/// `--economical` have no effect.
+fn refuse_fixed_n_flags_with_tol(args: &RunArgs) -> Result<(), LabError> {
+    if args.tol.is_none() {
+        return Ok(());
+    }
+    let a = &args.scene;
+    for (flag, given) in [
+        ("--n", a.n.is_some()),
+        ("--quad-points", a.quad_points.is_some()),
+        ("--economical", a.economical),
+    ] {
+        if given {
+            return Err(ignored(
+                flag,
+                format!(
+                    "with --tol, n is chosen per step from the ladder (--ladder), each rung \
+                     with its quadrature's default points; {flag} would be ignored"
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// In-memory runs whose estimated memory exceeds this are refused up front (streamed runs
@@ -151,9 +215,11 @@ fn sibling(path: &Path, suffix: &str, fallback: &str) -> PathBuf {
 }
 
 pub fn run(args: RunArgs) -> Result<(), LabError> {
+    refuse_fixed_n_flags_with_tol(&args)?;
     let scene = Scene::load(&args.scene.scene)?
         .with_overrides(&args.overrides()?)
         .build()?;
+    refuse_unused_scene_flags(&args.scene, &scene)?;
     // Every output is checked before any work: usable, distinct, and not the scene file.
     let mut outputs: Vec<(&str, PathBuf)> = Vec::new();
     if let Some(o) = &args.output {
@@ -171,7 +237,11 @@ pub fn run(args: RunArgs) -> Result<(), LabError> {
     }
     let mut plan = Plan::new();
     for (role, path) in &outputs {
-        plan.output(*role, path);
+        if *role == "--output" {
+            plan.output(*role, path);
+        } else {
+            plan.chart(*role, path);
+        }
     }
     plan.scene(&args.scene.scene).check()?;
 

@@ -28,7 +28,7 @@ pub struct WorkPrecisionArgs {
     pub horizon: Option<f64>,
     /// Timed repetitions per configuration (the median is reported; default 5, 1 with
     /// --long).
-    #[arg(long)]
+    #[arg(long, value_parser = super::values::count)]
     pub repeats: Option<usize>,
     /// A reduced sweep (seconds), for smoke tests.
     #[arg(long)]
@@ -70,6 +70,30 @@ pub struct WorkPrecisionArgs {
     pub run: SceneArgs,
 }
 
+/// `--write-reference` writes the reference at the study's sample times (set by the scene,
+/// `--horizon`, `--quick` and `--long`) and runs no sweep: the sweep's flags would be ignored.
+fn refuse_study_flags_with_write_reference(args: &WorkPrecisionArgs) -> Result<(), LabError> {
+    for (flag, given) in [
+        ("--bases", args.bases.is_some()),
+        ("--ns", args.ns.is_some()),
+        ("--divisors", args.divisors.is_some()),
+        ("--quadratures", args.quadratures.is_some()),
+        ("--repeats", args.repeats.is_some()),
+        ("--external", !args.external.is_empty()),
+        ("--out", args.out.is_some()),
+    ] {
+        if given {
+            return Err(LabError::InvalidArgument {
+                name: flag.into(),
+                reason: "--write-reference writes the reference positions and runs no sweep; \
+                         this flag would be ignored"
+                    .into(),
+            });
+        }
+    }
+    Ok(())
+}
+
 pub fn run_work_precision(args: WorkPrecisionArgs) -> Result<(), LabError> {
     let r = &args.run;
     super::refuse_ignored(
@@ -86,6 +110,9 @@ pub fn run_work_precision(args: WorkPrecisionArgs) -> Result<(), LabError> {
         "it sweeps the bases, n and the quadrature point counts (--bases, --ns, \
          --quadratures) with the Gauss–Legendre rule and the auto stage solver",
     )?;
+    if args.write_reference.is_some() {
+        refuse_study_flags_with_write_reference(&args)?;
+    }
     let dir = args
         .out
         .clone()
@@ -110,7 +137,7 @@ pub fn run_work_precision(args: WorkPrecisionArgs) -> Result<(), LabError> {
     if args.horizon.is_some() {
         config.horizon = args.horizon;
     }
-    config.repeats = args.repeats.unwrap_or(if args.long { 1 } else { 5 }).max(1);
+    config.repeats = args.repeats.unwrap_or(if args.long { 1 } else { 5 });
     if let Some(b) = &args.bases {
         config.bases = b.clone();
     }

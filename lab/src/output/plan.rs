@@ -17,6 +17,7 @@ pub struct Plan {
     outputs: Vec<(String, PathBuf)>,
     dirs: Vec<(String, PathBuf)>,
     inputs: Vec<(String, PathBuf)>,
+    charts: Vec<(String, PathBuf)>,
 }
 
 impl Plan {
@@ -35,6 +36,22 @@ impl Plan {
     pub fn output_opt(&mut self, role: &str, path: Option<&Path>) -> &mut Self {
         if let Some(p) = path {
             self.output(role, p);
+        }
+        self
+    }
+
+    /// An SVG chart the command writes (`--plot`): an output whose name must end in `.svg`
+    /// (the charts are SVG only; `--plot x.png` would write SVG into a `.png`).
+    pub fn chart(&mut self, role: impl Into<String>, path: &Path) -> &mut Self {
+        let role = role.into();
+        self.charts.push((role.clone(), path.to_path_buf()));
+        self.output(role, path)
+    }
+
+    /// An optional chart ([`Plan::chart`] when given).
+    pub fn chart_opt(&mut self, role: &str, path: Option<&Path>) -> &mut Self {
+        if let Some(p) = path {
+            self.chart(role, p);
         }
         self
     }
@@ -71,6 +88,17 @@ impl Plan {
     /// Check every output (usable, its name short enough, in a usable directory) and that,
     /// once resolved, no two outputs are the same file and no output is an input.
     pub fn check(&self) -> Result<()> {
+        for (role, path) in &self.charts {
+            let svg = path
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("svg"));
+            if !svg && !is_special(path) {
+                return Err(bad_output(
+                    path,
+                    format!("{role} writes an SVG chart; give the file the extension .svg"),
+                ));
+            }
+        }
         for (_, dir) in &self.dirs {
             check_output_dir(dir)?;
         }
