@@ -107,7 +107,11 @@ fn check_name_lengths(path: &Path, file: bool) -> Result<()> {
     for (i, name) in parts.iter().enumerate() {
         let len = name.as_encoded_bytes().len();
         let last = i + 1 == parts.len();
-        let max = if file && last { MAX_OUTPUT_NAME_BYTES } else { 255 };
+        let max = if file && last {
+            MAX_OUTPUT_NAME_BYTES
+        } else {
+            255
+        };
         if len > max {
             let why = if file && last {
                 format!(

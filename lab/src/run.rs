@@ -380,6 +380,16 @@ fn run_system(system: &AnySystem, scene: &BuiltScene, options: RunOptions) -> Re
 
 pub use crate::error::fmt_number;
 
+/// The start checks of a run, for every command built from a scene: coincident bodies (a
+/// collision) and non-finite initial invariants (a singular start such as Kepler at the
+/// origin), with the messages `gvi run` gives.
+pub(crate) fn check_start<S: System>(system: &S, q0: &[f64], p0: &[f64], t0: f64) -> Result<()> {
+    // In the run's order: the exact solution's own errors (Kepler elements that overflow
+    // name `mu`) come before the monitor's.
+    system.exact_solution(t0, q0, p0)?;
+    Monitor::new(system, q0, p0, t0).map(|_| ())
+}
+
 /// Keep the first `states` step ends (and the `states − 1` steps between them).
 fn truncate(traj: &mut Trajectory, states: usize) {
     let steps = states.saturating_sub(1);
@@ -406,7 +416,10 @@ pub fn chart_times(traj: &Trajectory, per_step: usize) -> Vec<f64> {
 /// Indices of the step ends a chart marks: all of them, or evenly strided to at most
 /// [`crate::plot::MAX_POINTS_PER_SERIES`] (the last kept).
 pub fn chart_indices(states: usize) -> Vec<usize> {
-    crate::plot::thin(&(0..states).collect::<Vec<_>>(), crate::plot::MAX_POINTS_PER_SERIES)
+    crate::plot::thin(
+        &(0..states).collect::<Vec<_>>(),
+        crate::plot::MAX_POINTS_PER_SERIES,
+    )
 }
 
 /// Orbit (2-D) or q(t) (1-D) chart: Galerkin curves, step ends and, if known, the exact

@@ -120,8 +120,18 @@ fn charts_of_long_runs_are_thinned_to_what_a_chart_can_show() {
     // 6000 steps: 6001 step ends and 192 000 curve samples without thinning.
     let svg = dir.join("long.svg");
     let o = gvi(&[
-        "run", "harmonic", "--n", "4", "--h", "0.5", "--steps", "6000", "--plot", s(&svg),
-        "--output", "/dev/null",
+        "run",
+        "harmonic",
+        "--n",
+        "4",
+        "--h",
+        "0.5",
+        "--steps",
+        "6000",
+        "--plot",
+        s(&svg),
+        "--output",
+        "/dev/null",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let text = std::fs::read_to_string(&svg).unwrap();
@@ -132,8 +142,18 @@ fn charts_of_long_runs_are_thinned_to_what_a_chart_can_show() {
     // Negative control: a short run keeps every step end (one more circle: the legend's).
     let svg = dir.join("short.svg");
     let o = gvi(&[
-        "run", "harmonic", "--n", "4", "--h", "0.5", "--steps", "50", "--plot", s(&svg),
-        "--output", "/dev/null",
+        "run",
+        "harmonic",
+        "--n",
+        "4",
+        "--h",
+        "0.5",
+        "--steps",
+        "50",
+        "--plot",
+        s(&svg),
+        "--output",
+        "/dev/null",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let (_, circles) = svg_counts(&std::fs::read_to_string(&svg).unwrap());

@@ -47,7 +47,7 @@ fn dot_dot_through_a_missing_directory_cannot_reach_the_scene() {
         TWO_BODY
     );
     assert!(!dir.join("nope").exists(), "nothing is created");
-    // The same spelling for --plot, and a `..` out of a deeper missing path.
+    // A `..` out of a deeper missing path.
     let o = gvi_in(
         &dir,
         &[
@@ -55,11 +55,29 @@ fn dot_dot_through_a_missing_directory_cannot_reach_the_scene() {
             "scene.toml",
             "--steps",
             "5",
-            "--plot",
+            "--output",
             "a/b/../../scene.toml",
         ],
     );
     fails_with(&o, "scene file");
+    // --plot through `..`: a scene file named like a chart.
+    std::fs::write(dir.join("scene.svg"), TWO_BODY).unwrap();
+    let o = gvi_in(
+        &dir,
+        &[
+            "run",
+            "scene.svg",
+            "--steps",
+            "5",
+            "--plot",
+            "a/b/../../scene.svg",
+        ],
+    );
+    fails_with(&o, "scene file");
+    assert_eq!(
+        std::fs::read_to_string(dir.join("scene.svg")).unwrap(),
+        TWO_BODY
+    );
     // Negative control: the same spelling naming another file is written.
     let o = gvi_in(
         &dir,
@@ -136,8 +154,8 @@ fn periodic_checks_every_output() {
     std::fs::write(dir.join("f8.toml"), FIGURE_EIGHT).unwrap();
     let cases: [&[&str]; 4] = [
         &["--output", "f8.toml"],
-        &["--plot", "x/../f8.toml"],
-        &["--output", "o.json", "--plot", "o.json"],
+        &["--output", "x/../f8.toml"],
+        &["--output", "o.svg", "--plot", "o.svg"],
         &["--plot", "p.svg", "--refine-plot", "./p.svg"],
     ];
     for extra in cases {
@@ -244,7 +262,10 @@ fn ensemble_output_cannot_be_the_scene() {
         ],
     );
     fails_with(&o, "scene file");
-    assert_eq!(std::fs::read_to_string(dir.join("s.toml")).unwrap(), TWO_BODY);
+    assert_eq!(
+        std::fs::read_to_string(dir.join("s.toml")).unwrap(),
+        TWO_BODY
+    );
 }
 
 #[test]
@@ -258,13 +279,16 @@ fn output_names_too_long_for_the_temporary_name_are_refused_before_the_work() {
             &["run", "kepler", "--steps", "100000000", "--output", &name],
         );
         fails_with(&o, &format!("{len} bytes"));
-        let o = gvi_in(&dir, &["run", "kepler", "--steps", "3", "--plot", &name]);
-        fails_with(&o, "bytes");
+        let chart = format!("{}.svg", "x".repeat(len - 4));
+        let o = gvi_in(&dir, &["run", "kepler", "--steps", "3", "--plot", &chart]);
+        fails_with(&o, &format!("{len} bytes"));
     }
     let long_dir = "d".repeat(256);
     let o = gvi_in(
         &dir,
-        &["refine", "kepler", "--vary", "n", "--range", "4:8:2", "--out", &long_dir],
+        &[
+            "refine", "kepler", "--vary", "n", "--range", "4:8:2", "--out", &long_dir,
+        ],
     );
     fails_with(&o, "256 bytes");
     // Negative control: the longest allowed name is written.

@@ -24,13 +24,7 @@ pub fn run_check(args: SceneArgs) -> Result<(), LabError> {
         per_step * steps as f64,
         "the check keeps the whole run; fewer --steps",
     )?;
-    let report = check_report(
-        &gvi,
-        system,
-        &scene.initial.q,
-        &scene.initial.p,
-        steps,
-    )?;
+    let report = check_report(&gvi, system, &scene.initial.q, &scene.initial.p, steps)?;
     crate::output::print(&format!("{report}\n"))?;
     Ok(())
 }

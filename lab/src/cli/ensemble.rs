@@ -102,6 +102,14 @@ pub fn run_ensemble_command(args: EnsembleArgs) -> Result<(), LabError> {
     if let Some(s) = &summary_file {
         eprintln!("  summary written to {}", s.display());
     }
+    if ensemble.completed().next().is_none() {
+        // The rows (with each failure) are written; but there is no result to report.
+        let first = ensemble.members.iter().find_map(|m| m.failure.clone());
+        return Err(LabError::AllRunsFailed {
+            runs: ensemble.members.len(),
+            first: first.unwrap_or_default(),
+        });
+    }
 
     // Throughput: the first members again on one thread, in the same process. The results
     // must be identical (members do not depend on the thread that runs them).

@@ -39,8 +39,8 @@ pub fn run_periodic(args: PeriodicArgs) -> Result<(), LabError> {
     let scene = Scene::load(&args.scene)?.build()?;
     Plan::new()
         .output_opt("--output", args.output.as_deref())
-        .output_opt("--plot", args.plot.as_deref())
-        .output_opt("--refine-plot", args.refine_plot.as_deref())
+        .chart_opt("--plot", args.plot.as_deref())
+        .chart_opt("--refine-plot", args.refine_plot.as_deref())
         .scene(&args.scene)
         .check()?;
     let mut request = PeriodicRequest {

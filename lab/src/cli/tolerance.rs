@@ -2,8 +2,8 @@
 
 use super::values::{self, Tolerances};
 use crate::error::LabError;
-use crate::scene::{Overrides, Scene};
 use crate::output::Plan;
+use crate::scene::{Overrides, Scene};
 use crate::studies::tolerance::{ToleranceConfig, file_names, tolerance_study};
 use clap::Args;
 use galerkin_vi::adaptive::ErrorControl;

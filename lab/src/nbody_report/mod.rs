@@ -185,7 +185,7 @@ pub fn nbody_report(scene: &BuiltScene, options: ReportOptions) -> Result<NBodyR
             rq.iter()
                 .zip(&fq)
                 .flat_map(|(a, b)| a.iter().zip(b).map(|(x, y)| (x - y).abs()))
-                .fold(0.0, f64::max),
+                .fold(0.0, crate::distance::nan_max),
         )
     } else {
         None
@@ -310,7 +310,7 @@ fn perihelion_drift(
         .iter()
         .zip(&reference)
         .map(|(a, b)| wrap(a - b).abs())
-        .fold(0.0, f64::max);
+        .fold(0.0, crate::distance::nan_max);
     let advance = |w: &[f64]| wrap(w[w.len() - 1] - w[0]);
     Some(PerihelionDrift {
         galerkin_advance: advance(&galerkin),
@@ -332,7 +332,7 @@ impl NBodyReport {
                     .position_errors
                     .iter()
                     .map(|r| r[b])
-                    .fold(0.0, f64::max);
+                    .fold(0.0, crate::distance::nan_max);
                 (n.clone(), e)
             })
             .collect()
@@ -348,7 +348,7 @@ impl NBodyReport {
                     .invariant_errors
                     .iter()
                     .map(|r| r[i])
-                    .fold(0.0, f64::max);
+                    .fold(0.0, crate::distance::nan_max);
                 (n.clone(), e)
             })
             .collect()

@@ -85,9 +85,17 @@ impl Plan {
         self
     }
 
-    /// Check every output (usable, its name short enough, in a usable directory) and that,
-    /// once resolved, no two outputs are the same file and no output is an input.
+    /// Check every output (usable, its name short enough, in a usable directory), that once
+    /// resolved no two outputs are the same file and no output is an input, and that every
+    /// chart is named `.svg`.
     pub fn check(&self) -> Result<()> {
+        for (_, dir) in &self.dirs {
+            check_output_dir(dir)?;
+        }
+        for (_, path) in &self.outputs {
+            check_output_path(path)?;
+        }
+        self.ensure_distinct()?;
         for (role, path) in &self.charts {
             let svg = path
                 .extension()
@@ -99,13 +107,7 @@ impl Plan {
                 ));
             }
         }
-        for (_, dir) in &self.dirs {
-            check_output_dir(dir)?;
-        }
-        for (_, path) in &self.outputs {
-            check_output_path(path)?;
-        }
-        self.ensure_distinct()
+        Ok(())
     }
 
     /// Only the comparison of [`Plan::check`]: no two outputs, and no output and input, are

@@ -263,9 +263,8 @@ fn ensure_memory(
     let solve = 8.0 * (2.0 * classes * nodes * nb + 3.0 * unknowns * unknowns);
     let steps = spec.steps.unwrap_or(scene.method.steps) as f64;
     let n = spec.n.unwrap_or(scene.method.n);
-    let closing = steps
-        * request.periods as f64
-        * crate::memory::trajectory_bytes_per_step(n, layout.dim());
+    let closing =
+        steps * request.periods as f64 * crate::memory::trajectory_bytes_per_step(n, layout.dim());
     crate::memory::ensure_fits(
         format!(
             "the periodic analysis at K = {kmax} modes with {} closing periods",

@@ -133,7 +133,13 @@ pub fn ensure_memory(scene: &BuiltScene, config: &CompareConfig) -> Result<()> {
         .max()
         .unwrap_or(1)
         .max(1) as f64;
-    let n = config.ns.iter().chain(&config.fixed_ns).copied().max().unwrap_or(2);
+    let n = config
+        .ns
+        .iter()
+        .chain(&config.fixed_ns)
+        .copied()
+        .max()
+        .unwrap_or(2);
     let steps = base.steps as f64 * max_div;
     let horizon = base.h * base.steps as f64;
     let reference = Reference::estimated_bytes(system, &scene.initial, base.h / max_div, horizon);

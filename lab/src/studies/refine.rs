@@ -18,6 +18,7 @@ use crate::error::Result;
 use crate::fit::{AlgebraicFit, GeometricFit, fit_algebraic, fit_geometric};
 use crate::plot::{Chart, Series};
 use crate::scene::BuiltScene;
+use galerkin_vi::basis::BasisKind;
 use galerkin_vi::systems::System;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -208,6 +209,17 @@ fn refine_system<S: System + Sync>(
     })
 }
 
+/// The largest n a basis accepts (its `MAX_N`).
+fn max_n(kind: BasisKind) -> usize {
+    use galerkin_vi::basis::{ChebyshevLagrange, Fourier, Hermite, Legendre};
+    match kind {
+        BasisKind::Chebyshev => ChebyshevLagrange::MAX_N,
+        BasisKind::Legendre => Legendre::MAX_N,
+        BasisKind::Hermite => Hermite::MAX_N,
+        BasisKind::Fourier => Fourier::MAX_N,
+    }
+}
+
 /// Reject sweep values no run could use: n not a whole number ≥ 2; h longer than the
 /// horizon (a sweep over one truncated step fits a meaningless rate) or so short that the
 /// horizon needs more than [`galerkin_vi::integrator::MAX_STEPS`] steps.
@@ -225,9 +237,14 @@ fn check_values(
     for &x in values {
         match vary {
             Vary::N => {
-                if !(x >= 2.0 && x.fract() == 0.0 && x <= 4096.0) {
+                // The basis's own limit (1024 for the polynomial bases, 4096 for Fourier),
+                // so that the message names the limit that is enforced.
+                let max = max_n(base.basis);
+                if !(x >= 2.0 && x.fract() == 0.0 && x <= max as f64) {
                     return Err(bad(format!(
-                        "n = {x:e} is not a whole number of basis functions in 2…4096"
+                        "n = {x:e} is not a whole number of basis functions in 2…{max} (the \
+                         {} basis's limit)",
+                        base.basis
                     )));
                 }
             }

@@ -157,8 +157,8 @@ pub fn ensure_memory(scene: &BuiltScene, config: &ToleranceConfig) -> Result<()>
     let hi = config.ladder.last().copied().unwrap_or(64).max(lo);
     let reference = Reference::estimated_bytes(system, init, m.h, m.h * steps)
         + 2.0 * steps * (8 * d + 24) as f64;
-    let runs = steps
-        * (crate::memory::trajectory_bytes_per_step(hi + 8, d) + 16.0 * (hi - lo + 9) as f64);
+    let runs =
+        steps * (crate::memory::trajectory_bytes_per_step(hi + 8, d) + 16.0 * (hi - lo + 9) as f64);
     crate::memory::ensure_fits(
         format!("the tolerance study of {} steps", m.steps),
         reference + runs,
@@ -168,6 +168,14 @@ pub fn ensure_memory(scene: &BuiltScene, config: &ToleranceConfig) -> Result<()>
 
 /// Run the study on a scene (its method's basis, quadrature, h and steps).
 pub fn tolerance_study(scene: &BuiltScene, config: &ToleranceConfig) -> Result<ToleranceStudy> {
+    let ladder = &config.ladder;
+    if ladder.is_empty() || ladder.windows(2).any(|w| w[0] >= w[1]) {
+        // Not increasing, the fixed-n scan between its ends would be empty (all-NaN rows).
+        return Err(crate::error::LabError::InvalidArgument {
+            name: "ladder (--ladder)".into(),
+            reason: format!("{ladder:?}: the ladder of n must be non-empty and increasing"),
+        });
+    }
     let system = scene.euclidean()?;
     let (reference, label) = step_end_reference(system, scene)?;
     study_system(system, scene, config, &reference, label)
