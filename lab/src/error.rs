@@ -135,6 +135,15 @@ pub enum LabError {
         /// What to shrink.
         hint: String,
     },
+    /// A streamed run stopped by Ctrl-C (SIGINT) before step `step`: the rows before it are
+    /// kept (`kept` says where).
+    #[error("interrupted (Ctrl-C) before step {step}: {kept}")]
+    Interrupted {
+        /// The first step not computed.
+        step: usize,
+        /// Where the rows computed before it are.
+        kept: String,
+    },
     /// Serialisation failed.
     #[error("serialisation error: {0}")]
     Serialize(String),

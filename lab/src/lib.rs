@@ -32,6 +32,7 @@ pub mod dop853;
 pub mod ensemble;
 pub mod error;
 pub mod fit;
+pub mod interrupt;
 pub mod memory;
 pub mod nbody_report;
 pub mod nbody_scene;

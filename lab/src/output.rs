@@ -226,6 +226,34 @@ pub fn ensure_distinct(outputs: &[(&str, &Path)], inputs: &[(&str, &Path)]) -> R
     plan.ensure_distinct()
 }
 
+/// Remove the temporary files `PREFIX<PID>` of this destination left by runs that were
+/// killed (their process no longer exists), saying so on stderr. Only the tool's own pattern
+/// for this very destination is touched; where processes cannot be checked (no `/proc`),
+/// nothing is removed.
+fn remove_stale_temps(dir: &Path, prefix: &str) {
+    if !Path::new("/proc/self").exists() {
+        return;
+    }
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let Some(pid) = name.to_str().and_then(|n| n.strip_prefix(prefix)) else {
+            continue;
+        };
+        let dead = pid.parse::<u32>().is_ok_and(|pid| {
+            pid != std::process::id() && !Path::new(&format!("/proc/{pid}")).exists()
+        });
+        if dead && std::fs::remove_file(entry.path()).is_ok() {
+            eprintln!(
+                "removed {}, the temporary file of a run that was killed",
+                entry.path().display()
+            );
+        }
+    }
+}
+
 /// A file being written: bytes go to a temporary file next to the destination, renamed into
 /// place by [`AtomicFile::commit`]. Dropped without a commit, the temporary file is removed
 /// and the destination is untouched. Destinations that are devices or FIFOs (`/dev/null`,
@@ -254,11 +282,9 @@ impl AtomicFile {
         let name = dest
             .file_name()
             .ok_or_else(|| bad_output(dest, "the path has no file name"))?;
-        let temp = parent_dir(dest).join(format!(
-            ".{}.gvi-tmp-{}",
-            name.to_string_lossy(),
-            std::process::id()
-        ));
+        let prefix = format!(".{}.gvi-tmp-", name.to_string_lossy());
+        remove_stale_temps(parent_dir(dest), &prefix);
+        let temp = parent_dir(dest).join(format!("{prefix}{}", std::process::id()));
         let file = std::fs::File::create(&temp).map_err(io_err(&temp))?;
         Ok(AtomicFile {
             dest: dest.to_path_buf(),

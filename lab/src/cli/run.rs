@@ -252,6 +252,8 @@ pub fn run(args: RunArgs) -> Result<(), LabError> {
         args.plot.is_none() && args.format == Format::Csv && !scene.method.chooses_n() && !on_so3;
     let samples = RunOptions::default().curve_samples_per_step;
     let (summary, failure) = if streamed {
+        // The first Ctrl-C stops the stream after the step in progress; the rows are kept.
+        let _sigint = crate::interrupt::catch();
         let outcome = match &args.output {
             Some(path) => {
                 let mut file = AtomicFile::create(path)?;
@@ -271,6 +273,20 @@ pub fn run(args: RunArgs) -> Result<(), LabError> {
         run_in_memory(&scene, &args)?
     };
     eprintln!("{summary}");
+    if let Some(LabError::Interrupted { step, .. }) = failure {
+        let kept = match &args.output {
+            Some(path) => format!(
+                "the rows of steps 0…{} are written to {}",
+                step.saturating_sub(1),
+                path.display()
+            ),
+            None => format!(
+                "the rows of steps 0…{} went to stdout",
+                step.saturating_sub(1)
+            ),
+        };
+        return Err(LabError::Interrupted { step, kept });
+    }
     if let Some(e) = failure {
         return Err(e);
     }

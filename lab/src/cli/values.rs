@@ -87,7 +87,7 @@ impl FromStr for Range {
             }
             // Counted before they are made: a range is never cut short without a word.
             let count = ((hi / lo).ln() / f.ln() + 1e-9).floor() + 1.0;
-            if !(count <= 10_000.0) {
+            if count.is_nan() || count > 10_000.0 {
                 return Err(bad(&format!(
                     "{count:.0} values, more than 10000 (a larger factor)"
                 )));

@@ -104,6 +104,13 @@ fn stream_system(
     // The library refuses a tolerance-driven method (it keeps the whole trajectory) before
     // the first visit, so the header is written only for a run that starts.
     let visit = |s: StreamStep<'_>| -> Result<()> {
+        if crate::interrupt::requested() {
+            // Ctrl-C: stop here; the rows before this step are kept (the caller says where).
+            return Err(LabError::Interrupted {
+                step: s.step,
+                kept: "no row was written".into(),
+            });
+        }
         if s.step == 0 {
             writeln!(out, "{}", header.join(",")).map_err(io)?;
         }
