@@ -195,3 +195,16 @@ fn the_refine_limit_named_is_the_limit_enforced() {
     ]);
     fails_with(&o, "2…4096");
 }
+
+#[test]
+fn overflowing_kepler_elements_name_the_field_that_overflows() {
+    // --p0 0,1e300 blamed mu (= 1).
+    let o = gvi(&["run", "kepler", "--p0", "0,1e300", "--steps", "2"]);
+    fails_with(&o, "Kepler p0[1] = 1e300");
+    // Negative control: the same flags at ordinary values run (mu = 1e308 is still blamed on
+    // mu: `messages_name_the_field_and_the_value` in robustness.rs).
+    let o = gvi(&[
+        "run", "kepler", "--steps", "2", "--q0", "0.4,0", "--p0", "0,2",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
