@@ -208,3 +208,30 @@ fn overflowing_kepler_elements_name_the_field_that_overflows() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
 }
+
+#[test]
+fn a_lagrangian_singular_at_the_start_is_named_as_such() {
+    // log(x) at x = 0 is -inf: reported as a singular velocity Hessian before.
+    let dir = scratch("singular-l");
+    let scene = |x0: &str| {
+        format!(
+            "name = \"log\"\n[system]\ntype = \"lagrangian\"\ncoordinates = [\"x\"]\n\
+             lagrangian = \"x_dot^2/2 + log(x)\"\n[initial]\nq = [{x0}]\np = [0.5]\n\
+             [method]\nn = 8\nh = 0.1\nsteps = 3\n"
+        )
+    };
+    let bad = dir.join("bad.toml");
+    std::fs::write(&bad, scene("0.0")).unwrap();
+    let o = gvi(&["run", s(&bad)]);
+    fails_with(&o, "non-finite value in the Lagrangian");
+    assert!(
+        !stderr(&o).contains("singular velocity Hessian"),
+        "{}",
+        stderr(&o)
+    );
+    // Negative control: from x = 1 the same Lagrangian runs.
+    let good = dir.join("good.toml");
+    std::fs::write(&good, scene("1.0")).unwrap();
+    let o = gvi(&["run", s(&good)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
