@@ -33,6 +33,7 @@
 //! # Ok::<(), galerkin_vi_lab::error::LabError>(())
 //! ```
 
+use crate::distance::nan_max;
 use crate::error::{LabError, Result};
 use crate::scene::BuiltScene;
 use galerkin_vi::GalerkinIntegrator;
@@ -100,6 +101,21 @@ impl EnsembleOptions {
         }
         Ok(())
     }
+}
+
+/// The memory an ensemble of `count` members in dimension `d` with `momenta` momentum maps
+/// needs, estimated before it runs: every member's initial state and result (final state,
+/// errors, failure) and the CSV text of its row (about 25 bytes per number, written twice: the
+/// output and the one-thread comparison), checked against [`crate::memory::LIMIT_BYTES`].
+pub fn ensure_memory(count: usize, d: usize, momenta: usize) -> Result<()> {
+    let state = (16 * d + 2 * 24) as f64;
+    let numbers = (2 * d + 6 + momenta) as f64;
+    let per_member = 2.0 * state + 8.0 * momenta as f64 + 128.0 + 2.0 * 25.0 * numbers;
+    crate::memory::ensure_fits(
+        format!("an ensemble of {count} members"),
+        per_member * count as f64,
+        "the members' rows are held until written; fewer --count",
+    )
 }
 
 /// One member's initial state.
@@ -236,8 +252,23 @@ pub fn run_member<S: System, B: Basis, Q: Quadrature>(
     let mut jac = DMatrix::<f64>::zeros(d2, d2);
     let (mut q_next, mut p_next) = (vec![0.0; d], vec![0.0; d]);
     let mut log_growth = 0.0;
-    let mut failure = None;
+    // A start that overflows (σ = 1e300) has no meaningful errors: a failure, not zeros.
+    let start_values = q.iter().chain(&p).chain(&inv).chain(&j0);
+    let mut failure = start_values.clone().any(|x| !x.is_finite()).then(|| {
+        let bad = start_values
+            .copied()
+            .find(|x| !x.is_finite())
+            .unwrap_or(f64::NAN);
+        format!("the perturbed initial state or its invariants are not finite ({bad})")
+    });
     let mut completed = 0;
+    let steps = if failure.is_some() {
+        energy_error = f64::NAN;
+        momentum_errors.fill(f64::NAN);
+        0
+    } else {
+        steps
+    };
     for k in 0..steps {
         let next = (&mut q_next[..], &mut p_next[..]);
         if let Err(e) = gvi.step_jacobian_into(system, &mut ws, &mut tws, &q, &p, next, &mut jac, k)
@@ -257,10 +288,10 @@ pub fn run_member<S: System, B: Basis, Q: Quadrature>(
         }
         system.invariants(&q, &p, &mut inv);
         if let (Some(i), Some(e0)) = (energy_index, e0) {
-            energy_error = energy_error.max(((inv[i] - e0) / e0).abs());
+            energy_error = nan_max(energy_error, ((inv[i] - e0) / e0).abs());
         }
         for ((err, s), j0) in momentum_errors.iter_mut().zip(symmetries).zip(&j0) {
-            *err = err.max((momentum(s, &q, &p, &mut xi) - j0).abs());
+            *err = nan_max(*err, (momentum(s, &q, &p, &mut xi) - j0).abs());
         }
     }
     let time = completed as f64 * gvi.step_size();
@@ -297,7 +328,7 @@ pub struct Statistic {
     pub count: usize,
     /// Mean.
     pub mean: f64,
-    /// Sample standard deviation (0 for one member).
+    /// Sample standard deviation (0 for one member, NaN for none).
     pub std: f64,
     /// Minimum.
     pub min: f64,
@@ -311,10 +342,10 @@ impl Statistic {
         let v: Vec<f64> = values.into_iter().filter(|x| x.is_finite()).collect();
         let n = v.len();
         let mean = v.iter().sum::<f64>() / n as f64;
-        let var = if n > 1 {
-            v.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1) as f64
-        } else {
-            0.0
+        let var = match n {
+            0 => f64::NAN,
+            1 => 0.0,
+            _ => v.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1) as f64,
         };
         // With no finite value every statistic is NaN (not ±∞ from an empty fold).
         let extreme = |f: fn(f64, f64) -> f64| v.iter().copied().reduce(f).unwrap_or(f64::NAN);

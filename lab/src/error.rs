@@ -119,6 +119,31 @@ pub enum LabError {
         /// The documented limit.
         limit: f64,
     },
+    /// Work whose estimated memory is above the limit ([`crate::memory::ensure_fits`]);
+    /// refused before any work is done.
+    #[error(
+        "refusing {what}: it needs an estimated {estimate:.3e} bytes of memory, above the \
+         limit {limit:.0e} ({hint})"
+    )]
+    MemoryEstimate {
+        /// The work refused.
+        what: String,
+        /// Estimated bytes.
+        estimate: f64,
+        /// The limit ([`crate::memory::LIMIT_BYTES`]).
+        limit: f64,
+        /// What to shrink.
+        hint: String,
+    },
+    /// A streamed run stopped by Ctrl-C (SIGINT) before step `step`: the rows before it are
+    /// kept (`kept` says where).
+    #[error("interrupted (Ctrl-C) before step {step}: {kept}")]
+    Interrupted {
+        /// The first step not computed.
+        step: usize,
+        /// Where the rows computed before it are.
+        kept: String,
+    },
     /// Serialisation failed.
     #[error("serialisation error: {0}")]
     Serialize(String),
@@ -140,6 +165,13 @@ impl From<galerkin_vi::IntegrationFailure> for LabError {
 }
 
 impl LabError {
+    /// Whether this is a write to a pipe whose reader has gone (`gvi scenes | head -1`): not a
+    /// failure to report, the tool just stops (`main` exits quietly with status 141, as a
+    /// tool killed by SIGPIPE does).
+    pub fn is_broken_pipe(&self) -> bool {
+        matches!(self, LabError::Io { source, .. } if source.kind() == std::io::ErrorKind::BrokenPipe)
+    }
+
     /// The library error inside, if this is one.
     pub fn core(&self) -> Option<&GviError> {
         match self {

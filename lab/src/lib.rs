@@ -14,8 +14,9 @@
 //! - [`nbody_report`], [`periodic`], [`run::rigid_body`]: N-body accuracy reports, periodic orbits of
 //!   scenes, rigid-body runs.
 //! - [`ensemble`]: perturbed members of a scene in parallel (`gvi ensemble`).
-//! - [`fit`], [`plot`], [`output`], [`progress`]: rate fits, SVG charts, atomic file output and
-//!   progress bars.
+//! - [`fit`], [`plot`], [`output`], [`progress`], [`memory`]: rate fits, SVG charts, atomic
+//!   file output (every path checked by one [`output::Plan`]), progress bars and the memory
+//!   estimates every command makes before its work.
 //! - [`cli`]: the `gvi` command line.
 //!
 //! The guide (docs/guide/ in the repository) documents every command and study with the command
@@ -31,6 +32,8 @@ pub mod dop853;
 pub mod ensemble;
 pub mod error;
 pub mod fit;
+pub mod interrupt;
+pub mod memory;
 pub mod nbody_report;
 pub mod nbody_scene;
 pub mod output;

@@ -10,7 +10,10 @@
 use crate::error::LabError;
 use crate::error::Result;
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::{Component, Path, PathBuf};
+
+mod plan;
+pub use plan::Plan;
 
 /// Pseudo-filesystems whose files are not outputs (writing there fails or does harm).
 const FORBIDDEN_ROOTS: [&str; 2] = ["/proc", "/sys"];
@@ -53,35 +56,79 @@ fn is_special(path: &Path) -> bool {
     std::fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir())
 }
 
-/// The absolute, symlink-resolved form of a path that may not exist yet: its deepest
-/// existing ancestor canonicalised, the rest appended.
+/// The absolute, symlink-resolved form of a path that may not exist yet, as the kernel will
+/// see it once missing directories are created: components are taken left to right, every
+/// existing prefix is canonicalised (symlinks resolved, so a later `..` goes to the real
+/// parent) and `..` after a prefix that does not exist yet drops it lexically (`nope/../x` is
+/// `x`, as it is once `nope` has been created).
 pub fn resolve(path: &Path) -> PathBuf {
-    if let Ok(p) = path.canonicalize() {
-        return p;
-    }
     let abs = if path.is_absolute() {
         path.to_path_buf()
     } else {
         std::env::current_dir().unwrap_or_default().join(path)
     };
-    let mut rest = Vec::new();
-    let mut cur = abs.as_path();
-    loop {
-        if let Ok(c) = cur.canonicalize() {
-            let mut out = c;
-            for part in rest.iter().rev() {
-                out.push(part);
+    let mut out = PathBuf::new();
+    for part in abs.components() {
+        match part {
+            Component::Prefix(_) | Component::RootDir => out.push(part),
+            Component::CurDir => {}
+            Component::ParentDir => {
+                out.pop();
             }
-            return out;
-        }
-        match (cur.parent(), cur.file_name()) {
-            (Some(parent), Some(name)) => {
-                rest.push(name.to_os_string());
-                cur = parent;
+            Component::Normal(name) => {
+                out.push(name);
+                if let Ok(c) = out.canonicalize() {
+                    out = c;
+                }
             }
-            _ => return abs,
         }
     }
+    out
+}
+
+/// The longest file name an output may have: the atomic writer's temporary file is
+/// `.NAME.gvi-tmp-PID`, 17 bytes longer at most (a PID has up to 7 digits), and a name has
+/// at most 255 bytes on the usual filesystems.
+pub const MAX_OUTPUT_NAME_BYTES: usize = 255 - TEMP_NAME_OVERHEAD;
+
+/// Bytes the temporary name adds to a file name: `.`, `.gvi-tmp-` and up to 7 PID digits.
+const TEMP_NAME_OVERHEAD: usize = 1 + ".gvi-tmp-".len() + 7;
+
+/// Refuse a path with a directory name over 255 bytes or a file name over
+/// [`MAX_OUTPUT_NAME_BYTES`] (`file` false for a directory: every component may have 255).
+fn check_name_lengths(path: &Path, file: bool) -> Result<()> {
+    let parts: Vec<&std::ffi::OsStr> = path
+        .components()
+        .filter_map(|c| match c {
+            Component::Normal(n) => Some(n),
+            _ => None,
+        })
+        .collect();
+    for (i, name) in parts.iter().enumerate() {
+        let len = name.as_encoded_bytes().len();
+        let last = i + 1 == parts.len();
+        let max = if file && last {
+            MAX_OUTPUT_NAME_BYTES
+        } else {
+            255
+        };
+        if len > max {
+            let why = if file && last {
+                format!(
+                    "the file name has {len} bytes; at most {max} are allowed (255, less the \
+                     {TEMP_NAME_OVERHEAD} of the temporary name .NAME.gvi-tmp-PID it is written \
+                     through)"
+                )
+            } else {
+                format!("a directory name has {len} bytes; at most 255 are allowed")
+            };
+            return Err(bad_output(path, why));
+        }
+    }
+    if path.as_os_str().as_encoded_bytes().len() + TEMP_NAME_OVERHEAD >= 4096 {
+        return Err(bad_output(path, "the path is longer than 4096 bytes"));
+    }
+    Ok(())
 }
 
 /// Check an output file path before any work: not a directory, not under `/proc` or `/sys`,
@@ -93,6 +140,9 @@ pub fn check_output_path(path: &Path) -> Result<()> {
     }
     if path.is_dir() {
         return Err(bad_output(path, "it is a directory, not a file"));
+    }
+    if !is_special(path) {
+        check_name_lengths(path, true)?;
     }
     let resolved = resolve(path);
     if FORBIDDEN_ROOTS.iter().any(|r| resolved.starts_with(r)) {
@@ -122,6 +172,7 @@ pub fn check_output_dir(dir: &Path) -> Result<()> {
     if dir.exists() && !dir.is_dir() {
         return Err(bad_output(dir, "it is a file, not a directory"));
     }
+    check_name_lengths(dir, false)?;
     let resolved = resolve(dir);
     if FORBIDDEN_ROOTS.iter().any(|r| resolved.starts_with(r)) {
         return Err(bad_output(
@@ -161,35 +212,46 @@ fn probe_dir(dir: &Path) -> Result<()> {
 }
 
 /// Refuse output paths that coincide with each other or with an input file (a scene): after
-/// resolving symlinks and relative paths, every output must be distinct from every other path.
-/// `outputs` and `inputs` are (role, path) pairs; the roles name the flags in the message.
+/// resolving symlinks, `..` and relative paths ([`resolve`]), every output must be distinct
+/// from every other path. `outputs` and `inputs` are (role, path) pairs; the roles name the
+/// flags in the message. The comparison of [`Plan::check`], without its per-path checks.
 pub fn ensure_distinct(outputs: &[(&str, &Path)], inputs: &[(&str, &Path)]) -> Result<()> {
-    let resolved: Vec<PathBuf> = outputs.iter().map(|(_, p)| resolve(p)).collect();
-    for (i, (role, path)) in outputs.iter().enumerate() {
-        if is_special(path) {
+    let mut plan = Plan::new();
+    for (role, path) in outputs {
+        plan.output(*role, path);
+    }
+    for (role, path) in inputs {
+        plan.input(*role, path);
+    }
+    plan.ensure_distinct()
+}
+
+/// Remove the temporary files `PREFIX<PID>` of this destination left by runs that were
+/// killed (their process no longer exists), saying so on stderr. Only the tool's own pattern
+/// for this very destination is touched; where processes cannot be checked (no `/proc`),
+/// nothing is removed.
+fn remove_stale_temps(dir: &Path, prefix: &str) {
+    if !Path::new("/proc/self").exists() {
+        return;
+    }
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let Some(pid) = name.to_str().and_then(|n| n.strip_prefix(prefix)) else {
             continue;
-        }
-        for (j, (other, _)) in outputs.iter().enumerate().skip(i + 1) {
-            if resolved[i] == resolved[j] {
-                return Err(bad_output(
-                    path,
-                    format!("{role} and {other} name the same file; give them different paths"),
-                ));
-            }
-        }
-        for (other, input) in inputs {
-            if resolve(input) == resolved[i] {
-                return Err(bad_output(
-                    path,
-                    format!(
-                        "{role} is the {other} read by this command; writing it would destroy \
-                         the input"
-                    ),
-                ));
-            }
+        };
+        let dead = pid.parse::<u32>().is_ok_and(|pid| {
+            pid != std::process::id() && !Path::new(&format!("/proc/{pid}")).exists()
+        });
+        if dead && std::fs::remove_file(entry.path()).is_ok() {
+            eprintln!(
+                "removed {}, the temporary file of a run that was killed",
+                entry.path().display()
+            );
         }
     }
-    Ok(())
 }
 
 /// A file being written: bytes go to a temporary file next to the destination, renamed into
@@ -220,11 +282,9 @@ impl AtomicFile {
         let name = dest
             .file_name()
             .ok_or_else(|| bad_output(dest, "the path has no file name"))?;
-        let temp = parent_dir(dest).join(format!(
-            ".{}.gvi-tmp-{}",
-            name.to_string_lossy(),
-            std::process::id()
-        ));
+        let prefix = format!(".{}.gvi-tmp-", name.to_string_lossy());
+        remove_stale_temps(parent_dir(dest), &prefix);
+        let temp = parent_dir(dest).join(format!("{prefix}{}", std::process::id()));
         let file = std::fs::File::create(&temp).map_err(io_err(&temp))?;
         Ok(AtomicFile {
             dest: dest.to_path_buf(),
@@ -284,6 +344,13 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
 /// Write a text file atomically ([`write_atomic`]).
 pub fn write_file(path: &Path, text: &str) -> Result<()> {
     write_atomic(path, text.as_bytes())
+}
+
+/// Write text to stdout, returning a typed error instead of panicking as `print!` does: a
+/// full device is an [`LabError::Io`] on `<stdout>`, a closed pipe one whose
+/// [`LabError::is_broken_pipe`] is true.
+pub fn print(text: &str) -> Result<()> {
+    write_output(None, text)
 }
 
 /// Write text to a file atomically ([`write_atomic`]) or, with no path, to stdout.

@@ -345,7 +345,8 @@ fn run_system(system: &AnySystem, scene: &BuiltScene, options: RunOptions) -> Re
         (None, None)
     };
     let n_chart = (options.chart && !trajectory.step_n.is_empty()).then(|| {
-        let pts: Vec<(f64, f64)> = (0..trajectory.steps())
+        let pts: Vec<(f64, f64)> = chart_indices(trajectory.steps())
+            .into_iter()
             .map(|k| {
                 (
                     trajectory.time(k) + 0.5 * trajectory.h,
@@ -379,6 +380,16 @@ fn run_system(system: &AnySystem, scene: &BuiltScene, options: RunOptions) -> Re
 
 pub use crate::error::fmt_number;
 
+/// The start checks of a run, for every command built from a scene: coincident bodies (a
+/// collision) and non-finite initial invariants (a singular start such as Kepler at the
+/// origin), with the messages `gvi run` gives.
+pub(crate) fn check_start<S: System>(system: &S, q0: &[f64], p0: &[f64], t0: f64) -> Result<()> {
+    // In the run's order: the exact solution's own errors (Kepler elements that overflow
+    // name `mu`) come before the monitor's.
+    system.exact_solution(t0, q0, p0)?;
+    Monitor::new(system, q0, p0, t0).map(|_| ())
+}
+
 /// Keep the first `states` step ends (and the `states − 1` steps between them).
 fn truncate(traj: &mut Trajectory, states: usize) {
     let steps = states.saturating_sub(1);
@@ -389,6 +400,28 @@ fn truncate(traj: &mut Trajectory, states: usize) {
     traj.step_n.truncate(steps);
 }
 
+/// Times at which a chart samples a trajectory's Galerkin curves: `per_step` per step while
+/// that gives at most [`crate::plot::MAX_POINTS_PER_SERIES`] points, otherwise that many
+/// evenly spaced over the run (a chart cannot show more; the run's table has every step).
+pub fn chart_times(traj: &Trajectory, per_step: usize) -> Vec<f64> {
+    let max = crate::plot::MAX_POINTS_PER_SERIES;
+    if traj.steps().saturating_mul(per_step.max(1)) < max {
+        return traj.sample_times(per_step);
+    }
+    let (t0, t1) = (traj.time(0), traj.end_time());
+    let m = (max - 1) as f64;
+    (0..max).map(|i| t0 + (t1 - t0) * i as f64 / m).collect()
+}
+
+/// Indices of the step ends a chart marks: all of them, or evenly strided to at most
+/// [`crate::plot::MAX_POINTS_PER_SERIES`] (the last kept).
+pub fn chart_indices(states: usize) -> Vec<usize> {
+    crate::plot::thin(
+        &(0..states).collect::<Vec<_>>(),
+        crate::plot::MAX_POINTS_PER_SERIES,
+    )
+}
+
 /// Orbit (2-D) or q(t) (1-D) chart: Galerkin curves, step ends and, if known, the exact
 /// solution.
 fn run_chart<S: System>(
@@ -397,7 +430,7 @@ fn run_chart<S: System>(
     traj: &Trajectory,
     exact: Option<&galerkin_vi::systems::ExactSolution>,
 ) -> Result<Chart> {
-    let samples = traj.sample_times(32);
+    let samples = chart_times(traj, 32);
     let title = format!("{} — {}", scene.name, scene.description);
     let two_d = system.dim() >= 2;
     let point = |q: &[f64], t: f64| if two_d { (q[0], q[1]) } else { (t, q[0]) };
@@ -405,7 +438,8 @@ fn run_chart<S: System>(
     for &t in &samples {
         curve.push(point(&traj.position_at(t)?, t));
     }
-    let ends: Vec<(f64, f64)> = (0..traj.q.len())
+    let ends: Vec<(f64, f64)> = chart_indices(traj.q.len())
+        .into_iter()
         .map(|k| point(&traj.q[k], traj.time(k)))
         .collect();
     let mut chart = if two_d {

@@ -135,9 +135,17 @@ impl System for Kepler {
                     ("p0[1]", p0[1]),
                     ("mu", self.mu),
                 ];
+                // A non-finite field if there is one; otherwise the one of the most extreme
+                // magnitude (p0 = 1e300 overflows the elements, not mu = 1).
+                let extremity = |v: f64| if v == 0.0 { 0.0 } else { v.abs().log10().abs() };
                 let (name, value) = fields
                     .into_iter()
                     .find(|(_, v)| !v.is_finite())
+                    .or_else(|| {
+                        fields
+                            .into_iter()
+                            .max_by(|a, b| extremity(a.1).total_cmp(&extremity(b.1)))
+                    })
                     .unwrap_or(("mu", self.mu));
                 Err(GviError::InvalidParameter {
                     name: format!("Kepler {name}"),

@@ -4,7 +4,7 @@
 use super::run::{SceneArgs, load_scene};
 use crate::ensemble::{EnsembleOptions, perturbed_members, run_members};
 use crate::error::LabError;
-use crate::output::{check_output_path, ensure_distinct, write_file, write_output};
+use crate::output::{Plan, write_file, write_output};
 use clap::Args;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -75,17 +75,17 @@ pub fn run_ensemble_command(args: EnsembleArgs) -> Result<(), LabError> {
         None => std::thread::available_parallelism().map_or(1, |n| n.get()),
     };
     let summary_file = args.output.as_deref().map(summary_path);
-    if let (Some(o), Some(s)) = (&args.output, &summary_file) {
-        check_output_path(o)?;
-        check_output_path(s)?;
-        let scene_path = Path::new(&args.scene.scene);
-        let inputs: Vec<(&str, &Path)> = if scene_path.is_file() {
-            vec![("scene file", scene_path)]
-        } else {
-            Vec::new()
-        };
-        ensure_distinct(&[("--output", o), ("the summary", s)], &inputs)?;
-    }
+    Plan::new()
+        .output_opt("--output", args.output.as_deref())
+        .output_opt("the summary", summary_file.as_deref())
+        .scene(&args.scene.scene)
+        .check()?;
+    let system = scene.euclidean()?;
+    crate::ensemble::ensure_memory(
+        args.count,
+        scene.initial.q.len(),
+        galerkin_vi::systems::System::symmetries(system).len(),
+    )?;
     let members = perturbed_members(&scene.initial.q, &scene.initial.p, &options)?;
 
     let pb = crate::progress::bar(members.len(), "ensemble");
@@ -101,6 +101,14 @@ pub fn run_ensemble_command(args: EnsembleArgs) -> Result<(), LabError> {
     eprintln!("{}", ensemble.to_string().trim_end());
     if let Some(s) = &summary_file {
         eprintln!("  summary written to {}", s.display());
+    }
+    if ensemble.completed().next().is_none() {
+        // The rows (with each failure) are written; but there is no result to report.
+        let first = ensemble.members.iter().find_map(|m| m.failure.clone());
+        return Err(LabError::AllRunsFailed {
+            runs: ensemble.members.len(),
+            first: first.unwrap_or_default(),
+        });
     }
 
     // Throughput: the first members again on one thread, in the same process. The results

@@ -98,11 +98,12 @@ pub fn main_with(cli: Cli) -> Result<(), LabError> {
         Command::Periodic(args) => periodic::run_periodic(*args),
         Command::Ensemble(args) => ensemble::run_ensemble_command(*args),
         Command::Scenes => {
+            let mut text = String::new();
             for name in crate::scene::Scene::builtin_names() {
                 let scene = crate::scene::Scene::load(name)?;
-                println!("{name:<20} {}", scene.description);
+                text.push_str(&format!("{name:<20} {}\n", scene.description));
             }
-            Ok(())
+            crate::output::print(&text)
         }
     }
 }

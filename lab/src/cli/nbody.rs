@@ -1,7 +1,8 @@
 //! `gvi nbody-report SCENE`: accuracy of an N-body run against a Gauss-collocation reference.
 
 use crate::error::LabError;
-use crate::nbody_report::{ReportOptions, nbody_report};
+use crate::nbody_report::{ReportOptions, file_names, nbody_report};
+use crate::output::Plan;
 use crate::scene::{Overrides, Scene};
 use clap::Args;
 use std::path::PathBuf;
@@ -55,14 +56,19 @@ pub fn run_nbody_report(args: NBodyReportArgs) -> Result<(), LabError> {
             ..Overrides::default()
         })
         .build()?;
+    Plan::new()
+        .output_dir("--out", &args.out, &file_names(&scene.name))
+        .scene(&args.scene)
+        .check()?;
     let options = ReportOptions {
         stages: args.stages,
         substeps: args.substeps,
         cross_check: !args.no_cross_check,
     };
+    crate::nbody_report::ensure_memory(&scene, &options)?;
     let report = nbody_report(&scene, options)?;
     let files = report.write_to(&args.out)?;
-    print!("{report}");
+    crate::output::print(&report.to_string())?;
     eprintln!("wrote {} in {}", files.join(", "), args.out.display());
     Ok(())
 }

@@ -4,6 +4,7 @@ use super::run::Format;
 use super::values;
 use super::write_output;
 use crate::error::LabError;
+use crate::output::Plan;
 use crate::periodic::{PeriodicRequest, analyse_scene};
 use crate::scene::Scene;
 use clap::Args;
@@ -36,6 +37,12 @@ pub struct PeriodicArgs {
 
 pub fn run_periodic(args: PeriodicArgs) -> Result<(), LabError> {
     let scene = Scene::load(&args.scene)?.build()?;
+    Plan::new()
+        .output_opt("--output", args.output.as_deref())
+        .chart_opt("--plot", args.plot.as_deref())
+        .chart_opt("--refine-plot", args.refine_plot.as_deref())
+        .scene(&args.scene)
+        .check()?;
     let mut request = PeriodicRequest {
         periods: args.periods,
         ..PeriodicRequest::default()
@@ -51,7 +58,7 @@ pub fn run_periodic(args: PeriodicArgs) -> Result<(), LabError> {
     write_output(args.output.as_deref(), &text)?;
     let summary = report.summary();
     if args.output.is_some() {
-        print!("{summary}");
+        crate::output::print(&summary)?;
     } else {
         eprint!("{summary}");
     }

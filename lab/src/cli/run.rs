@@ -3,7 +3,7 @@
 use super::values;
 use super::write_output;
 use crate::error::LabError;
-use crate::output::{AtomicFile, check_output_path, ensure_distinct};
+use crate::output::{AtomicFile, Plan};
 use crate::run::stream::{bytes_per_step, stream_scene};
 use crate::run::{RunOptions, RunSummary, run_scene};
 use crate::scene::{BuiltScene, BuiltSystem, Overrides, Scene};
@@ -130,16 +130,80 @@ impl RunArgs {
     }
 }
 
-/// Load the scene named on the command line, apply the flag overrides and build it (once).
+/// Load the scene named on the command line, apply the flag overrides and build it (once);
+/// flags the built scene would ignore are refused ([`refuse_unused_scene_flags`]).
 pub fn load_scene(a: &SceneArgs) -> Result<BuiltScene, LabError> {
-    Scene::load(&a.scene)?
+    let scene = Scene::load(&a.scene)?
         .with_overrides(&a.overrides()?)
-        .build()
+        .build()?;
+    refuse_unused_scene_flags(a, &scene)?;
+    Ok(scene)
+}
+
+fn ignored(flag: &str, reason: String) -> LabError {
+    LabError::InvalidArgument {
+        name: flag.to_string(),
+        reason,
+    }
+}
+
+/// Refuse the scene flags a built scene would ignore: `--retraction` outside the rigid-body
+/// scenes (only the Lie group integrator has a chart), `--solver` on them (that integrator has
+/// no stage solver to choose).
+pub fn refuse_unused_scene_flags(a: &SceneArgs, scene: &BuiltScene) -> Result<(), LabError> {
+    let rigid = matches!(scene.system, BuiltSystem::RigidBody(_));
+    if a.retraction.is_some() && !rigid {
+        return Err(ignored(
+            "--retraction",
+            format!(
+                "{} is not a rigid-body scene; only those (rigid-body, heavy-top, pendulum-3d, \
+                 type = \"rigid-body\" | \"heavy-top\") run on SO(3) with a retraction",
+                scene.name
+            ),
+        ));
+    }
+    if a.solver.is_some() && rigid {
+        return Err(ignored(
+            "--solver",
+            format!(
+                "{} is a rigid-body scene, run by the Lie group integrator, which has no stage \
+                 solver to choose",
+                scene.name
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Refuse the method flags a `--tol` run would ignore: n is chosen per step from the ladder,
+/// each rung with its quadrature's default points, so `--n`, `--quad-points` and
+/// `--economical` have no effect.
+fn refuse_fixed_n_flags_with_tol(args: &RunArgs) -> Result<(), LabError> {
+    if args.tol.is_none() {
+        return Ok(());
+    }
+    let a = &args.scene;
+    for (flag, given) in [
+        ("--n", a.n.is_some()),
+        ("--quad-points", a.quad_points.is_some()),
+        ("--economical", a.economical),
+    ] {
+        if given {
+            return Err(ignored(
+                flag,
+                format!(
+                    "with --tol, n is chosen per step from the ladder (--ladder), each rung \
+                     with its quadrature's default points; {flag} would be ignored"
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// In-memory runs whose estimated memory exceeds this are refused up front (streamed runs
 /// hold one row at a time and have no such limit).
-const MEMORY_LIMIT_BYTES: f64 = 4e9;
+const MEMORY_LIMIT_BYTES: f64 = crate::memory::LIMIT_BYTES;
 
 /// `<stem><suffix>.svg` next to `path`.
 fn sibling(path: &Path, suffix: &str, fallback: &str) -> PathBuf {
@@ -151,9 +215,11 @@ fn sibling(path: &Path, suffix: &str, fallback: &str) -> PathBuf {
 }
 
 pub fn run(args: RunArgs) -> Result<(), LabError> {
+    refuse_fixed_n_flags_with_tol(&args)?;
     let scene = Scene::load(&args.scene.scene)?
         .with_overrides(&args.overrides()?)
         .build()?;
+    refuse_unused_scene_flags(&args.scene, &scene)?;
     // Every output is checked before any work: usable, distinct, and not the scene file.
     let mut outputs: Vec<(&str, PathBuf)> = Vec::new();
     if let Some(o) = &args.output {
@@ -169,17 +235,15 @@ pub fn run(args: RunArgs) -> Result<(), LabError> {
             outputs.push(("the n chart", sibling(p, "-n", "run")));
         }
     }
-    for (_, path) in &outputs {
-        check_output_path(path)?;
+    let mut plan = Plan::new();
+    for (role, path) in &outputs {
+        if *role == "--output" {
+            plan.output(*role, path);
+        } else {
+            plan.chart(*role, path);
+        }
     }
-    let scene_path = Path::new(&args.scene.scene);
-    let inputs: Vec<(&str, &Path)> = if scene_path.is_file() {
-        vec![("scene file", scene_path)]
-    } else {
-        Vec::new()
-    };
-    let out_refs: Vec<(&str, &Path)> = outputs.iter().map(|(r, p)| (*r, p.as_path())).collect();
-    ensure_distinct(&out_refs, &inputs)?;
+    plan.scene(&args.scene.scene).check()?;
 
     // Rigid bodies run on SO(3) by their own integrator (galerkin_vi::lie), in memory.
     let on_so3 = matches!(scene.system, BuiltSystem::RigidBody(_));
@@ -188,6 +252,8 @@ pub fn run(args: RunArgs) -> Result<(), LabError> {
         args.plot.is_none() && args.format == Format::Csv && !scene.method.chooses_n() && !on_so3;
     let samples = RunOptions::default().curve_samples_per_step;
     let (summary, failure) = if streamed {
+        // The first Ctrl-C stops the stream after the step in progress; the rows are kept.
+        let _sigint = crate::interrupt::catch();
         let outcome = match &args.output {
             Some(path) => {
                 let mut file = AtomicFile::create(path)?;
@@ -207,6 +273,20 @@ pub fn run(args: RunArgs) -> Result<(), LabError> {
         run_in_memory(&scene, &args)?
     };
     eprintln!("{summary}");
+    if let Some(LabError::Interrupted { step, .. }) = failure {
+        let kept = match &args.output {
+            Some(path) => format!(
+                "the rows of steps 0…{} are written to {}",
+                step.saturating_sub(1),
+                path.display()
+            ),
+            None => format!(
+                "the rows of steps 0…{} went to stdout",
+                step.saturating_sub(1)
+            ),
+        };
+        return Err(LabError::Interrupted { step, kept });
+    }
     if let Some(e) = failure {
         return Err(e);
     }

@@ -20,7 +20,9 @@ pub struct ScalingArgs {
 
 pub fn run_solver_scaling(args: ScalingArgs) -> Result<(), LabError> {
     if let Some(dir) = &args.out {
-        crate::output::check_output_dir(dir)?;
+        crate::output::Plan::new()
+            .output_dir("--out", dir, &crate::studies::scaling::FILES)
+            .check()?;
     }
     let mut config = if args.quick {
         ScalingConfig::quick()
@@ -36,9 +38,9 @@ pub fn run_solver_scaling(args: ScalingArgs) -> Result<(), LabError> {
             for path in study.write(dir)? {
                 eprintln!("wrote {}", path.display());
             }
-            print!("{}", study.summary());
+            crate::output::print(&study.summary())?;
         }
-        None => print!("{}", study.summary()),
+        None => crate::output::print(&study.summary())?,
     }
     Ok(())
 }

@@ -3,6 +3,7 @@
 use super::run::{SceneArgs, load_scene};
 use super::values::Range;
 use crate::error::LabError;
+use crate::output::Plan;
 use crate::studies::refine::{Vary, refine};
 use crate::studies::reproduce::{Size, reproduce};
 use clap::{Args, ValueEnum};
@@ -45,7 +46,10 @@ pub fn run_refine(args: RefineArgs) -> Result<(), LabError> {
             super::refuse_ignored("refine --vary h", r, &["--h"], "h is swept (--range)")?
         }
     }
-    crate::output::check_output_dir(&dir)?;
+    Plan::new()
+        .output_dir("--out", &dir, &crate::studies::refine::FILES)
+        .scene(&args.run.scene)
+        .check()?;
     let scene = load_scene(&args.run)?;
     let vary = match args.vary {
         VaryArg::N => Vary::N,
@@ -83,7 +87,9 @@ pub struct ReproduceArgs {
 
 pub fn run_reproduce(args: ReproduceArgs) -> Result<(), LabError> {
     let dir = args.out.unwrap_or_else(|| PathBuf::from("out/reproduce"));
-    crate::output::check_output_dir(&dir)?;
+    Plan::new()
+        .output_dir("--out", &dir, &["summary.md", "summary.json"])
+        .check()?;
     let size = if args.quick { Size::Quick } else { Size::Full };
     let rep = reproduce(&dir, size)?;
     eprint!("{}", rep.markdown());
@@ -130,7 +136,10 @@ pub fn run_compare_bases(args: CompareBasesArgs) -> Result<(), LabError> {
         "it sweeps every basis and quadrature over n (set n with --range and the quadratures \
          with --quadratures)",
     )?;
-    crate::output::check_output_dir(&dir)?;
+    Plan::new()
+        .output_dir("--out", &dir, &crate::studies::compare_bases::FILES)
+        .scene(&args.run.scene)
+        .check()?;
     let scene = load_scene(&args.run)?;
     let ns: Vec<usize> = args
         .range

@@ -2,6 +2,7 @@
 
 use super::run::{SceneArgs, load_scene};
 use crate::error::LabError;
+use crate::output::Plan;
 use crate::studies::compare_refinement::{CompareConfig, compare_refinement};
 use crate::studies::peers::QuadPoints;
 use crate::studies::stability::{Class, StabilityConfig, stability};
@@ -27,7 +28,7 @@ pub struct WorkPrecisionArgs {
     pub horizon: Option<f64>,
     /// Timed repetitions per configuration (the median is reported; default 5, 1 with
     /// --long).
-    #[arg(long)]
+    #[arg(long, value_parser = super::values::count)]
     pub repeats: Option<usize>,
     /// A reduced sweep (seconds), for smoke tests.
     #[arg(long)]
@@ -69,6 +70,30 @@ pub struct WorkPrecisionArgs {
     pub run: SceneArgs,
 }
 
+/// `--write-reference` writes the reference at the study's sample times (set by the scene,
+/// `--horizon`, `--quick` and `--long`) and runs no sweep: the sweep's flags would be ignored.
+fn refuse_study_flags_with_write_reference(args: &WorkPrecisionArgs) -> Result<(), LabError> {
+    for (flag, given) in [
+        ("--bases", args.bases.is_some()),
+        ("--ns", args.ns.is_some()),
+        ("--divisors", args.divisors.is_some()),
+        ("--quadratures", args.quadratures.is_some()),
+        ("--repeats", args.repeats.is_some()),
+        ("--external", !args.external.is_empty()),
+        ("--out", args.out.is_some()),
+    ] {
+        if given {
+            return Err(LabError::InvalidArgument {
+                name: flag.into(),
+                reason: "--write-reference writes the reference positions and runs no sweep; \
+                         this flag would be ignored"
+                    .into(),
+            });
+        }
+    }
+    Ok(())
+}
+
 pub fn run_work_precision(args: WorkPrecisionArgs) -> Result<(), LabError> {
     let r = &args.run;
     super::refuse_ignored(
@@ -85,14 +110,22 @@ pub fn run_work_precision(args: WorkPrecisionArgs) -> Result<(), LabError> {
         "it sweeps the bases, n and the quadrature point counts (--bases, --ns, \
          --quadratures) with the Gauss–Legendre rule and the auto stage solver",
     )?;
-    match &args.write_reference {
-        Some(path) => crate::output::check_output_path(path)?,
-        None => crate::output::check_output_dir(
-            args.out
-                .as_deref()
-                .unwrap_or(std::path::Path::new("out/work-precision")),
-        )?,
+    if args.write_reference.is_some() {
+        refuse_study_flags_with_write_reference(&args)?;
     }
+    let dir = args
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("out/work-precision"));
+    let mut plan = Plan::new();
+    match &args.write_reference {
+        Some(path) => plan.output("--write-reference", path),
+        None => plan.output_dir("--out", &dir, &crate::studies::work_precision::FILES),
+    };
+    for path in &args.external {
+        plan.input("--external file", path);
+    }
+    plan.scene(&args.run.scene).check()?;
     let scene = load_scene(&args.run)?;
     let mut config = if args.quick {
         WorkPrecisionConfig::quick()
@@ -104,7 +137,7 @@ pub fn run_work_precision(args: WorkPrecisionArgs) -> Result<(), LabError> {
     if args.horizon.is_some() {
         config.horizon = args.horizon;
     }
-    config.repeats = args.repeats.unwrap_or(if args.long { 1 } else { 5 }).max(1);
+    config.repeats = args.repeats.unwrap_or(if args.long { 1 } else { 5 });
     if let Some(b) = &args.bases {
         config.bases = b.clone();
     }
@@ -146,9 +179,6 @@ pub fn run_work_precision(args: WorkPrecisionArgs) -> Result<(), LabError> {
     for (path, points) in external {
         study.merge_external(&path.display().to_string(), points);
     }
-    let dir = args
-        .out
-        .unwrap_or_else(|| PathBuf::from("out/work-precision"));
     let files = study.write(&dir)?;
     eprint!("{}", study.summary());
     for f in files {
@@ -174,7 +204,10 @@ pub struct StabilityArgs {
 
 pub fn run_stability(args: StabilityArgs) -> Result<(), LabError> {
     let dir = args.out.unwrap_or_else(|| PathBuf::from("out/stability"));
-    crate::output::check_output_dir(&dir)?;
+    Plan::new()
+        .output_dir("--out", &dir, &crate::studies::stability::FILES)
+        .scene(&args.run.scene)
+        .check()?;
     // The map sweeps h and n itself and takes its steps from --cell-steps.
     for (flag, given) in [
         ("--h", args.run.h.is_some()),
@@ -274,13 +307,17 @@ pub fn run_compare_refinement(args: CompareRefinementArgs) -> Result<(), LabErro
         &["--n", "--basis", "--quad-points", "--economical"],
         "it sweeps the bases and n with the quadrature's default number of points",
     )?;
-    crate::output::check_output_dir(&dir)?;
+    Plan::new()
+        .output_dir("--out", &dir, &crate::studies::compare_refinement::FILES)
+        .scene(&args.run.scene)
+        .check()?;
     let scene = load_scene(&args.run)?;
     let config = if args.quick {
         CompareConfig::quick()
     } else {
         CompareConfig::full()
     };
+    crate::studies::compare_refinement::ensure_memory(&scene, &config)?;
     let study = compare_refinement(&scene, &config)?;
     let files = study.write(&dir)?;
     eprintln!(

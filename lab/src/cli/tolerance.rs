@@ -2,8 +2,9 @@
 
 use super::values::{self, Tolerances};
 use crate::error::LabError;
+use crate::output::Plan;
 use crate::scene::{Overrides, Scene};
-use crate::studies::tolerance::{ToleranceConfig, tolerance_study};
+use crate::studies::tolerance::{ToleranceConfig, file_names, tolerance_study};
 use clap::Args;
 use galerkin_vi::adaptive::ErrorControl;
 use std::path::PathBuf;
@@ -48,6 +49,7 @@ pub fn run_tolerance_study(args: ToleranceArgs) -> Result<(), LabError> {
     if let Some(dir) = &args.out {
         crate::output::check_output_dir(dir)?;
     }
+    let scene_arg = args.scene.as_str();
     let mut scene = Scene::load(&args.scene)?;
     let mut overrides = Overrides {
         basis: args.basis.as_deref().map(str::parse).transpose()?,
@@ -67,6 +69,12 @@ pub fn run_tolerance_study(args: ToleranceArgs) -> Result<(), LabError> {
         scene.name = format!("{}-e{e}", scene.name);
     }
     let scene = scene.with_overrides(&overrides).build()?;
+    if let Some(dir) = &args.out {
+        Plan::new()
+            .output_dir("--out", dir, &file_names(&scene.name))
+            .scene(scene_arg)
+            .check()?;
+    }
     let mut config = ToleranceConfig {
         tols: args.tols.values().to_vec(),
         ..ToleranceConfig::default()
@@ -75,8 +83,9 @@ pub fn run_tolerance_study(args: ToleranceArgs) -> Result<(), LabError> {
     if let Some(l) = &args.ladder {
         config.ladder = l.clone();
     }
+    crate::studies::tolerance::ensure_memory(&scene, &config)?;
     let study = tolerance_study(&scene, &config)?;
-    println!("{}", study.to_markdown());
+    crate::output::print(&format!("{}\n", study.to_markdown()))?;
     if let Some(dir) = &args.out {
         for p in study.write_to(dir)? {
             eprintln!("written {}", p.display());

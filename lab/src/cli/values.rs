@@ -37,13 +37,17 @@ pub fn count(s: &str) -> Result<usize, String> {
         .ok_or_else(|| format!("'{s}' is not a whole number ≥ 1 (expected a comma-separated list)"))
 }
 
-/// A number of Fourier modes K in 1..=4096.
+/// A number of Fourier modes K, checked by [`crate::periodic::check_modes`] (the check the
+/// scene's `[periodic] modes` gets too).
 pub fn modes(s: &str) -> Result<usize, String> {
     let s = s.trim();
-    s.parse::<usize>()
-        .ok()
-        .filter(|v| (1..=4096).contains(v))
-        .ok_or_else(|| format!("K must be an integer in 1..=4096, got '{s}'"))
+    let k = s.parse::<usize>().map_err(|_| {
+        format!(
+            "K must be an integer in 1..={}, got '{s}'",
+            crate::periodic::MAX_MODES
+        )
+    })?;
+    crate::periodic::check_modes(k)
 }
 
 /// Sweep values: `A:B:STEP` (arithmetic, from min(A, B) to max(A, B)) or `A:B:xF`
@@ -81,8 +85,15 @@ impl FromStr for Range {
             if !(f.is_finite() && f > 1.0) {
                 return Err(bad("the factor must exceed 1"));
             }
+            // Counted before they are made: a range is never cut short without a word.
+            let count = ((hi / lo).ln() / f.ln() + 1e-9).floor() + 1.0;
+            if count.is_nan() || count > 10_000.0 {
+                return Err(bad(&format!(
+                    "{count:.0} values, more than 10000 (a larger factor)"
+                )));
+            }
             let mut x = lo;
-            while x <= hi * (1.0 + 1e-12) && values.len() < 10_000 {
+            while x <= hi * (1.0 + 1e-12) {
                 values.push(x);
                 x *= f;
             }
@@ -151,7 +162,15 @@ mod tests {
         let g: Range = "0.1:1:x2".parse().unwrap();
         assert_eq!(g.values().len(), 4);
         assert!((g.values()[3] - 0.8).abs() < 1e-12);
-        for bad in ["4:10", "a:b:c", "4:10:0", "0:10:1", "1:2:x1", "1:1e9:1e-9"] {
+        for bad in [
+            "4:10",
+            "a:b:c",
+            "4:10:0",
+            "0:10:1",
+            "1:2:x1",
+            "1:1e9:1e-9",
+            "4:8:x1.00001",
+        ] {
             assert!(bad.parse::<Range>().is_err(), "{bad}");
         }
     }

@@ -24,7 +24,7 @@ pub fn orbit_charts(
     let k = (traj.dim / nb).max(1);
     let mut curves: Vec<Vec<(f64, f64)>> = vec![Vec::new(); nb];
     let mut extent = vec![0.0f64; nb];
-    for t in traj.sample_times(ORBIT_SAMPLES_PER_STEP) {
+    for t in crate::run::chart_times(traj, ORBIT_SAMPLES_PER_STEP) {
         let q = traj.position_at(t)?;
         for b in 0..nb {
             let (x, y) = (q[b * k], if k > 1 { q[b * k + 1] } else { 0.0 });
@@ -34,8 +34,9 @@ pub fn orbit_charts(
     }
     let ends: Vec<Vec<(f64, f64)>> = (0..nb)
         .map(|b| {
-            traj.q
-                .iter()
+            crate::run::chart_indices(traj.q.len())
+                .into_iter()
+                .map(|i| &traj.q[i])
                 .map(|q| (q[b * k], if k > 1 { q[b * k + 1] } else { 0.0 }))
                 .collect()
         })

@@ -114,6 +114,44 @@ pub struct NBodyReport {
     pub orbit_charts: (Chart, Option<Chart>),
 }
 
+/// The files [`NBodyReport::write_to`] writes for the scene named `scene`:
+/// `<stem>-errors.csv`, `-summary.txt`, `-errors.svg`, `-orbits.svg` and (when the report has
+/// an inner chart) `-orbits-inner.svg`, where the stem is the name with `/`, `\\` and spaces
+/// replaced by `_`.
+pub fn file_names(scene: &str) -> [String; 5] {
+    let stem = scene.replace(['/', '\\', ' '], "_");
+    [
+        "-errors.csv",
+        "-summary.txt",
+        "-errors.svg",
+        "-orbits.svg",
+        "-orbits-inner.svg",
+    ]
+    .map(|suffix| format!("{stem}{suffix}"))
+}
+
+/// The memory [`nbody_report`] needs, estimated before it runs: per step end, the Galerkin
+/// trajectory, the reference positions and momenta (and the cross-check's positions), the
+/// per-body errors, the invariant errors and the time, checked against
+/// [`crate::memory::LIMIT_BYTES`].
+pub fn ensure_memory(scene: &BuiltScene, options: &ReportOptions) -> Result<()> {
+    let system = scene.euclidean()?;
+    let d = scene.initial.q.len();
+    let bodies = system.as_nbody().map_or(1, |nb| nb.bodies());
+    let invariants = system.invariant_names().len();
+    let vector = (8 * d + 24) as f64;
+    let reference = vector * if options.cross_check { 3.0 } else { 2.0 };
+    let per_step = crate::memory::trajectory_bytes_per_step(scene.method.n, d)
+        + reference
+        + (8 * (bodies + invariants + 1) + 48) as f64;
+    let steps = scene.method.steps;
+    crate::memory::ensure_fits(
+        format!("the N-body report of {steps} steps"),
+        per_step * (steps as f64 + 1.0),
+        "the report keeps the run and its reference; fewer --steps",
+    )
+}
+
 /// Run an N-body scene with its Galerkin method and compare it with a Gauss-collocation
 /// reference of the same model (module docs). A Galerkin solver failure is an error.
 pub fn nbody_report(scene: &BuiltScene, options: ReportOptions) -> Result<NBodyReport> {
@@ -147,7 +185,7 @@ pub fn nbody_report(scene: &BuiltScene, options: ReportOptions) -> Result<NBodyR
             rq.iter()
                 .zip(&fq)
                 .flat_map(|(a, b)| a.iter().zip(b).map(|(x, y)| (x - y).abs()))
-                .fold(0.0, f64::max),
+                .fold(0.0, crate::distance::nan_max),
         )
     } else {
         None
@@ -272,7 +310,7 @@ fn perihelion_drift(
         .iter()
         .zip(&reference)
         .map(|(a, b)| wrap(a - b).abs())
-        .fold(0.0, f64::max);
+        .fold(0.0, crate::distance::nan_max);
     let advance = |w: &[f64]| wrap(w[w.len() - 1] - w[0]);
     Some(PerihelionDrift {
         galerkin_advance: advance(&galerkin),
@@ -294,7 +332,7 @@ impl NBodyReport {
                     .position_errors
                     .iter()
                     .map(|r| r[b])
-                    .fold(0.0, f64::max);
+                    .fold(0.0, crate::distance::nan_max);
                 (n.clone(), e)
             })
             .collect()
@@ -310,7 +348,7 @@ impl NBodyReport {
                     .invariant_errors
                     .iter()
                     .map(|r| r[i])
-                    .fold(0.0, f64::max);
+                    .fold(0.0, crate::distance::nan_max);
                 (n.clone(), e)
             })
             .collect()
@@ -370,7 +408,7 @@ impl NBodyReport {
     /// `dir`; returns the file names.
     pub fn write_to(&self, dir: &std::path::Path) -> Result<Vec<String>> {
         crate::output::check_output_dir(dir)?;
-        let stem = self.scene.name.replace(['/', '\\', ' '], "_");
+        let [csv, summary, errors, orbits, inner] = file_names(&self.scene.name);
         let mut files = Vec::new();
         let mut text = |name: String, body: String| -> Result<()> {
             let path = dir.join(&name);
@@ -378,12 +416,12 @@ impl NBodyReport {
             files.push(name);
             Ok(())
         };
-        text(format!("{stem}-errors.csv"), self.to_csv()?)?;
-        text(format!("{stem}-summary.txt"), self.to_string())?;
-        let mut charts = vec![(format!("{stem}-errors.svg"), self.error_chart())];
-        charts.push((format!("{stem}-orbits.svg"), self.orbit_charts.0.clone()));
-        if let Some(inner) = &self.orbit_charts.1 {
-            charts.push((format!("{stem}-orbits-inner.svg"), inner.clone()));
+        text(csv, self.to_csv()?)?;
+        text(summary, self.to_string())?;
+        let mut charts = vec![(errors, self.error_chart())];
+        charts.push((orbits, self.orbit_charts.0.clone()));
+        if let Some(chart) = &self.orbit_charts.1 {
+            charts.push((inner, chart.clone()));
         }
         for (name, chart) in charts {
             chart

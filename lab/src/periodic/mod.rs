@@ -201,6 +201,80 @@ pub fn problem_of(
     Ok((layout, symmetries, body_dim))
 }
 
+/// The largest number of Fourier modes K of a solve (`--modes` and the scene's
+/// `[periodic] modes` alike): the solve holds dense tables of (nodes × (2K + 1)) values and a
+/// Jacobian of ((2K + 1)·d)² values.
+pub const MAX_MODES: usize = 4096;
+
+/// The one range check of a number of Fourier modes, for `--modes` and the scene's
+/// `[periodic] modes` alike: 1 ≤ K ≤ [`MAX_MODES`].
+pub fn check_modes(k: usize) -> std::result::Result<usize, String> {
+    if (1..=MAX_MODES).contains(&k) {
+        Ok(k)
+    } else {
+        Err(format!("K must be an integer in 1..={MAX_MODES}, got {k}"))
+    }
+}
+
+/// The scene's `[periodic]` values checked as the flags are: `modes` by [`check_modes`],
+/// `steps` ≥ 1 and `n` ≥ 2 when given. Errors name the scene key, not a flag.
+fn check_spec(scene: &BuiltScene, spec: &PeriodicSpec) -> Result<()> {
+    let bad = |key: &str, reason: String| LabError::Scene {
+        source_name: scene.name.clone(),
+        reason: format!("[periodic] {key}: {reason}"),
+    };
+    check_modes(spec.modes).map_err(|r| bad("modes", r))?;
+    if spec.steps == Some(0) {
+        return Err(bad(
+            "steps",
+            "0 steps per period: need at least 1 (omit the key for the scene's steps)".into(),
+        ));
+    }
+    if let Some(n) = spec.n.filter(|&n| n < 2) {
+        return Err(bad(
+            "n",
+            format!("{n} basis functions: need at least 2 (omit the key for the scene's n)"),
+        ));
+    }
+    Ok(())
+}
+
+/// The memory of a periodic analysis at `kmax` modes, estimated before it runs: the solve's
+/// basis tables (two of nodes × (2K + 1) values per shift class) and its dense Jacobian with
+/// its factorisation (three matrices of ((2K + 1)·components)² values), and the closing run
+/// (steps per period × periods, kept whole), checked against [`crate::memory::LIMIT_BYTES`].
+fn ensure_memory(
+    scene: &BuiltScene,
+    spec: &PeriodicSpec,
+    layout: &Layout,
+    kmax: usize,
+    request: &PeriodicRequest,
+) -> Result<()> {
+    let nb = (2 * kmax + 1) as f64;
+    let nodes = spec
+        .nodes
+        .or(request.options.nodes)
+        .unwrap_or_else(|| default_nodes(layout, kmax)) as f64;
+    let classes = match *layout {
+        Layout::Choreography { bodies, .. } => bodies,
+        Layout::Orbit { .. } => 1,
+    } as f64;
+    let unknowns = nb * layout.components() as f64 + 2.0;
+    let solve = 8.0 * (2.0 * classes * nodes * nb + 3.0 * unknowns * unknowns);
+    let steps = spec.steps.unwrap_or(scene.method.steps) as f64;
+    let n = spec.n.unwrap_or(scene.method.n);
+    let closing =
+        steps * request.periods as f64 * crate::memory::trajectory_bytes_per_step(n, layout.dim());
+    crate::memory::ensure_fits(
+        format!(
+            "the periodic analysis at K = {kmax} modes with {} closing periods",
+            request.periods
+        ),
+        solve + closing,
+        "fewer modes (--modes or the scene's [periodic] modes) or fewer --periods",
+    )
+}
+
 /// The scene's `[periodic]` table, or a typed error naming the scene.
 pub fn spec_of(scene: &BuiltScene) -> Result<&PeriodicSpec> {
     scene.periodic().ok_or_else(|| LabError::Scene {
@@ -223,19 +297,21 @@ fn analyse<S: System>(
 ) -> Result<PeriodicReport> {
     let spec = spec_of(scene)?;
     let (layout, symmetries, body_dim) = problem_of(scene, spec)?;
+    check_spec(scene, spec)?;
     let mut modes_list = request.modes.clone();
     if modes_list.is_empty() {
         modes_list.push(spec.modes);
     }
-    if let Some(&k) = modes_list.iter().find(|&&k| k < 1) {
-        return Err(LabError::InvalidArgument {
+    for &k in &modes_list {
+        check_modes(k).map_err(|reason| LabError::InvalidArgument {
             name: "--modes".into(),
-            reason: format!("K must be at least 1, got {k}"),
-        });
+            reason,
+        })?;
     }
     modes_list.sort_unstable();
     modes_list.dedup();
     let kmax = *modes_list.last().unwrap_or(&spec.modes);
+    ensure_memory(scene, spec, &layout, kmax, request)?;
     let mut names = system.invariant_names().iter();
     let mut inv = vec![0.0; system.invariant_names().len()];
     let condition = match spec.condition {

@@ -23,6 +23,32 @@ pub enum Style {
     DashedLine,
 }
 
+/// The most points a series keeps: a chart of a long run shows what a chart can show (a few
+/// thousand points per series, an SVG of at most a few MB), not every step. Longer series are
+/// thinned on [`Chart::push`] by [`thin`].
+pub const MAX_POINTS_PER_SERIES: usize = 4000;
+
+/// The most dashes a dashed series is drawn with (each is an SVG element); a longer dashed
+/// series is drawn solid.
+const MAX_DASHES: f64 = 20_000.0;
+
+/// Every k-th point of `points` (k the smallest stride leaving at most `max`), the last point
+/// kept, so that a line still ends where the data end.
+pub fn thin<T: Copy>(points: &[T], max: usize) -> Vec<T> {
+    let max = max.max(2);
+    if points.len() <= max {
+        return points.to_vec();
+    }
+    let stride = (points.len() - 1).div_ceil(max - 1);
+    let mut out: Vec<T> = points.iter().step_by(stride).copied().collect();
+    if (points.len() - 1) % stride != 0 {
+        if let Some(&last) = points.last() {
+            out.push(last);
+        }
+    }
+    out
+}
+
 /// One data series of a [`Chart`].
 #[derive(Debug, Clone)]
 pub struct Series {
@@ -169,13 +195,16 @@ impl Chart {
         (self.width, self.height) = (width, height);
         self
     }
-    /// Adds a series (builder style).
+    /// Adds a series (builder style; thinned as by [`Chart::push`]).
     pub fn with_series(mut self, s: Series) -> Self {
-        self.series.push(s);
+        self.push(s);
         self
     }
-    /// Adds a series.
-    pub fn push(&mut self, s: Series) {
+    /// Adds a series, thinned to at most [`MAX_POINTS_PER_SERIES`] points ([`thin`]).
+    pub fn push(&mut self, mut s: Series) {
+        if s.points.len() > MAX_POINTS_PER_SERIES {
+            s.points = thin(&s.points, MAX_POINTS_PER_SERIES);
+        }
         self.series.push(s);
     }
 
@@ -301,16 +330,27 @@ impl Chart {
         let data = self.prepared();
         let (size, x, y) = self.layout(&data)?;
         let corner = self.legend_corner(&data, size, (x.lo, x.hi), (y.lo, y.hi));
+        let (pw, ph) = plot_area_size(size, &self.title);
+        let (sx, sy) = (f64::from(pw) / (x.hi - x.lo), f64::from(ph) / (y.hi - y.lo));
         let root = SVGBackend::with_string(out, size).into_drawing_area();
         root.fill(&WHITE).map_err(backend_err)?;
         let area = titled(&root, &self.title)?;
         let mut chart = frame(&area, [&self.x_label, &self.y_label], x, y, true)?;
         let mut any_label = false;
+        // Pixels along a series: a dashed line longer than MAX_DASHES dashes (a long run
+        // retracing its orbit) is drawn solid, since every dash is an SVG element.
+        let pixels = |runs: &[Vec<(f64, f64)>]| -> f64 {
+            let seg = |w: &[(f64, f64)]| ((w[1].0 - w[0].0) * sx).hypot((w[1].1 - w[0].1) * sy);
+            runs.iter().flat_map(|r| r.windows(2).map(seg)).sum()
+        };
         for Prepared(color, s, runs) in &data {
             let (line, dot) = (palette(*color).stroke_width(2), palette(*color).filled());
             let markers = || runs.iter().flatten().map(move |&p| Circle::new(p, 3, dot));
             let anno = match s.style {
                 Style::Line | Style::LineMarkers => {
+                    chart.draw_series(runs.iter().map(|r| PathElement::new(r.clone(), line)))
+                }
+                Style::DashedLine if pixels(runs) > 13.0 * MAX_DASHES => {
                     chart.draw_series(runs.iter().map(|r| PathElement::new(r.clone(), line)))
                 }
                 Style::DashedLine => chart.draw_series(

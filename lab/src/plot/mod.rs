@@ -21,7 +21,7 @@ mod heatmap;
 mod layout;
 
 pub use axis::Scale;
-pub use chart::{Chart, Series, Style};
+pub use chart::{Chart, MAX_POINTS_PER_SERIES, Series, Style, thin};
 pub use error::PlotError;
 pub use heatmap::HeatMap;
 

@@ -21,12 +21,15 @@ use std::time::Instant;
 /// columns, n basis functions and dimension d: the trajectory (states, coefficients, step
 /// statistics, vector headers), the table row, and the output text (about 25 bytes per
 /// written number; JSON also writes the coefficients). An estimate for refusing runs up
-/// front; measured at 0.46–1.1 KB per step for the shipped scenes.
+/// front; measured at 0.46–1.1 KB per step for the shipped scenes. A chart adds no per-step
+/// term: it keeps at most [`crate::plot::MAX_POINTS_PER_SERIES`] points per series (a charted
+/// Kepler run at n = 8: estimated 716 B per step, measured 576 B per step between 2·10⁴ and
+/// 10⁵ steps).
 pub fn bytes_per_step(columns: usize, n: usize, d: usize, json: bool) -> f64 {
-    let trajectory = 8 * (n * d + 2 * d) + 3 * 24 + 64;
+    let trajectory = crate::memory::trajectory_bytes_per_step(n, d);
     let row = 8 * columns + 24;
     let text = 25 * (columns + if json { n * d + 2 * d } else { 0 });
-    (trajectory + row + text) as f64
+    trajectory + (row + text) as f64
 }
 
 /// What a streamed run reports once its rows are written.
@@ -101,6 +104,13 @@ fn stream_system(
     // The library refuses a tolerance-driven method (it keeps the whole trajectory) before
     // the first visit, so the header is written only for a run that starts.
     let visit = |s: StreamStep<'_>| -> Result<()> {
+        if crate::interrupt::requested() {
+            // Ctrl-C: stop here; the rows before this step are kept (the caller says where).
+            return Err(LabError::Interrupted {
+                step: s.step,
+                kept: "no row was written".into(),
+            });
+        }
         if s.step == 0 {
             writeln!(out, "{}", header.join(",")).map_err(io)?;
         }

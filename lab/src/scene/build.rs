@@ -127,7 +127,24 @@ impl Scene {
             SystemSpec::Lagrangian(spec) => {
                 // Lengths and regularity of L at the initial state, with the expression's own
                 // messages (the number of coordinates, the singular velocity Hessian).
-                AnySystem::from(spec.check(&initial.q, &initial.p)?).into()
+                let system = spec.check(&initial.q, &initial.p)?;
+                // The exact formula is for one initial state; from another (a scene's typo,
+                // --q0) the library drops it. Say so rather than drop it silently.
+                if spec.exact.is_some()
+                    && matches!(
+                        galerkin_vi::systems::System::exact_solution(
+                            &system, initial.t0, &initial.q, &initial.p
+                        ),
+                        Ok(None)
+                    )
+                {
+                    eprintln!(
+                        "warning: the exact solution of {} does not pass through the initial \
+                         state (q = {:?}, p = {:?}); no position errors are reported",
+                        self.name, initial.q, initial.p
+                    );
+                }
+                AnySystem::from(system).into()
             }
             SystemSpec::RigidBody { inertia } => {
                 BuiltSystem::RigidBody(AnyRigidBody::Free(FreeRigidBody::new(*inertia)?))
@@ -182,6 +199,8 @@ fn check_initial(system: &BuiltSystem, init: &InitialState) -> Result<()> {
         BuiltSystem::Euclidean(s) => {
             ensure_len("initial q (system dimension)", s.dim(), init.q.len())?;
             ensure_len("initial p (system dimension)", s.dim(), init.p.len())?;
+            // The start `gvi run` refuses, every command refuses (`stability` ran from it).
+            crate::run::check_start(s, &init.q, &init.p, init.t0)?;
         }
         BuiltSystem::RigidBody(_) => {
             ensure_len("initial q (rotation vector)", 3, init.q.len())?;

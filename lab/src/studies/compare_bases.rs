@@ -20,6 +20,14 @@ use rayon::prelude::*;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
+/// The files [`BasisComparison::write`] writes into its directory.
+pub const FILES: [&str; 4] = [
+    "compare-bases.csv",
+    "compare-bases.json",
+    "compare-bases-error.svg",
+    "compare-bases-condition.svg",
+];
+
 /// One row: a pairing at one n.
 #[derive(Debug, Clone, Serialize)]
 pub struct BasisPoint {
@@ -187,12 +195,7 @@ impl BasisComparison {
                 .iter()
                 .map(|p| MeasurementRow::new(&p.measurement, Some(p.kinetic_condition))),
         )?;
-        let files = [
-            dir.join("compare-bases.csv"),
-            dir.join("compare-bases.json"),
-            dir.join("compare-bases-error.svg"),
-            dir.join("compare-bases-condition.svg"),
-        ];
+        let files = FILES.map(|f| dir.join(f));
         write_file(&files[0], &csv)?;
         let json =
             serde_json::to_string_pretty(self).map_err(|e| LabError::Serialize(e.to_string()))?;

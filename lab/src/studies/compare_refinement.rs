@@ -27,6 +27,14 @@ use galerkin_vi::systems::System;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
+/// The files [`CompareStudy::write`] writes into its directory.
+pub const FILES: [&str; 4] = [
+    "compare_refinement.csv",
+    "compare_refinement.json",
+    "compare_refinement_evaluations.svg",
+    "compare_refinement_seconds.svg",
+];
+
 /// The paths to compare.
 #[derive(Debug, Clone, Serialize)]
 pub struct CompareConfig {
@@ -109,6 +117,38 @@ pub struct CompareStudy {
     pub paths: Vec<RefinementPath>,
     /// Cheapest path per target (10⁻³, 10⁻⁶, 10⁻⁹, 10⁻¹²).
     pub cheapest: Vec<Cheapest>,
+}
+
+/// The memory [`compare_refinement`] needs, estimated before it runs: the reference and the
+/// longest run (largest n at the smallest h; the runs are sequential), checked against
+/// [`crate::memory::LIMIT_BYTES`].
+pub fn ensure_memory(scene: &BuiltScene, config: &CompareConfig) -> Result<()> {
+    let system = scene.euclidean()?;
+    let base = &scene.method;
+    let max_div = config
+        .h_divisors
+        .iter()
+        .chain(&config.fixed_h_divisors)
+        .copied()
+        .max()
+        .unwrap_or(1)
+        .max(1) as f64;
+    let n = config
+        .ns
+        .iter()
+        .chain(&config.fixed_ns)
+        .copied()
+        .max()
+        .unwrap_or(2);
+    let steps = base.steps as f64 * max_div;
+    let horizon = base.h * base.steps as f64;
+    let reference = Reference::estimated_bytes(system, &scene.initial, base.h / max_div, horizon);
+    let run = steps * crate::memory::trajectory_bytes_per_step(n, scene.initial.q.len());
+    crate::memory::ensure_fits(
+        format!("the comparison (its longest run has {steps:.0} steps)"),
+        reference + run,
+        "every run keeps its trajectory; fewer --steps",
+    )
 }
 
 /// Run the comparison on a scene.
@@ -315,18 +355,13 @@ impl CompareStudy {
     /// Write `compare_refinement.{csv,json}`, `compare_refinement_evaluations.svg` and
     /// `compare_refinement_seconds.svg` into `dir`.
     pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>> {
-        let csv = dir.join("compare_refinement.csv");
+        let [csv, json, evaluations, seconds] = FILES.map(|f| dir.join(f));
         write_file(&csv, &self.csv()?)?;
-        let json = dir.join("compare_refinement.json");
         let text =
             serde_json::to_string_pretty(self).map_err(|e| LabError::Serialize(e.to_string()))?;
         write_file(&json, &text)?;
         let mut files = vec![csv, json];
-        for (by_seconds, name) in [
-            (false, "compare_refinement_evaluations.svg"),
-            (true, "compare_refinement_seconds.svg"),
-        ] {
-            let svg = dir.join(name);
+        for (by_seconds, svg) in [(false, evaluations), (true, seconds)] {
             self.chart(by_seconds)
                 .save_svg(&svg)
                 .map_err(|e| LabError::Plot(e.to_string()))?;

@@ -133,6 +133,27 @@ impl Reference {
         (horizon / (h / 4.0).min(1.0)).ceil().max(1.0)
     }
 
+    /// The bytes [`Reference::for_system`] would hold (0 for an exact solution), estimated
+    /// without running it, for [`crate::memory::ensure_fits`].
+    pub fn estimated_bytes<S: System>(
+        system: &S,
+        initial: &InitialState,
+        h: f64,
+        horizon: f64,
+    ) -> f64 {
+        let d = system.dim();
+        let steps = Self::estimated_steps(system, initial, h, horizon);
+        if steps == 0.0 {
+            return 0.0;
+        }
+        if system.shortest_time_scale(&initial.q, &initial.p).is_some() && d > 4 {
+            // Sampled 16 times per step h: one position vector per sample.
+            let samples = (horizon / h).ceil().max(1.0) * 16.0;
+            return samples * (8 * d + 24) as f64;
+        }
+        steps * crate::memory::trajectory_bytes_per_step(48, d)
+    }
+
     /// Short description for reports.
     pub fn describe(&self) -> &'static str {
         match self {
@@ -302,27 +323,24 @@ fn fill_errors<S: System>(
 
 pub(crate) use crate::distance::{max_norm_diff, nan_max};
 
-/// Memory above which a study is refused before it starts.
-pub const MAX_STUDY_BYTES: f64 = 4e9;
+/// Memory above which a study is refused before it starts (the one limit,
+/// [`crate::memory::LIMIT_BYTES`]).
+pub const MAX_STUDY_BYTES: f64 = crate::memory::LIMIT_BYTES;
 
 /// Refuse a study whose runs would hold an absurd amount of memory: each run keeps its
-/// trajectory (about 8(nD + 2D) + 136 bytes per step), and rayon runs as many at once as it
-/// has threads.
+/// trajectory ([`crate::memory::trajectory_bytes_per_step`]), and rayon runs as many at once
+/// as it has threads ([`crate::memory::ensure_fits`]).
 pub fn refuse_memory(steps_per_run: f64, n: usize, d: usize) -> Result<()> {
-    let per_step = (8 * (n * d + 2 * d) + 136) as f64;
+    let per_step = crate::memory::trajectory_bytes_per_step(n, d);
     let parallel = rayon::current_num_threads().max(1) as f64;
-    let estimate = steps_per_run * per_step * parallel;
-    if estimate.is_nan() || estimate > MAX_STUDY_BYTES {
-        return Err(LabError::CostTooHigh {
-            what: format!(
-                "the memory in bytes ({steps_per_run:.3e} steps per run at about {per_step:.0} \
-                 bytes each, {parallel} runs at once; lower --steps or the range)"
-            ),
-            estimate,
-            limit: MAX_STUDY_BYTES,
-        });
-    }
-    Ok(())
+    crate::memory::ensure_fits(
+        format!(
+            "the sweep ({steps_per_run:.3e} steps per run at about {per_step:.0} bytes each, \
+             {parallel} runs at once)"
+        ),
+        steps_per_run * per_step * parallel,
+        "lower --steps or the range",
+    )
 }
 
 /// Refuse a study whose every run failed: there is nothing to report.

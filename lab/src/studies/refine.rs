@@ -18,10 +18,14 @@ use crate::error::Result;
 use crate::fit::{AlgebraicFit, GeometricFit, fit_algebraic, fit_geometric};
 use crate::plot::{Chart, Series};
 use crate::scene::BuiltScene;
+use galerkin_vi::basis::BasisKind;
 use galerkin_vi::systems::System;
 use rayon::prelude::*;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
+
+/// The files [`Refinement::write`] writes into its directory.
+pub const FILES: [&str; 3] = ["refine.csv", "refine.json", "refine.svg"];
 
 /// Which parameter a sweep varies.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -205,6 +209,17 @@ fn refine_system<S: System + Sync>(
     })
 }
 
+/// The largest n a basis accepts (its `MAX_N`).
+fn max_n(kind: BasisKind) -> usize {
+    use galerkin_vi::basis::{ChebyshevLagrange, Fourier, Hermite, Legendre};
+    match kind {
+        BasisKind::Chebyshev => ChebyshevLagrange::MAX_N,
+        BasisKind::Legendre => Legendre::MAX_N,
+        BasisKind::Hermite => Hermite::MAX_N,
+        BasisKind::Fourier => Fourier::MAX_N,
+    }
+}
+
 /// Reject sweep values no run could use: n not a whole number ≥ 2; h longer than the
 /// horizon (a sweep over one truncated step fits a meaningless rate) or so short that the
 /// horizon needs more than [`galerkin_vi::integrator::MAX_STEPS`] steps.
@@ -222,9 +237,14 @@ fn check_values(
     for &x in values {
         match vary {
             Vary::N => {
-                if !(x >= 2.0 && x.fract() == 0.0 && x <= 4096.0) {
+                // The basis's own limit (1024 for the polynomial bases, 4096 for Fourier),
+                // so that the message names the limit that is enforced.
+                let max = max_n(base.basis);
+                if !(x >= 2.0 && x.fract() == 0.0 && x <= max as f64) {
                     return Err(bad(format!(
-                        "n = {x:e} is not a whole number of basis functions in 2…4096"
+                        "n = {x:e} is not a whole number of basis functions in 2…{max} (the \
+                         {} basis's limit)",
+                        base.basis
                     )));
                 }
             }
@@ -323,15 +343,14 @@ impl RefineStudy {
         chart
     }
 
-    /// Write `refine.csv`, `refine.json` and `refine.svg` into `dir`; returns the paths.
+    /// Write `refine.csv`, `refine.json` and `refine.svg` ([`FILES`]) into `dir`; returns
+    /// the paths.
     pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>> {
-        let csv = dir.join("refine.csv");
+        let [csv, json, svg] = FILES.map(|f| dir.join(f));
         write_file(&csv, &measurements_csv(&self.points)?)?;
-        let json = dir.join("refine.json");
         let text =
             serde_json::to_string_pretty(self).map_err(|e| LabError::Serialize(e.to_string()))?;
         write_file(&json, &text)?;
-        let svg = dir.join("refine.svg");
         self.chart()
             .save_svg(&svg)
             .map_err(|e| LabError::Plot(e.to_string()))?;

@@ -39,6 +39,14 @@ use rayon::prelude::*;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
+/// The files [`StabilityStudy::write`] writes into its directory.
+pub const FILES: [&str; 4] = [
+    "stability.csv",
+    "stability_baselines.csv",
+    "stability.json",
+    "stability.svg",
+];
+
 /// The grid and criteria.
 #[derive(Debug, Clone, Serialize)]
 pub struct StabilityConfig {
@@ -468,15 +476,12 @@ impl StabilityStudy {
 
     /// Write `stability.{csv,json,svg}` and `stability_baselines.csv` into `dir`.
     pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>> {
-        let csv = dir.join("stability.csv");
+        let [csv, base, json, svg] = FILES.map(|f| dir.join(f));
         write_file(&csv, &self.csv()?)?;
-        let base = dir.join("stability_baselines.csv");
         write_file(&base, &self.baselines_csv()?)?;
-        let json = dir.join("stability.json");
         let text =
             serde_json::to_string_pretty(self).map_err(|e| LabError::Serialize(e.to_string()))?;
         write_file(&json, &text)?;
-        let svg = dir.join("stability.svg");
         self.heat_map()
             .save_svg(&svg)
             .map_err(|e| LabError::Plot(e.to_string()))?;

@@ -138,8 +138,44 @@ pub struct ToleranceStudy {
     pub rows: Vec<ToleranceRow>,
 }
 
+/// The files [`ToleranceStudy::write_to`] writes for the scene named `scene`:
+/// `<scene>-tolerance.csv`, `.md`, `-error.svg` and `-cost.svg`.
+pub fn file_names(scene: &str) -> [String; 4] {
+    [".csv", ".md", "-error.svg", "-cost.svg"].map(|suffix| format!("{scene}-tolerance{suffix}"))
+}
+
+/// The memory [`tolerance_study`] needs, estimated before it runs: the reference positions at
+/// the step ends (and the reference run behind them), the largest run (n up to eight above the
+/// ladder's top, for the oracle) and the one-step errors of every n, checked against
+/// [`crate::memory::LIMIT_BYTES`].
+pub fn ensure_memory(scene: &BuiltScene, config: &ToleranceConfig) -> Result<()> {
+    let system = scene.euclidean()?;
+    let (m, init) = (&scene.method, &scene.initial);
+    let d = init.q.len();
+    let steps = m.steps as f64;
+    let lo = config.ladder.first().copied().unwrap_or(4);
+    let hi = config.ladder.last().copied().unwrap_or(64).max(lo);
+    let reference = Reference::estimated_bytes(system, init, m.h, m.h * steps)
+        + 2.0 * steps * (8 * d + 24) as f64;
+    let runs =
+        steps * (crate::memory::trajectory_bytes_per_step(hi + 8, d) + 16.0 * (hi - lo + 9) as f64);
+    crate::memory::ensure_fits(
+        format!("the tolerance study of {} steps", m.steps),
+        reference + runs,
+        "every run keeps its trajectory; fewer --steps",
+    )
+}
+
 /// Run the study on a scene (its method's basis, quadrature, h and steps).
 pub fn tolerance_study(scene: &BuiltScene, config: &ToleranceConfig) -> Result<ToleranceStudy> {
+    let ladder = &config.ladder;
+    if ladder.is_empty() || ladder.windows(2).any(|w| w[0] >= w[1]) {
+        // Not increasing, the fixed-n scan between its ends would be empty (all-NaN rows).
+        return Err(crate::error::LabError::InvalidArgument {
+            name: "ladder (--ladder)".into(),
+            reason: format!("{ladder:?}: the ladder of n must be non-empty and increasing"),
+        });
+    }
     let system = scene.euclidean()?;
     let (reference, label) = step_end_reference(system, scene)?;
     study_system(system, scene, config, &reference, label)
@@ -489,16 +525,10 @@ impl ToleranceStudy {
 
     /// Write `<scene>-tolerance.csv`, `.md`, `-error.svg` and `-cost.svg` to `dir`.
     pub fn write_to(&self, dir: &Path) -> Result<Vec<PathBuf>> {
-        let stem = format!("{}-tolerance", self.scene);
-        let csv = dir.join(format!("{stem}.csv"));
-        let md = dir.join(format!("{stem}.md"));
+        let [csv, md, es, cs] = file_names(&self.scene).map(|f| dir.join(f));
         write_file(&csv, &self.to_csv()?)?;
         write_file(&md, &self.to_markdown())?;
         let (e, c) = self.charts();
-        let (es, cs) = (
-            dir.join(format!("{stem}-error.svg")),
-            dir.join(format!("{stem}-cost.svg")),
-        );
         for (chart, path) in [(e, &es), (c, &cs)] {
             chart
                 .save_svg(path)

@@ -233,6 +233,26 @@ impl ExpressionLagrangian {
         ad::hessian(|y| self.tape.eval(&qc, y), v, lv, lvv);
     }
 
+    /// A NaN or infinite L, ∂L/∂v or ∂²L/∂v² at (q, v) is a [`GviError::NonFinite`] naming
+    /// the state (a singularity of L there), not a singular velocity Hessian.
+    fn ensure_finite_at(&self, q: &[f64], v: &[f64], lv: &[f64], lvv: &[f64]) -> Result<()> {
+        let l = self.value(q, v);
+        let bad = std::iter::once(l)
+            .chain(lv.iter().copied())
+            .chain(lvv.iter().copied())
+            .find(|x| !x.is_finite());
+        match bad {
+            Some(value) => Err(GviError::NonFinite {
+                what: format!(
+                    "the Lagrangian or its velocity derivatives at q = {q:?}, v = {v:?} (L is \
+                     singular there)"
+                ),
+                value,
+            }),
+            None => Ok(()),
+        }
+    }
+
     /// The velocity v with ∂L/∂v(q, v) = p (inverse Legendre transform), by Newton's method
     /// from v = 0 (one step for Lagrangians quadratic in v). Errors: wrong lengths, non-finite
     /// input, a singular velocity Hessian at an iterate
@@ -254,6 +274,7 @@ impl ExpressionLagrangian {
             if residual <= 4.0 * f64::EPSILON * scale {
                 return Ok(v);
             }
+            self.ensure_finite_at(q, &v, &lv, &lvv)?;
             let m = DMatrix::from_row_slice(d, d, &lvv);
             let rcond = reciprocal_condition(&m);
             if rcond.is_nan() || rcond <= MIN_RCOND {
@@ -296,6 +317,7 @@ impl ExpressionLagrangian {
         let d = self.dim();
         let (mut lv, mut lvv) = (vec![0.0; d], vec![0.0; d * d]);
         self.velocity_derivatives(q, &v, &mut lv, &mut lvv);
+        self.ensure_finite_at(q, &v, &lv, &lvv)?;
         let rcond = reciprocal_condition(&DMatrix::from_row_slice(d, d, &lvv));
         if rcond.is_nan() || rcond <= MIN_RCOND {
             return Err(ExpressionError::SingularHessian {

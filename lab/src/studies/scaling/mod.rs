@@ -25,6 +25,15 @@ use serde::Serialize;
 
 use std::time::Instant;
 
+/// The files [`ScalingStudy::write`] writes into its directory.
+pub const FILES: [&str; 5] = [
+    "solver_scaling.csv",
+    "solver_scaling.json",
+    "solver_scaling.md",
+    "scaling_n.svg",
+    "scaling_bodies.svg",
+];
+
 /// Solvers in the order they run (`exact` first: it is the reference of the others).
 pub const SOLVERS: [StageSolver; 5] = [
     StageSolver::Exact,

@@ -227,14 +227,7 @@ impl ScalingStudy {
 
     /// Write `solver_scaling.{csv,json,md}`, `scaling_n.svg` and `scaling_bodies.svg`.
     pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>> {
-        let names = [
-            "solver_scaling.csv",
-            "solver_scaling.json",
-            "solver_scaling.md",
-            "scaling_n.svg",
-            "scaling_bodies.svg",
-        ];
-        let paths: Vec<PathBuf> = names.iter().map(|n| dir.join(n)).collect();
+        let paths: Vec<PathBuf> = super::FILES.iter().map(|n| dir.join(n)).collect();
         write_file(&paths[0], &self.csv()?)?;
         let json =
             serde_json::to_string_pretty(self).map_err(|e| LabError::Serialize(e.to_string()))?;

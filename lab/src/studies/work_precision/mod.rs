@@ -190,6 +190,14 @@ pub struct WorkPrecisionStudy {
     pub external_files: Vec<String>,
 }
 
+/// The files [`WorkPrecisionStudy::write`] writes into its directory.
+pub const FILES: [&str; 4] = [
+    "work_precision.csv",
+    "work_precision.json",
+    "work_precision.md",
+    "work_precision.svg",
+];
+
 /// The targets of [`WorkPrecisionStudy::fastest`].
 pub const TARGETS: [f64; 3] = [1e-6, 1e-9, 1e-12];
 
@@ -560,15 +568,12 @@ impl WorkPrecisionStudy {
 
     /// Write `work_precision.{csv,json,svg}` and `work_precision.md` into `dir`.
     pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>> {
-        let csv = dir.join("work_precision.csv");
+        let [csv, json, md, svg] = FILES.map(|f| dir.join(f));
         write_file(&csv, &self.csv()?)?;
-        let json = dir.join("work_precision.json");
         let text =
             serde_json::to_string_pretty(self).map_err(|e| LabError::Serialize(e.to_string()))?;
         write_file(&json, &text)?;
-        let md = dir.join("work_precision.md");
         write_file(&md, &self.summary())?;
-        let svg = dir.join("work_precision.svg");
         self.chart()
             .save_svg(&svg)
             .map_err(|e| LabError::Plot(e.to_string()))?;
