@@ -268,7 +268,7 @@ mod dop {
     /// the force evaluations of each, and checks that both reach the same end state to within
     /// the tolerance-level error.
     pub fn compare(kepler: &Kepler, initial: &InitialState) {
-        let any = galerkin_vi::systems::AnySystem::Kepler(kepler.clone());
+        let any = galerkin_vi::systems::AnySystem::Kepler(*kepler);
         eprintln!(
             "\nDOP853: the study's wrapper (100 samples, each exactly at a step end) against the \
              crate used bare over the whole span (no samples); ratios: median of interleaved pairs"
