@@ -4,31 +4,39 @@
 # (docs/studies/work-precision-long/), the outer solar system
 # (docs/studies/work-precision-outer-solar-system/) and the J2000 10-body scene
 # (docs/studies/work-precision-solar-system/). Run it on a quiet machine: every timing is
-# wall-clock, one configuration after another. About 4.5 minutes on a 2-core machine
-# (measured 4 min 16 s, REBOUND runs and the economical families included).
+# wall-clock, one configuration after another. About 7 minutes on a 2-core machine
+# (REBOUND 5.2.2 runs and the economical and compact families included).
 #
 # Needs the REBOUND venv: python3 -m venv .venv-rebound &&
 #   .venv-rebound/bin/pip install -r scripts/rebound/requirements.txt
 set -euo pipefail
 cd "$(dirname "$0")/.."
-cargo build --release
+cargo build --release -p galerkin-vi-lab
 GVI=target/release/gvi
 PY=.venv-rebound/bin/python
 S=scripts/rebound/work_precision.py
 E=docs/studies/external
-if [ "${SKIP_REBOUND:-0}" != 1 ]; then
-  $PY $S kepler --out $E/rebound-kepler-T200.csv
-  $PY $S kepler --horizon 20000 --out $E/rebound-kepler-T20000.csv
-  $PY $S outer-solar-system --out $E/rebound-outer-solar-system.csv
-  $PY $S solar-system --out $E/rebound-solar-system.csv
-fi
+# Each scene's REBOUND runs come right before its own study, so that both see the same load on
+# a shared machine; `uptime` before and after each scene goes to stderr.
+rebound() {
+  if [ "${SKIP_REBOUND:-0}" != 1 ]; then $PY $S "$@"; fi
+}
+uptime >&2
+rebound kepler --repeats 5 --out $E/rebound-kepler-T200.csv
 $GVI work-precision kepler --external $E/rebound-kepler-T200.csv --out docs/studies
+uptime >&2
+rebound kepler --horizon 20000 --out $E/rebound-kepler-T20000.csv
 $GVI work-precision kepler --long --external $E/rebound-kepler-T20000.csv \
   --out docs/studies/work-precision-long
+uptime >&2
+rebound outer-solar-system --repeats 5 --out $E/rebound-outer-solar-system.csv
 $GVI work-precision outer-solar-system --repeats 3 --bases chebyshev,legendre \
   --ns 6,8,10,12,14,16,20,24 --divisors 1,2,4 \
   --external $E/rebound-outer-solar-system.csv --out docs/studies/work-precision-outer-solar-system
+uptime >&2
+rebound solar-system --repeats 5 --out $E/rebound-solar-system.csv
 $GVI work-precision solar-system --repeats 3 --bases chebyshev,legendre \
   --ns 8,10,12,16,20,25,32 --divisors 1,2,4,8 \
   --external $E/rebound-solar-system.csv --out docs/studies/work-precision-solar-system
+uptime >&2
 python3 scripts/work-precision-summary.py > docs/studies/work-precision-summary.md

@@ -1,18 +1,20 @@
 //! Each peer of the work–precision study timed exactly as the study runs it
 //! (`studies::peers::run_peer`) against a bare, careful use of the same method on the same
 //! problem: Kepler e = 0.6 (μ = 1), T = 200 sampled every 2 (100 samples), fixed-step methods
-//! at h = 2/64, DOP853 at rtol = atol = 1e-12 and 1e-14 (the latter is the study's cheapest
-//! DOP853 point below 1e-9 at T = 200).
+//! at h = 2/64, DOP853 at rtol = atol = 1e-12, 10^-13.5 and 1e-14 (the study's half-decade
+//! grid around 1e-9 at T = 200).
 //!
 //! The bare versions are hand-written static-size loops of the same schemes (`[f64; 2]`
 //! positions and momenta, the Kepler force written out, samples stored as `[f64; 4]`); the
-//! bare DOP853 is the `differential-equations` crate used directly: `[f64; 4]` state, a
-//! hand-written right-hand side, one method object reused for every interval through
-//! `solve_ode`, and an output handler that stores nothing.
+//! bare DOP853 is the `differential-equations` crate used directly as a careful user would:
+//! `[f64; 4]` state, a hand-written right-hand side, one reused method object, the whole span
+//! in one `solve_ode` call with an output handler that stores nothing, and no samples at all
+//! (the wrapper also stops exactly at the 100 sample times, so the ratio charges it with its
+//! sampling).
 //!
 //! Before criterion's own measurements it prints a table of wrapper/bare ratios of median
-//! wall times (`cargo bench --bench peers`). It asserts nothing about time; it does check that
-//! wrapper and bare reach the same end state.
+//! wall times (`cargo bench -p galerkin-vi-lab --bench peers`). It asserts nothing about time;
+//! it does check that wrapper and bare reach the same end state.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use galerkin_vi::baselines::CompositionScheme;
@@ -190,7 +192,7 @@ mod dop {
     use super::*;
     use differential_equations::control::ControlFlag;
     use differential_equations::interpolate::Interpolation;
-    use differential_equations::methods::ExplicitRungeKutta;
+    use differential_equations::methods::{DormandPrince, ExplicitRungeKutta, Ordinary};
     use differential_equations::ode::{ODE, OrdinaryNumericalMethod, solve_ode};
     use differential_equations::solout::Solout;
     use differential_equations::solution::Solution;
@@ -204,18 +206,14 @@ mod dop {
         }
     }
 
-    /// Stores nothing; remembers the last two accepted step lengths.
-    #[derive(Default)]
-    struct Steps {
-        last: f64,
-        before_last: f64,
-        accepted: usize,
-    }
-    impl Solout<f64, [f64; 4]> for Steps {
+    /// Stores nothing.
+    struct Nothing;
+    impl Solout<f64, [f64; 4]> for Nothing {
+        #[inline]
         fn solout<I>(
             &mut self,
-            t_curr: f64,
-            t_prev: f64,
+            _t: f64,
+            _t_prev: f64,
             _y: &[f64; 4],
             _y_prev: &[f64; 4],
             _i: &mut I,
@@ -224,82 +222,132 @@ mod dop {
         where
             I: Interpolation<f64, [f64; 4]> + ?Sized,
         {
-            if t_curr != t_prev {
-                self.before_last = self.last;
-                self.last = t_curr - t_prev;
-                self.accepted += 1;
-            }
             ControlFlag::Continue
         }
     }
 
-    /// DOP853 from the crate, stopped at every sample time; each interval starts with the last
-    /// full step of the one before (as the wrapper does).
-    pub fn bare_dop853(tolerance: f64) -> Samples {
-        let mut method = ExplicitRungeKutta::dop853()
-            .rtol(tolerance)
-            .atol(tolerance)
-            .max_steps(usize::MAX);
-        let mut y = [Q0[0], Q0[1], P0[0], P0[1]];
-        let mut out = Vec::with_capacity(SAMPLES + 1);
-        out.push(y);
-        let mut h0 = 0.0f64;
-        for k in 0..SAMPLES {
-            let t0 = k as f64 * INTERVAL;
-            method.h0 = h0.min(INTERVAL);
-            let mut steps = Steps::default();
-            solve_ode(&mut method, &KeplerRhs, t0, t0 + INTERVAL, &y, &mut steps)
-                .expect("DOP853 on Kepler");
-            y = *OrdinaryNumericalMethod::<f64, [f64; 4]>::y(&method);
-            if steps.accepted >= 2 {
-                h0 = steps.before_last;
-            }
-            out.push(y);
-        }
-        out
+    /// The crate used directly by a careful user: one `[f64; 4]` state, the hand-written
+    /// right-hand side, one method object reused for every run (`h0 = 0`: its own initial-step
+    /// heuristic each time), the whole span T = 200 in one `solve_ode` call, an output handler
+    /// that stores nothing. It samples nothing: only the end state is read.
+    pub fn bare_dop853(method: &mut Dop) -> ([f64; 4], usize) {
+        method.h0 = 0.0;
+        let y = [Q0[0], Q0[1], P0[0], P0[1]];
+        let solution = solve_ode(
+            method,
+            &KeplerRhs,
+            0.0,
+            INTERVAL * SAMPLES as f64,
+            &y,
+            &mut Nothing,
+        )
+        .expect("DOP853 on Kepler");
+        (
+            *OrdinaryNumericalMethod::<f64, [f64; 4]>::y(method),
+            solution.evals.function,
+        )
     }
 
-    /// The previous wrapper's form, for the record: a `Vec<f64>` state, the force through the
-    /// generic `Lagrangian::force`, a new method and `IVP::solve` per interval, every step
-    /// stored in the returned `Solution`.
-    pub fn previous_dop853(kepler: &Kepler, tolerance: f64) -> Samples {
-        use differential_equations::prelude::IVP;
-        use galerkin_vi::Lagrangian;
-        struct Canonical<'a>(&'a Kepler);
-        impl ODE<f64, Vec<f64>> for Canonical<'_> {
-            fn diff(&self, _t: f64, y: &Vec<f64>, dydt: &mut Vec<f64>) {
-                let (q, p) = y.split_at(2);
-                let (dq, dp) = dydt.split_at_mut(2);
-                dq.copy_from_slice(p);
-                self.0.force(q, dp);
-            }
+    /// The crate's DOP853 type for a `[f64; 4]` state.
+    pub type Dop = ExplicitRungeKutta<Ordinary, DormandPrince, f64, [f64; 4], 8, 12, 16>;
+
+    /// A fresh method object (its step count runs over its whole life, so no step limit).
+    pub fn new_dop(tolerance: f64) -> Dop {
+        ExplicitRungeKutta::dop853()
+            .rtol(tolerance)
+            .atol(tolerance)
+            .max_steps(usize::MAX)
+    }
+
+    /// Tolerances compared: the study's half-decade grid around 1e-9 at T = 200.
+    pub const TOLERANCES: [f64; 3] = [1e-12, 3.1622776601683794e-14, 1e-14];
+
+    /// Prints wrapper / careful-bare ratios of wall times (interleaved runs: the median of
+    /// the per-pair ratios, robust to a machine whose load drifts), the wrapper on the study's
+    /// own system type (`AnySystem`, as `gvi work-precision` runs it) and on `Kepler`, with
+    /// the force evaluations of each, and checks that both reach the same end state to within
+    /// the tolerance-level error.
+    pub fn compare(kepler: &Kepler, initial: &InitialState) {
+        let any = galerkin_vi::systems::AnySystem::Kepler(*kepler);
+        eprintln!(
+            "\nDOP853: the study's wrapper (100 samples, each exactly at a step end) against the \
+             crate used bare over the whole span (no samples); ratios: median of interleaved pairs"
+        );
+        eprintln!(
+            "{:<10} {:>11} {:>11} {:>11} {:>7} {:>7} {:>7} {:>9}",
+            "tol", "wrapper", "AnySystem", "bare", "ratio", "(Any)", "evals", "|Δ end|"
+        );
+        for tolerance in TOLERANCES {
+            let peer = Peer::Dop853 { tolerance };
+            let mut method = new_dop(tolerance);
+            let run = wrapper(kepler, initial, peer);
+            let (end, bare_evals) = bare_dop853(&mut method);
+            let (q, p) = (&run.q[SAMPLES], &run.p[SAMPLES]);
+            let diff = [q[0] - end[0], q[1] - end[1], p[0] - end[2], p[1] - end[3]]
+                .iter()
+                .fold(0.0f64, |m, x| m.max(x.abs()));
+            assert!(
+                diff < 1e-6,
+                "DOP853 {tolerance:e}: wrapper and bare differ by {diff:e}"
+            );
+            let budget = Duration::from_millis(3000);
+            let mut study = || {
+                let run = run_peer(&any, initial, black_box(peer), INTERVAL, 1, SAMPLES);
+                black_box(run.expect("run_peer"));
+            };
+            let mut direct = || {
+                black_box(wrapper(kepler, initial, black_box(peer)));
+            };
+            let mut bare = || {
+                black_box(bare_dop853(&mut method));
+            };
+            let [tw, ta, tb, rw, ra] = paired(&mut direct, &mut study, &mut bare, budget);
+            eprintln!(
+                "{:<10.3e} {:>8.1} µs {:>8.1} µs {:>8.1} µs {:>6.3}× {:>6.3}× {:>6.3}× {:>9.1e}",
+                tolerance,
+                tw * 1e6,
+                ta * 1e6,
+                tb * 1e6,
+                rw,
+                ra,
+                run.force_evaluations as f64 / bare_evals as f64,
+                diff
+            );
         }
-        let ode = Canonical(kepler);
-        let mut y = vec![Q0[0], Q0[1], P0[0], P0[1]];
-        let mut out = Vec::with_capacity(SAMPLES + 1);
-        out.push([y[0], y[1], y[2], y[3]]);
-        let mut last: Option<f64> = None;
-        for k in 0..SAMPLES {
-            let t0 = k as f64 * INTERVAL;
-            let mut method = ExplicitRungeKutta::dop853()
-                .rtol(tolerance)
-                .atol(tolerance)
-                .max_steps(10_000_000);
-            if let Some(h0) = last {
-                method = method.h0(h0.min(INTERVAL));
-            }
-            let solution = IVP::ode(&ode, t0, t0 + INTERVAL, y.clone())
-                .method(method)
-                .solve()
-                .expect("DOP853 on Kepler");
-            let n = solution.t.len();
-            if n >= 3 {
-                last = Some(solution.t[n - 2] - solution.t[n - 3]);
-            }
-            y = solution.y[n - 1].clone();
-            out.push([y[0], y[1], y[2], y[3]]);
+    }
+
+    /// Runs a, b and c in turn until `budget` (at least 15 rounds); returns the three median
+    /// times and the medians of the per-round ratios a/c and b/c.
+    fn paired(
+        a: &mut dyn FnMut(),
+        b: &mut dyn FnMut(),
+        c: &mut dyn FnMut(),
+        budget: Duration,
+    ) -> [f64; 5] {
+        let time = |f: &mut dyn FnMut()| {
+            let t = Instant::now();
+            f();
+            t.elapsed().as_secs_f64()
+        };
+        a();
+        b();
+        c();
+        let mut rounds: Vec<[f64; 3]> = Vec::new();
+        let start = Instant::now();
+        while rounds.len() < 15 || (start.elapsed() < budget && rounds.len() < 1001) {
+            rounds.push([time(a), time(b), time(c)]);
         }
-        out
+        let median = |mut v: Vec<f64>| {
+            v.sort_by(f64::total_cmp);
+            v[v.len() / 2]
+        };
+        [
+            median(rounds.iter().map(|r| r[0]).collect()),
+            median(rounds.iter().map(|r| r[1]).collect()),
+            median(rounds.iter().map(|r| r[2]).collect()),
+            median(rounds.iter().map(|r| r[0] / r[2]).collect()),
+            median(rounds.iter().map(|r| r[1] / r[2]).collect()),
+        ]
     }
 }
 
@@ -318,8 +366,7 @@ struct Case {
 }
 
 fn cases() -> Vec<Case> {
-    #[cfg_attr(not(feature = "dop853"), allow(unused_mut))]
-    let mut cases = vec![
+    vec![
         Case {
             label: "stormer-verlet",
             peer: Peer::StormerVerlet,
@@ -342,21 +389,7 @@ fn cases() -> Vec<Case> {
             },
             bare: || bare_composition(yoshida6()),
         },
-    ];
-    #[cfg(feature = "dop853")]
-    cases.extend([
-        Case {
-            label: "dop853 (1e-12)",
-            peer: Peer::Dop853 { tolerance: 1e-12 },
-            bare: || dop::bare_dop853(1e-12),
-        },
-        Case {
-            label: "dop853 (1e-14)",
-            peer: Peer::Dop853 { tolerance: 1e-14 },
-            bare: || dop::bare_dop853(1e-14),
-        },
-    ]);
-    cases
+    ]
 }
 
 fn median_time(mut f: impl FnMut(), budget: Duration) -> f64 {
@@ -424,18 +457,7 @@ fn peers(c: &mut Criterion) {
         );
     }
     #[cfg(feature = "dop853")]
-    for tolerance in [1e-12, 1e-14] {
-        let t = median_time(
-            || {
-                black_box(dop::previous_dop853(&kepler, black_box(tolerance)));
-            },
-            Duration::from_millis(1500),
-        );
-        eprintln!(
-            "previous DOP853 wrapper form (Vec state, IVP::solve per interval, history kept), tol {tolerance:e}: {:.1} µs",
-            t * 1e6
-        );
-    }
+    dop::compare(&kepler, &initial);
     let mut group = c.benchmark_group("peers");
     group
         .sample_size(10)
@@ -447,6 +469,17 @@ fn peers(c: &mut Criterion) {
             b.iter(|| wrapper(&kepler, &initial, black_box(case.peer)))
         });
         group.bench_function(format!("{label}/bare"), |b| b.iter(|| (case.bare)()));
+    }
+    #[cfg(feature = "dop853")]
+    for tolerance in dop::TOLERANCES {
+        let peer = Peer::Dop853 { tolerance };
+        group.bench_function(format!("dop853-{tolerance:e}/wrapper"), |b| {
+            b.iter(|| wrapper(&kepler, &initial, black_box(peer)))
+        });
+        let mut method = dop::new_dop(tolerance);
+        group.bench_function(format!("dop853-{tolerance:e}/bare"), |b| {
+            b.iter(|| dop::bare_dop853(&mut method))
+        });
     }
     group.finish();
 }

@@ -2,25 +2,28 @@
 //! the `differential-equations` crate, as an external peer (cargo feature `dop853`, on by
 //! default).
 //!
-//! Its dense output is only about fourth order between step ends, so states are never
-//! interpolated: each call of [`OneStepMethod::step`] integrates the canonical equations from t
-//! to t + h (h the *sample interval*) as its own initial-value problem, ending exactly at the
-//! sample time, and the next interval starts with the last full accepted step size of this one.
+//! States are never interpolated: the samples are step ends. One run integrates the whole span
+//! with one method object, initialised once: consecutive calls of [`OneStepMethod::step`] that
+//! continue from the state the previous call returned (the study's sampling loop) keep
+//! stepping the same solution, and a step that would pass the next sample time is shortened to
+//! end exactly on it — the loop of the crate's own `solve_ode`, with output points. After such a
+//! shortened step the next step starts from the controller's proposal before shortening
+//! (the usual treatment of output points in step-size control, e.g. `tstops` in
+//! OrdinaryDiffEq.jl), so that sampling costs about one extra step per sample and nothing
+//! else. A call that does not continue the previous one (another state or time) starts a new
+//! solution, with the last full step as its first.
 //!
 //! It runs the way a careful user of the crate would run it: a fixed-size state `[f64; 2D]` for
 //! the dimensions of the built-in scenes (D = 1, 2, 4, 6, 18, 30; a `Vec<f64>` state otherwise),
-//! the system's own force (hand-written for the built-in systems), one method object reused for
-//! every interval through the crate's low-level `solve_ode`, and an output handler that stores
-//! nothing (no per-step history: only the end state is read, from the method itself).
+//! the system's own force (hand-written for the built-in systems), one method object for the
+//! whole span and no stored history (`benches/peers.rs` times it against the crate's
+//! `solve_ode` over the whole span with an output handler that stores nothing).
 
-use differential_equations::control::ControlFlag;
-use differential_equations::interpolate::Interpolation;
 use differential_equations::methods::{DormandPrince, ExplicitRungeKutta, Ordinary};
-use differential_equations::ode::{ODE, OrdinaryNumericalMethod, solve_ode};
-use differential_equations::solout::Solout;
-use differential_equations::solution::Solution;
+use differential_equations::ode::{ODE, OrdinaryNumericalMethod};
+use differential_equations::status::Status;
 use differential_equations::traits::State;
-use galerkin_vi::baselines::{CanonicalParts, OneStepMethod};
+use galerkin_vi::baselines::{CanonicalParts, OneStepMethod, force_static};
 use galerkin_vi::error::{GviError, Result};
 use galerkin_vi::lagrangian::Lagrangian;
 
@@ -59,55 +62,44 @@ impl Buffer for Vec<f64> {
     }
 }
 
-/// The canonical equations y = (q, p), ẏ = (M⁻¹p, f(q)) for the external solver.
+/// The canonical equations y = (q, p), ẏ = (M⁻¹p, f(q)) for the external solver, on a
+/// `Vec<f64>` state of any length.
 struct Canonical<'a, L: Lagrangian> {
     lagrangian: &'a L,
     parts: CanonicalParts,
 }
 
-impl<L: Lagrangian, Y: Buffer> ODE<f64, Y> for Canonical<'_, L> {
+impl<L: Lagrangian> ODE<f64, Vec<f64>> for Canonical<'_, L> {
     #[inline]
-    fn diff(&self, _t: f64, y: &Y, dydt: &mut Y) {
-        let y = y.as_slice();
-        // For `[f64; N]` the split point is a compile-time constant.
+    fn diff(&self, _t: f64, y: &Vec<f64>, dydt: &mut Vec<f64>) {
         let d = y.len() / 2;
         let (q, p) = y.split_at(d);
-        let (dq, dp) = dydt.as_mut_slice().split_at_mut(d);
+        let (dq, dp) = dydt.split_at_mut(d);
         self.parts.velocity(p, dq);
         self.lagrangian.force(q, dp);
     }
 }
 
-/// An output handler that stores nothing: it only remembers the last two accepted step
-/// lengths (the last one may be shortened to hit the sample time).
-#[derive(Debug, Default, Clone, Copy)]
-struct LastSteps {
-    last: f64,
-    before_last: f64,
-    accepted: usize,
+/// The same equations on a fixed-size state `[f64; N]`, N = 2D, through the fixed-size kernels
+/// the fixed-step baselines use (`velocity_static`, `force_static`): every length is a
+/// compile-time constant, as in a hand-written right-hand side.
+struct FixedCanonical<'a, L: Lagrangian, const D: usize> {
+    lagrangian: &'a L,
+    parts: CanonicalParts,
 }
 
-impl<Y: State<f64>> Solout<f64, Y> for LastSteps {
-    #[inline]
-    fn solout<I>(
-        &mut self,
-        t_curr: f64,
-        t_prev: f64,
-        _y_curr: &Y,
-        _y_prev: &Y,
-        _interpolator: &mut I,
-        _solution: &mut Solution<f64, Y>,
-    ) -> ControlFlag<f64, Y>
-    where
-        I: Interpolation<f64, Y> + ?Sized,
-    {
-        // The call after initialisation has t_curr = t_prev.
-        if t_curr != t_prev {
-            self.before_last = self.last;
-            self.last = t_curr - t_prev;
-            self.accepted += 1;
-        }
-        ControlFlag::Continue
+impl<L: Lagrangian, const D: usize, const N: usize> ODE<f64, [f64; N]>
+    for FixedCanonical<'_, L, D>
+{
+    #[inline(always)]
+    fn diff(&self, _t: f64, y: &[f64; N], dydt: &mut [f64; N]) {
+        // N = 2D (checked where it is built), so every index below is in range and known.
+        let q: [f64; D] = std::array::from_fn(|i| y[i]);
+        let p: [f64; D] = std::array::from_fn(|i| y[D + i]);
+        let v = self.parts.velocity_static(&p);
+        let f = force_static(self.lagrangian, &q);
+        dydt[..D].copy_from_slice(&v);
+        dydt[D..].copy_from_slice(&f);
     }
 }
 
@@ -118,8 +110,8 @@ type Dop853<Y> = ExplicitRungeKutta<Ordinary, DormandPrince, f64, Y, 8, 12, 16>;
 struct Interval {
     evaluations: usize,
     steps: usize,
-    /// The last full (not shortened) accepted step, when there were at least two.
-    next_h0: Option<f64>,
+    /// The last full (not shortened) accepted step, if there was one.
+    full_step: Option<f64>,
 }
 
 /// One sample interval of DOP853, whatever the state type.
@@ -138,14 +130,36 @@ trait Engine {
     ) -> Result<Interval>;
 }
 
-/// The method object (reused for every interval), the equations and the start buffer.
-struct Solver<'a, L: Lagrangian, Y: Buffer> {
-    ode: Canonical<'a, L>,
+/// The method object (one for the whole run), the equations and the start buffer.
+struct Solver<F, Y: Buffer> {
+    ode: F,
     method: Dop853<Y>,
     y0: Y,
+    /// Whether `method` holds a solution that a call may continue.
+    running: bool,
 }
 
-impl<L: Lagrangian, Y: Buffer> Engine for Solver<'_, L, Y> {
+/// Whether two times agree to a few rounding errors (a sample time computed as t₀ + kΔ
+/// against the same time reached as a sum of steps).
+#[inline]
+fn same_time(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 16.0 * f64::EPSILON * a.abs().max(b.abs()).max(1.0)
+}
+
+impl<F: ODE<f64, Y>, Y: Buffer> Solver<F, Y> {
+    /// Whether the method's current solution is at (t0, q, p), bit for bit in the state.
+    fn continues(&self, t0: f64, q: &[f64], p: &[f64]) -> bool {
+        if !self.running {
+            return false;
+        }
+        let t = OrdinaryNumericalMethod::<f64, Y>::t(&self.method);
+        let y = OrdinaryNumericalMethod::<f64, Y>::y(&self.method).as_slice();
+        let d = q.len();
+        same_time(t, t0) && y[..d] == *q && y[d..] == *p
+    }
+}
+
+impl<F: ODE<f64, Y>, Y: Buffer> Engine for Solver<F, Y> {
     fn advance(
         &mut self,
         t0: f64,
@@ -157,18 +171,65 @@ impl<L: Lagrangian, Y: Buffer> Engine for Solver<'_, L, Y> {
         q_next: &mut [f64],
         p_next: &mut [f64],
     ) -> Result<Interval> {
+        let fail = |t: f64, e: &dyn std::fmt::Debug| {
+            GviError::Unsupported(format!("DOP853 failed at t = {t}: {e:?}"))
+        };
         let d = q.len();
-        let y0 = self.y0.as_mut_slice();
-        y0[..d].copy_from_slice(q);
-        y0[d..].copy_from_slice(p);
-        // h0 = 0 asks the method for its initial-step heuristic.
-        self.method.h0 = h0;
+        let mut evaluations = 0;
+        let mut steps = 0;
+        let mut full_step = None;
         self.method.max_steps = max_steps;
-        let mut steps = LastSteps::default();
-        let solution = solve_ode(&mut self.method, &self.ode, t0, t1, &self.y0, &mut steps)
-            .map_err(|e| GviError::Unsupported(format!("DOP853 failed at t = {t0}: {e:?}")))?;
+        if !self.continues(t0, q, p) {
+            self.running = false;
+            let y0 = self.y0.as_mut_slice();
+            y0[..d].copy_from_slice(q);
+            y0[d..].copy_from_slice(p);
+            // h0 = 0 asks the method for its initial-step heuristic.
+            self.method.h0 = h0;
+            let evals = self
+                .method
+                .init(&self.ode, t0, t1, &self.y0)
+                .map_err(|e| fail(t0, &e))?;
+            evaluations += evals.function;
+            self.running = true;
+        }
+        // The loop of `solve_ode`, ending exactly at t1.
+        loop {
+            let t = OrdinaryNumericalMethod::<f64, Y>::t(&self.method);
+            if same_time(t, t1) {
+                break;
+            }
+            let h = OrdinaryNumericalMethod::<f64, Y>::h(&self.method);
+            let shortened = t + h > t1;
+            if shortened {
+                self.method.set_h(t1 - t);
+            }
+            match self.method.step(&self.ode) {
+                Ok(evals) => evaluations += evals.function,
+                Err(e) => {
+                    self.running = false;
+                    return Err(fail(t, &e));
+                }
+            }
+            steps += 1;
+            if matches!(
+                OrdinaryNumericalMethod::<f64, Y>::status(&self.method),
+                Status::RejectedStep
+            ) {
+                continue;
+            }
+            if shortened {
+                // Accepted as shortened: go on from the proposal before shortening, unless
+                // the controller now proposes more.
+                let proposed = OrdinaryNumericalMethod::<f64, Y>::h(&self.method);
+                self.method.set_h(proposed.max(h));
+            } else {
+                full_step = Some(h);
+            }
+        }
         let t_end = OrdinaryNumericalMethod::<f64, Y>::t(&self.method);
-        if (t_end - t1).abs() > 1e-12 * (1.0 + t_end.abs()) {
+        if !same_time(t_end, t1) {
+            self.running = false;
             return Err(GviError::Unsupported(format!(
                 "DOP853 stopped at t = {t_end} instead of {t1}"
             )));
@@ -177,9 +238,9 @@ impl<L: Lagrangian, Y: Buffer> Engine for Solver<'_, L, Y> {
         q_next.copy_from_slice(&y[..d]);
         p_next.copy_from_slice(&y[d..]);
         Ok(Interval {
-            evaluations: solution.evals.function,
-            steps: solution.steps.accepted + solution.steps.rejected,
-            next_h0: (steps.accepted >= 2).then_some(steps.before_last),
+            evaluations,
+            steps,
+            full_step,
         })
     }
 }
@@ -239,26 +300,37 @@ impl<'a, L: Lagrangian> Dop853Baseline<'a, L> {
         }
         let parts = CanonicalParts::new(lagrangian, h)?;
         let d = parts.d;
-        fn solver<'a, L: Lagrangian, Y: Buffer + 'a>(
+        fn solver<'a, F: ODE<f64, Y> + 'a, Y: Buffer + 'a>(
+            ode: F,
+            len: usize,
+            tolerance: f64,
+        ) -> Box<dyn Engine + 'a> {
+            Box::new(Solver::<F, Y> {
+                ode,
+                method: Dop853::<Y>::dop853().rtol(tolerance).atol(tolerance),
+                y0: Y::zeroed(len),
+                running: false,
+            })
+        }
+        fn fixed<'a, L: Lagrangian, const D: usize, const N: usize>(
             lagrangian: &'a L,
             parts: CanonicalParts,
             tolerance: f64,
         ) -> Box<dyn Engine + 'a> {
-            let len = 2 * parts.d;
-            Box::new(Solver::<L, Y> {
-                ode: Canonical { lagrangian, parts },
-                method: Dop853::<Y>::dop853().rtol(tolerance).atol(tolerance),
-                y0: Y::zeroed(len),
-            })
+            const { assert!(N == 2 * D) };
+            solver::<_, [f64; N]>(FixedCanonical::<L, D> { lagrangian, parts }, N, tolerance)
         }
         let (engine, static_state) = match (allow_static, d) {
-            (true, 1) => (solver::<L, [f64; 2]>(lagrangian, parts, tolerance), true),
-            (true, 2) => (solver::<L, [f64; 4]>(lagrangian, parts, tolerance), true),
-            (true, 4) => (solver::<L, [f64; 8]>(lagrangian, parts, tolerance), true),
-            (true, 6) => (solver::<L, [f64; 12]>(lagrangian, parts, tolerance), true),
-            (true, 18) => (solver::<L, [f64; 36]>(lagrangian, parts, tolerance), true),
-            (true, 30) => (solver::<L, [f64; 60]>(lagrangian, parts, tolerance), true),
-            _ => (solver::<L, Vec<f64>>(lagrangian, parts, tolerance), false),
+            (true, 1) => (fixed::<L, 1, 2>(lagrangian, parts, tolerance), true),
+            (true, 2) => (fixed::<L, 2, 4>(lagrangian, parts, tolerance), true),
+            (true, 4) => (fixed::<L, 4, 8>(lagrangian, parts, tolerance), true),
+            (true, 6) => (fixed::<L, 6, 12>(lagrangian, parts, tolerance), true),
+            (true, 18) => (fixed::<L, 18, 36>(lagrangian, parts, tolerance), true),
+            (true, 30) => (fixed::<L, 30, 60>(lagrangian, parts, tolerance), true),
+            _ => (
+                solver::<_, Vec<f64>>(Canonical { lagrangian, parts }, 2 * d, tolerance),
+                false,
+            ),
         };
         Ok(Dop853Baseline {
             h,
@@ -322,8 +394,8 @@ impl<L: Lagrangian> OneStepMethod for Dop853Baseline<'_, L> {
             .advance(t, t + self.h, h0, max_steps, q, p, q_next, p_next)?;
         self.evaluations += interval.evaluations;
         self.steps += interval.steps;
-        if interval.next_h0.is_some() {
-            self.last_step = interval.next_h0;
+        if interval.full_step.is_some() {
+            self.last_step = interval.full_step;
         }
         Ok(())
     }

@@ -6,8 +6,8 @@
 use galerkin_vi_lab::error::LabError;
 use galerkin_vi_lab::scene::Scene;
 use galerkin_vi_lab::studies::work_precision::{
-    MAX_SAMPLES, MAX_TOTAL_STEPS, WorkPrecisionConfig, read_external_csv, reference_csv,
-    work_precision,
+    MAX_SAMPLES, MAX_TOTAL_STEPS, WorkPrecisionConfig, read_external, read_external_csv,
+    reference_csv, work_precision,
 };
 use std::path::{Path, PathBuf};
 #[path = "common/cli.rs"]
@@ -308,4 +308,84 @@ fn reference_file_samples_the_study_grid() {
         .collect();
     assert_eq!(last[0], 10.0);
     assert_eq!(last[2], r.q[10][0]);
+}
+
+/// A study's own CSV with a failed row (a run that failed before it was timed: `NaN` seconds,
+/// `inf` error) reads back: the failed row is skipped with a note, the others are kept, and
+/// `gvi work-precision --external` prints the note and merges the rest.
+#[test]
+fn failed_rows_of_a_study_csv_are_skipped_with_a_note() {
+    let mut scene = Scene::load("kepler").unwrap();
+    scene.method.steps = 3;
+    let mut study = work_precision(&scene.build().unwrap(), &WorkPrecisionConfig::quick()).unwrap();
+    let mut failed = study.points[0].clone();
+    failed.method = "dop853".into();
+    failed.parameters = "tol = 1e-300".into();
+    failed.seconds = f64::NAN;
+    failed.error = f64::INFINITY;
+    failed.failure = Some("DOP853 tolerance: need 1e-16 ≤ tolerance < 1".into());
+    study.points.push(failed);
+    let dir = scratch("failed-rows");
+    let files = study.write(&dir).unwrap();
+    let csv = std::fs::read_to_string(&files[0]).unwrap();
+    let failed_line = csv
+        .lines()
+        .position(|l| l.contains("tol = 1e-300"))
+        .unwrap()
+        + 1;
+    assert!(csv.lines().nth(failed_line - 1).unwrap().contains(",NaN,"));
+    let rows = read_external(&files[0]).unwrap();
+    assert_eq!(rows.points.len(), study.points.len() - 1);
+    assert!(rows.points.iter().all(|p| p.seconds.is_finite()));
+    assert_eq!(rows.skipped.len(), 1);
+    let skipped = &rows.skipped[0];
+    assert_eq!(skipped.line, failed_line);
+    assert_eq!(skipped.method, "dop853");
+    assert_eq!(skipped.parameters, "tol = 1e-300");
+    assert!(skipped.failure.contains("tolerance"));
+    assert!(
+        skipped
+            .to_string()
+            .contains("skipped the failed row dop853")
+    );
+    assert_eq!(
+        read_external_csv(&files[0]).unwrap().len(),
+        rows.points.len()
+    );
+    // A failed row with a malformed (not merely non-finite) time is still a typed error.
+    let bad = dir.join("bad.csv");
+    std::fs::write(
+        &bad,
+        format!("{HEADER}\ndop853,\"tol = 1e-300\",,,1e-300,inf,oops,0,false,\"failed\"\n"),
+    )
+    .unwrap();
+    assert!(matches!(
+        read_external(&bad),
+        Err(LabError::ExternalCsv { line: 2, .. })
+    ));
+    // The CLI prints the note and merges the rest.
+    let out = dir.join("out");
+    let (code, _, err) = gvi(&[
+        "work-precision",
+        "kepler",
+        "--quick",
+        "--horizon",
+        "4",
+        "--external",
+        files[0].to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("note: ") && err.contains("skipped the failed row dop853 (tol = 1e-300)"),
+        "{err}"
+    );
+    let merged = std::fs::read_to_string(out.join("work_precision.csv")).unwrap();
+    assert!(!merged.contains("tol = 1e-300"));
+    assert_eq!(
+        merged.lines().filter(|l| l.ends_with(",true")).count(),
+        rows.points.len()
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -1,11 +1,12 @@
 #!/usr/bin/env python3
-"""REBOUND (IAS15, WHFast) as an external peer of `gvi work-precision`.
+"""REBOUND (IAS15, WHFast with symplectic correctors, WHCKL, SABA) as external peers of
+`gvi work-precision`.
 
-Runs REBOUND on one of the crate's built-in scenes with the study's protocol -- positions
-sampled at t_k = t0 + k*Delta (Delta = the scene's h), error = max over the samples of the
-max-norm position error against the study's own reference positions, written by
-`gvi work-precision SCENE --write-reference FILE` -- and writes rows in the study's CSV
-schema, for `gvi work-precision SCENE --external FILE.csv`.
+Runs REBOUND (pinned in scripts/rebound/requirements.txt) on one of the crate's built-in scenes
+with the study's protocol -- positions sampled at t_k = t0 + k*Delta (Delta = the scene's h),
+error = max over the samples of the max-norm position error against the study's own reference
+positions, written by `gvi work-precision SCENE --write-reference FILE` -- and writes rows in the
+study's CSV schema, for `gvi work-precision SCENE --external FILE.csv`.
 
 Setup (from the repository root):
 
@@ -16,20 +17,35 @@ Setup (from the repository root):
 Models:
 - kepler (q'' = -mu q/|q|^3): G = 1, a central body of mass mu at rest at the origin and a
   test particle (mass 0) at (q, 0), velocity (p, 0); the position is the test particle's
-  relative to the central body, so its motion is the Kepler problem exactly.
+  relative to the central body, so its motion is the Kepler problem exactly. For two bodies
+  the Wisdom-Holman family (WHFast, WHCKL, SABA) is exact up to rounding: its Kepler drift is
+  solved analytically and the interaction term is zero.
 - nbody: G = the scene's g (1 with gm values), masses = the scene's masses (GM), velocities
   as given, moved to the barycentre exactly as the scene does (`barycentric = true`); the
   positions compared are all bodies' barycentric coordinates in scene order, as in the study.
   The script checks that its initial positions agree with the reference's first row.
 
-Timing: only the integration (the sim.integrate / sim.steps calls and reading the positions
-at each sample) is timed with time.perf_counter, the median of --repeats runs, each on a
-fresh simulation built outside the timed region.
-IAS15 runs to every sample with sim.integrate(t, exact_finish_time=1); WHFast takes m steps of
-dt = Delta/m per sample (sim.steps(m), safe_mode = 0, keep_unsynchronized = 1, synchronized
-for reading only, so the stepping is never altered by the sampling).
-force_evaluations: WHFast = the number of steps (one interaction kick each); IAS15 = 0 (not
-counted; REBOUND does not report it).
+Integrators, each as REBOUND's documentation recommends for planetary systems:
+- IAS15 (default PRS23 adaptive mode) at epsilon = 1e-2 ... 1e-12 in half decades, integrating
+  to every sample with exact_finish_time = 1 (sim.integrate(t));
+- WHFast in Jacobi coordinates without corrector and with symplectic correctors of order 11
+  and 17 (rebound-whfast, rebound-whfast-c11, rebound-whfast-c17), WHCKL (WHFast, lazy implementer's kernel,
+  corrector 17; rebound-whckl), SABA(10,6,4) and SABA(8,6,4) (rebound-saba-10-6-4,
+  rebound-saba-8-6-4), all with safe_mode = 0 and keep_unsynchronized = 1, swept over
+  dt = Delta/m (m in DIVISORS, increasing, until the error stalls at its floor or a run takes
+  longer than --max-seconds). Each takes m steps per sample interval (sim.steps(m), which ends
+  with a synchronisation that applies the corrector, on a copy, so the stepping never depends
+  on the sampling): the samples are step boundaries, as dt divides Delta.
+The calls sim.integrate / sim.steps go to the C functions they wrap (reb_simulation_integrate,
+reb_simulation_steps), skipping the
+Python layer's message polling after each call; messages are processed once after the run,
+and a non-zero return code is an error.
+Each row's parameters name the integrator, its corrector/kernel and dt.
+
+Timing: only the integration (the integrate / steps calls, synchronising and reading the
+positions at each sample) is timed with time.perf_counter, the median of --repeats runs,
+each on a fresh simulation built outside the timed region.
+force_evaluations: 0 (not counted; REBOUND does not report them).
 """
 
 import argparse
@@ -42,6 +58,8 @@ import sys
 import tempfile
 import time
 import tomllib
+
+from ctypes import byref, c_double, c_int, c_size_t
 
 import rebound
 
@@ -88,13 +106,39 @@ def model(scene):
 
 
 def positions(kind, sim, dim):
-    ps = sim.particles
+    # Iterating over sim.particles builds the particle view once (indexing it builds it per
+    # particle: 2-200 us each in REBOUND 5.2.2's Python layer).
+    ps = list(sim.particles)
     if kind == "kepler":
         return [ps[1].x - ps[0].x, ps[1].y - ps[0].y]
     out = []
     for p in ps:
         out.extend((p.x, p.y, p.z)[:dim])
     return out
+
+
+# The integration calls go straight to REBOUND's C library: reb_simulation_integrate and
+# reb_simulation_steps are what sim.integrate and sim.steps call, without the Python layer's message polling after every call
+# (5-25 us each in 5.2.2, not the integrator's cost). Messages (warnings, errors) are
+# processed once after the run.
+_LIB = rebound.clibrebound
+_RET = {1: "generic error", 2: "no particles", 3: "close encounter", 4: "escape", 6: "interrupted",
+        7: "collision"}
+
+
+def _check(sim, ret):
+    if ret not in (0, 5):
+        sim.process_messages()
+        raise RuntimeError(f"REBOUND stopped: {_RET.get(ret, ret)}")
+
+
+def _integrate(sim, t):
+    _check(sim, _LIB.reb_simulation_integrate(byref(sim), c_double(t)))
+
+
+def _steps(sim, m):
+    _check(sim, _LIB.reb_simulation_steps(byref(sim), c_size_t(m)))
+
 
 
 def read_reference(path):
@@ -123,34 +167,93 @@ def build(kind, g, masses, q, v):
 def run_ias15(state, ts, epsilon, dim):
     sim = build(*state)
     sim.integrator = "ias15"
-    sim.ri_ias15.epsilon = epsilon
+    sim.integrator.epsilon = epsilon
     sim.t = ts[0]
+    sim.exact_finish_time = c_int(1)
     out = [positions(state[0], sim, dim)]
     start = time.perf_counter()
     for t in ts[1:]:
-        sim.integrate(t, exact_finish_time=1)
+        _integrate(sim, t)
         out.append(positions(state[0], sim, dim))
-    return time.perf_counter() - start, out, 0
+    seconds = time.perf_counter() - start
+    sim.process_messages()
+    return seconds, out, 0
 
 
-def run_whfast(state, ts, m, dim):
+# The fixed-step families: (method name, integrator setup, parameter text). Each is REBOUND's
+# own recommended configuration for planetary systems (Rein & Tamayo 2015; Rein, Tamayo &
+# Brown 2019): WHFast in Jacobi coordinates with symplectic correctors of order 11 or 17,
+# WHCKL (WHFast, lazy implementer's kernel, corrector 17), and SABA(10,6,4) / SABA(8,6,4).
+def _whfast(corrector, kernel="default"):
+    def setup(sim):
+        sim.integrator = "whfast"
+        sim.integrator.coordinates = "jacobi"
+        sim.integrator.corrector = corrector
+        sim.integrator.kernel = kernel
+        sim.integrator.safe_mode = 0
+        sim.integrator.keep_unsynchronized = 1
+    return setup
+
+
+def _saba(kind):
+    def setup(sim):
+        sim.integrator = "saba"
+        sim.integrator.type = kind
+        sim.integrator.safe_mode = 0
+        sim.integrator.keep_unsynchronized = 1
+    return setup
+
+
+FAMILIES = {
+    "whfast": ("rebound-whfast", _whfast(0), "WHFast, Jacobi, no corrector"),
+    "whfast-c11": ("rebound-whfast-c11", _whfast(11), "WHFast, Jacobi, corrector 11"),
+    "whfast-c17": ("rebound-whfast-c17", _whfast(17), "WHFast, Jacobi, corrector 17"),
+    "whckl": ("rebound-whckl", _whfast(17, "lazy"), "WHCKL (WHFast, Jacobi, lazy kernel, corrector 17)"),
+    "saba-10-6-4": ("rebound-saba-10-6-4", _saba("10_6_4"), "SABA(10,6,4)"),
+    "saba-8-6-4": ("rebound-saba-8-6-4", _saba("8_6_4"), "SABA(8,6,4)"),
+}
+
+
+def run_fixed(state, ts, setup, m, dim):
+    """m steps of dt = Delta/m per sample interval (sim.steps(m)): the samples are step
+    boundaries. safe_mode = 0 and keep_unsynchronized = 1: the synchronisation at the end of
+    every sim.steps call (which applies the symplectic corrector, where there is one) works on
+    a copy, so the stepping never depends on the sampling."""
     sim = build(*state)
-    sim.integrator = "whfast"
+    setup(sim)
     sim.dt = (ts[1] - ts[0]) / m
-    sim.ri_whfast.safe_mode = 0
-    sim.ri_whfast.keep_unsynchronized = 1
     sim.t = ts[0]
     out = [positions(state[0], sim, dim)]
     start = time.perf_counter()
     for _ in ts[1:]:
-        sim.steps(m)
-        sim.integrator_synchronize()
+        # reb_simulation_steps ends with a synchronisation (on a copy, applying the
+        # corrector): the positions are bit for bit those after an explicit synchronize,
+        # which would only apply the corrector a second time.
+        _steps(sim, m)
         out.append(positions(state[0], sim, dim))
-    return time.perf_counter() - start, out, m * (len(ts) - 1)
+    seconds = time.perf_counter() - start
+    sim.process_messages()
+    return seconds, out, 0
+
+
+# Steps per sample interval: every divisor of 2^a 5^b up to 1000 and a few more, so that
+# dt = Delta/m lands on the sample times and the sweep is fine enough to find each family's
+# cheapest step for a given error.
+DIVISORS = [1, 2, 3, 4, 5, 6, 8, 10, 12, 16, 20, 25, 32, 40, 50, 64, 80, 100, 128, 160, 200,
+            256, 320, 400, 512, 640, 800, 1000, 1280, 1600, 2000, 2560, 4096]
 
 
 def max_error(qs, ref):
-    return max(max(abs(a - b) for a, b in zip(q, r)) for q, r in zip(qs, ref))
+    """Max over the samples of the max-norm position error (inf if any position is NaN)."""
+    worst = 0.0
+    for q, r in zip(qs, ref):
+        for a, b in zip(q, r):
+            d = abs(a - b)
+            if not d <= worst:
+                if d != d:
+                    return math.inf
+                worst = d
+    return worst
 
 
 def timed(run, repeats):
@@ -177,9 +280,16 @@ def main():
     ap.add_argument("--gvi", default=os.environ.get("GVI", os.path.join(ROOT, "target", "release", "gvi")))
     ap.add_argument("--out", help="output CSV (the study's schema)")
     ap.add_argument("--repeats", type=int, default=3)
-    ap.add_argument("--epsilons", type=float, nargs="*", default=[10.0**-k for k in range(2, 13)])
-    ap.add_argument("--divisors", type=int, nargs="*", default=[2**k for k in range(0, 13)],
-                    help="WHFast steps per sample interval (dt = Delta/m)")
+    ap.add_argument("--epsilons", type=float, nargs="*",
+                    default=[10.0 ** (-k / 2) for k in range(4, 25)],
+                    help="IAS15 epsilons (default 1e-2 ... 1e-12 in half decades)")
+    ap.add_argument("--divisors", type=int, nargs="*", default=DIVISORS,
+                    help="fixed-step families: steps per sample interval (dt = Delta/m), "
+                         "swept in increasing order")
+    ap.add_argument("--families", nargs="*", default=list(FAMILIES), choices=list(FAMILIES),
+                    help="fixed-step families to sweep (default: all)")
+    ap.add_argument("--max-seconds", type=float, default=1.5,
+                    help="stop a fixed-step family's sweep after a run slower than this")
     ap.add_argument("--compare-reference", action="store_true",
                     help="only compare IAS15 at --compare-epsilons with the reference and print it")
     ap.add_argument("--compare-epsilons", type=float, nargs="*", default=[1e-10, 1e-11, 1e-12])
@@ -226,15 +336,26 @@ def main():
     for eps in args.epsilons:
         seconds, qs, evals, failure = timed(lambda: run_ias15(state, ts, eps, dim), args.repeats)
         error = max_error(qs, ref) if qs else math.inf
-        rows.append(("rebound-ias15", f"epsilon = {eps:g}", None, eps, error, seconds, evals, failure))
+        rows.append(("rebound-ias15", f"IAS15, epsilon = {eps:.3g}", None, eps, error, seconds, evals, failure))
         print(f"  rebound-ias15 epsilon = {eps:g}: error {error:.3e}, {seconds:.3e} s", file=sys.stderr)
     delta = ts[1] - ts[0]
-    for m in args.divisors:
-        dt = delta / m
-        seconds, qs, evals, failure = timed(lambda: run_whfast(state, ts, m, dim), args.repeats)
-        error = max_error(qs, ref) if qs else math.inf
-        rows.append(("rebound-whfast", f"dt = {dt:g}", dt, None, error, seconds, evals, failure))
-        print(f"  rebound-whfast dt = {dt:g}: error {error:.3e}, {seconds:.3e} s", file=sys.stderr)
+    for family in args.families:
+        method, setup, label = FAMILIES[family]
+        best, stalled = math.inf, 0
+        for m in sorted(set(args.divisors)):
+            dt = delta / m
+            seconds, qs, evals, failure = timed(lambda: run_fixed(state, ts, setup, m, dim), args.repeats)
+            error = max_error(qs, ref) if qs else math.inf
+            if not math.isfinite(error):
+                error, failure = math.inf, failure or "non-finite positions"
+            rows.append((method, f"{label}, dt = {dt:.6g} (Delta/{m})", dt, None, error, seconds, evals,
+                         failure))
+            print(f"  {method} dt = {dt:g}: error {error:.3e}, {seconds:.3e} s", file=sys.stderr)
+            # At its round-off floor a family gains nothing from smaller steps.
+            stalled = stalled + 1 if error < 1e-8 and error > 0.5 * best else 0
+            best = min(best, error)
+            if stalled >= 3 or (math.isfinite(seconds) and seconds > args.max_seconds):
+                break
 
     lines = [
         f"# REBOUND {rebound.__version__} (Python {platform.python_version()}, {platform.machine()}) on scene "

@@ -7,7 +7,7 @@ use crate::studies::compare_refinement::{CompareConfig, compare_refinement};
 use crate::studies::peers::QuadPoints;
 use crate::studies::stability::{Class, StabilityConfig, stability};
 use crate::studies::work_precision::{
-    WorkPrecisionConfig, read_external_csv, reference_csv, work_precision,
+    WorkPrecisionConfig, read_external, reference_csv, work_precision,
 };
 use crate::studies::write_file;
 use clap::Args;
@@ -34,8 +34,8 @@ pub struct WorkPrecisionArgs {
     #[arg(long)]
     pub quick: bool,
     /// The long-run sweep: T = 20,000 (unless --horizon is given), only the accurate end of
-    /// each family (Legendre and Chebyshev n = 16…32 at h = Δ/2, Δ/4; DOP853 at 1e-10…1e-14),
-    /// one repeat (about a minute on Kepler).
+    /// each family (Legendre and Chebyshev n = 16…32 at h = Δ/2, Δ/4; DOP853 at 1e-10…1e-15
+    /// in half decades), one repeat (about a minute on Kepler).
     #[arg(long, conflicts_with = "quick")]
     pub long: bool,
     /// Output directory (default ./out/work-precision).
@@ -172,12 +172,17 @@ pub fn run_work_precision(args: WorkPrecisionArgs) -> Result<(), LabError> {
     let external = args
         .external
         .iter()
-        .map(|path| read_external_csv(path).map(|points| (path, points)))
+        .map(|path| read_external(path).map(|rows| (path, rows)))
         .collect::<Result<Vec<_>, _>>()?;
+    for (path, rows) in &external {
+        for skipped in &rows.skipped {
+            eprintln!("note: {}: {skipped}", path.display());
+        }
+    }
     let mut study =
         work_precision(&scene, &config).map_err(|e| super::with_flag(e, "horizon", "--horizon"))?;
-    for (path, points) in external {
-        study.merge_external(&path.display().to_string(), points);
+    for (path, rows) in external {
+        study.merge_external(&path.display().to_string(), rows.points);
     }
     let files = study.write(&dir)?;
     eprint!("{}", study.summary());

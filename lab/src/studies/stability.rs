@@ -196,7 +196,7 @@ pub fn stability(scene: &BuiltScene, config: &StabilityConfig) -> Result<Stabili
     study_system(system, scene, config)
 }
 
-fn study_system<S: System + Sync>(
+fn study_system<S: System + Sync + 'static>(
     system: &S,
     scene: &BuiltScene,
     config: &StabilityConfig,
@@ -333,7 +333,7 @@ fn galerkin_cell<S: System>(
 }
 
 /// Whether `peer` keeps a bounded energy over `steps` steps of size h.
-pub fn bounded_at<S: System>(
+pub fn bounded_at<S: System + 'static>(
     system: &S,
     scene: &BuiltScene,
     peer: Peer,
@@ -349,7 +349,7 @@ pub fn bounded_at<S: System>(
     }
 }
 
-fn largest_stable_h<S: System>(
+fn largest_stable_h<S: System + 'static>(
     system: &S,
     scene: &BuiltScene,
     peer: Peer,

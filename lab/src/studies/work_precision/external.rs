@@ -65,10 +65,51 @@ fn split_csv_line(line: &str) -> std::result::Result<Vec<String>, String> {
     Ok(fields)
 }
 
+/// A failed row skipped by [`read_external`]: a row with a failure and no finite time (the
+/// study's own CSV writes `NaN` seconds for a run that failed before it was timed).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SkippedRow {
+    /// 1-based line in the file.
+    pub line: usize,
+    /// Method family.
+    pub method: String,
+    /// Its parameters.
+    pub parameters: String,
+    /// The row's failure text.
+    pub failure: String,
+}
+
+impl std::fmt::Display for SkippedRow {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "line {}: skipped the failed row {} ({}): {}",
+            self.line, self.method, self.parameters, self.failure
+        )
+    }
+}
+
+/// The rows of an external file: those merged, and the failed rows skipped.
+#[derive(Debug, Clone)]
+pub struct ExternalRows {
+    /// The rows read, every one marked `external`.
+    pub points: Vec<WorkPoint>,
+    /// Failed rows without a finite time, skipped (the caller prints a note for each).
+    pub skipped: Vec<SkippedRow>,
+}
+
+/// [`read_external`] without the notes: the rows read (failed rows without a finite time are
+/// dropped silently).
+pub fn read_external_csv(path: &Path) -> Result<Vec<WorkPoint>> {
+    read_external(path).map(|rows| rows.points)
+}
+
 /// Read an external work–precision CSV (the study's schema, see [`EXTERNAL_COLUMNS`]): a
 /// header line, then one row per configuration. Blank lines and lines starting with `#`
 /// (provenance comments) are skipped. Every row is marked `external`; its `pareto` value is
-/// parsed but recomputed on merging.
+/// parsed but recomputed on merging. A row with a failure whose `seconds` is not a finite
+/// number (`NaN`, as the study's own CSV writes for a run that failed; or empty) is skipped
+/// and listed in [`ExternalRows::skipped`], so that a study's own CSV reads back whole.
 ///
 /// Errors: [`LabError::ExternalFile`] if the file cannot be read; [`LabError::ExternalCsv`]
 /// naming the file and the 1-based line for a missing, unknown or duplicate column, a row with
@@ -76,7 +117,7 @@ fn split_csv_line(line: &str) -> std::result::Result<Vec<String>, String> {
 /// `seconds` must be finite, `seconds` ≥ 0; `error` must be finite and ≥ 0 unless the row has
 /// a failure; `n` and `force_evaluations` are non-negative integers; `pareto` is `true` or
 /// `false`).
-pub fn read_external_csv(path: &Path) -> Result<Vec<WorkPoint>> {
+pub fn read_external(path: &Path) -> Result<ExternalRows> {
     let text = std::fs::read_to_string(path).map_err(|source| LabError::ExternalFile {
         path: path.to_path_buf(),
         source,
@@ -131,6 +172,7 @@ pub fn read_external_csv(path: &Path) -> Result<Vec<WorkPoint>> {
         ));
     }
     let mut points = Vec::new();
+    let mut skipped = Vec::new();
     for (line, row) in lines {
         let fields = split_csv_line(row).map_err(|r| bad(line, r))?;
         if fields.len() != names.len() {
@@ -187,6 +229,20 @@ pub fn read_external_csv(path: &Path) -> Result<Vec<WorkPoint>> {
             return Err(bad(line, "method: empty".into()));
         }
         let failure = Some(get(9).to_string()).filter(|f| !f.is_empty());
+        if let Some(failure) = &failure {
+            // A failed run has no time to compare: skip it with a note, but only if its
+            // seconds cell is a number that is not finite, or empty (a malformed cell stays an
+            // error).
+            if number(6)?.is_none_or(|s| !s.is_finite()) {
+                skipped.push(SkippedRow {
+                    line,
+                    method,
+                    parameters: get(1).to_string(),
+                    failure: failure.clone(),
+                });
+                continue;
+            }
+        }
         let h = finite(2, number(2)?)?;
         let tolerance = finite(4, number(4)?)?;
         let error = number(5)?.ok_or_else(|| bad(line, "error: missing".into()))?;
@@ -227,5 +283,5 @@ pub fn read_external_csv(path: &Path) -> Result<Vec<WorkPoint>> {
             external: true,
         });
     }
-    Ok(points)
+    Ok(ExternalRows { points, skipped })
 }
