@@ -24,7 +24,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
-/// The files [`Refinement::write`] writes into its directory.
+/// The files [`RefineStudy::write`] writes into its directory.
 pub const FILES: [&str; 3] = ["refine.csv", "refine.json", "refine.svg"];
 
 /// Which parameter a sweep varies.
