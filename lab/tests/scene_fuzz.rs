@@ -109,7 +109,7 @@ fn mutate(text: &str, kind: u8, pick: usize, value: usize) -> String {
 fn cap(scene: &mut Scene) {
     // N-body scenes get their state from the bodies when built: count those coordinates.
     let big = scene.initial.q.len() > 12
-        || matches!(&scene.system, SystemSpec::NBody { dim, bodies, .. } if dim * bodies.len() > 12);
+        || matches!(&scene.system, SystemSpec::NBody { dim, bodies, .. } if dim.saturating_mul(bodies.len()) > 12);
     let m = &mut scene.method;
     m.steps = m.steps.min(if big { 2 } else { 6 });
     m.n = m.n.min(12);
