@@ -193,6 +193,93 @@ pub trait Lagrangian {
         self.gradient(q, v, &mut lq, &mut lv);
         lv.iter().zip(v).map(|(a, b)| a * b).sum::<f64>() - self.value(q, v)
     }
+
+    // --- Time dependence and forcing (docs/guide/forcing.md). Every method has a default
+    // that describes an autonomous, conservative system at no cost; the integrator asks
+    // `is_autonomous` and `is_forced` once per workspace and only then evaluates the `_at`
+    // forms at the node times t_k + c_j h. ---
+
+    /// Whether L has no explicit time dependence (the default). A non-autonomous Lagrangian
+    /// ([`crate::NonAutonomous`]) answers `false` and overrides the `_at` methods; its
+    /// time-free methods then see L at t = 0, and tools that assume autonomy (periodic orbits,
+    /// the geometric check's energy invariant) refuse it with a typed error.
+    fn is_autonomous(&self) -> bool {
+        true
+    }
+
+    /// L(t, q, v). Default: [`value`](Lagrangian::value), ignoring t.
+    fn value_at(&self, t: f64, q: &[f64], v: &[f64]) -> f64 {
+        let _ = t;
+        self.value(q, v)
+    }
+
+    /// L_q and L_v at (t, q, v). Default: [`gradient`](Lagrangian::gradient), ignoring t.
+    fn gradient_at(&self, t: f64, q: &[f64], v: &[f64], lq: &mut [f64], lv: &mut [f64]) {
+        let _ = t;
+        self.gradient(q, v, lq, lv)
+    }
+
+    /// L_qq, L_qv, L_vv at (t, q, v), as [`hessian`](Lagrangian::hessian). Default: ignoring t.
+    fn hessian_at(
+        &self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        lqq: &mut [f64],
+        lqv: &mut [f64],
+        lvv: &mut [f64],
+    ) {
+        let _ = t;
+        self.hessian(q, v, lqq, lqv, lvv)
+    }
+
+    /// ∂L/∂t at (t, q, v): the rate at which the energy changes along a motion of an
+    /// unforced system, dE/dt = −∂L/∂t. Default 0.
+    fn time_derivative(&self, t: f64, q: &[f64], v: &[f64]) -> f64 {
+        let _ = (t, q, v);
+        0.0
+    }
+
+    /// p = ∂L/∂v(t, q, v). Default: [`legendre_transform`](Lagrangian::legendre_transform).
+    fn legendre_transform_at(&self, t: f64, q: &[f64], v: &[f64], p: &mut [f64]) {
+        let _ = t;
+        self.legendre_transform(q, v, p)
+    }
+
+    /// E = L_v·v − L at (t, q, v). Default: [`energy`](Lagrangian::energy).
+    fn energy_at(&self, t: f64, q: &[f64], v: &[f64]) -> f64 {
+        let _ = t;
+        self.energy(q, v)
+    }
+
+    /// Whether a non-conservative force f(t, q, v) acts ([`crate::Forced`]); default `false`.
+    /// The integrator then solves the forced stage equations of the discrete
+    /// Lagrange–d'Alembert principle (docs/DESIGN.md §2): f enters wherever L_q does,
+    /// weighted by the quadrature, so p_{k+1} = D₂L_d + F_d⁺ and p_k = −D₁L_d − F_d⁻.
+    fn is_forced(&self) -> bool {
+        false
+    }
+
+    /// The force f(t, q, v) into `f` (a covector, D values). Default: zero.
+    fn external_force(&self, t: f64, q: &[f64], v: &[f64], f: &mut [f64]) {
+        let _ = (t, q, v);
+        f.iter_mut().for_each(|x| *x = 0.0);
+    }
+
+    /// ∂f/∂q and ∂f/∂v at (t, q, v), row-major D×D (entry (r, s) = ∂f_r/∂q_s, ∂f_r/∂v_s).
+    /// Default: zero.
+    fn external_force_jacobian(
+        &self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        fq: &mut [f64],
+        fv: &mut [f64],
+    ) {
+        let _ = (t, q, v);
+        fq.iter_mut().for_each(|x| *x = 0.0);
+        fv.iter_mut().for_each(|x| *x = 0.0);
+    }
 }
 
 /// A separable mechanical Lagrangian L = ½ vᵀ M v − V(q) with a constant symmetric

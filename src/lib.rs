@@ -36,6 +36,7 @@ pub mod basis;
 pub mod curve;
 pub mod error;
 pub mod events;
+pub mod forcing;
 pub mod geometry;
 pub mod integrator;
 pub mod lagrangian;
@@ -53,6 +54,9 @@ pub mod systems;
 pub mod trajectory;
 
 pub use error::{GviError, Result};
+pub use forcing::{
+    ExternalForce, Forced, LinearDamping, NonAutonomous, NonAutonomousLagrangian, StokesDrag,
+};
 pub use integrator::{GalerkinIntegrator, IntegrationFailure, NewtonOptions, StepJacobian};
 pub use lagrangian::{Lagrangian, Mechanical};
 pub use num_dual::DualNum;

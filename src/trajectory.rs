@@ -379,7 +379,7 @@ impl Trajectory {
         crate::error::ensure_len("Lagrangian dimension", self.dim, lagrangian.dim())?;
         let (q, v) = self.state_on_curve(t)?;
         let mut p = vec![0.0; self.dim];
-        lagrangian.legendre_transform(&q, &v, &mut p);
+        lagrangian.legendre_transform_at(t, &q, &v, &mut p);
         Ok(p)
     }
 

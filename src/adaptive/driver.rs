@@ -41,6 +41,7 @@ pub fn integrate_adaptive<L: Lagrangian>(
     crate::error::ensure_finite("initial position q0", q0)?;
     crate::error::ensure_finite("initial momentum p0", p0)?;
     let mut ladder = Ladder {
+        t: t0,
         rungs: Vec::with_capacity(opts.ladder.len()),
         evaluations: 0,
         last_failure: None,
@@ -161,6 +162,8 @@ pub fn integrate_adaptive<L: Lagrangian>(
         for r in ladder.rungs.iter_mut() {
             r.solved = None;
         }
+        // Every rung's solve of this step starts at t_k (time-dependent and forced systems).
+        ladder.t = t;
         let acc = match control {
             ErrorControl::Indicator => indicator_step(&mut ladder, lag, idx, &q, &p, local_tol),
             ErrorControl::Embedded => embedded_step(

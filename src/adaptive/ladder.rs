@@ -52,6 +52,8 @@ pub(super) struct Rung {
 
 /// The rungs of a run and the state the error controls share across steps.
 pub(super) struct Ladder {
+    /// The start time t_k of the step being solved (time-dependent and forced systems).
+    pub(super) t: f64,
     pub(super) rungs: Vec<Rung>,
     pub(super) evaluations: usize,
     pub(super) last_failure: Option<StepFailure>,
@@ -267,6 +269,7 @@ impl Ladder {
         let d = self.d;
         let r = &mut self.rungs[i];
         let gvi = if loose { &r.loose } else { &r.gvi };
+        r.ws.stage.set_step_start(self.t, 0.0, &[]);
         let mut result = gvi.step(lag, &mut r.ws, q, p, &mut r.q, &mut r.p);
         if warmed && !loose {
             // Guard: a warm start must not yield a kept step that is not solved to round-off
@@ -280,6 +283,7 @@ impl Ladder {
                 if stats.residual.is_nan() || stats.residual > WARM_RESIDUAL * pscale {
                     self.evaluations += stats.gradient_evaluations;
                     r.ws.reset();
+                    r.ws.stage.set_step_start(self.t, 0.0, &[]);
                     result = gvi.step(lag, &mut r.ws, q, p, &mut r.q, &mut r.p);
                 }
             }

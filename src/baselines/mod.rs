@@ -293,6 +293,7 @@ impl<L: Lagrangian, B: Basis, Q: Quadrature> OneStepMethod for GalerkinMethod<'_
         ensure_len("p", d, p.len())?;
         ensure_len("q_next", d, q_next.len())?;
         ensure_len("p_next", d, p_next.len())?;
+        self.workspace.set_time(t)?;
         let result = if self.integrator.options().compensated {
             // Continue the compensated sums only when called with the state returned last.
             if q != self.last_q.as_slice() || p != self.last_p.as_slice() {

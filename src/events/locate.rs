@@ -61,8 +61,9 @@ impl CurveProbe {
             &mut self.q,
             &mut self.v,
         );
-        lag.legendre_transform(&self.q, &self.v, &mut self.p);
-        curve.start_time() + tau * curve.h()
+        let t = curve.start_time() + tau * curve.h();
+        lag.legendre_transform_at(t, &self.q, &self.v, &mut self.p);
+        t
     }
 
     /// g at local time τ of `curve` (counted), with the state left in `self.q`, `self.p`.

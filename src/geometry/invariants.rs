@@ -133,7 +133,7 @@ pub fn energy_along_curves<L: Lagrangian>(
     let mut values = Vec::with_capacity(t.len());
     for &s in &t {
         let (q, v) = traj.state_on_curve(s)?;
-        values.push(lagrangian.energy(&q, &v));
+        values.push(lagrangian.energy_at(s, &q, &v));
     }
     Ok(Series { t, values })
 }
@@ -165,7 +165,7 @@ pub fn momentum_along_curves<L: Lagrangian, M: MomentumMap + ?Sized>(
     let mut p = vec![0.0; traj.dim];
     for &s in &t {
         let (q, v) = traj.state_on_curve(s)?;
-        lagrangian.legendre_transform(&q, &v, &mut p);
+        lagrangian.legendre_transform_at(s, &q, &v, &mut p);
         values.push(map.value(&q, &p));
     }
     Ok(Series { t, values })

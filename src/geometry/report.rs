@@ -114,6 +114,7 @@ pub fn check_report_with<S: System, B: Basis, Q: Quadrature>(
     steps: usize,
     symmetries: &[NamedMomentumMap],
 ) -> Result<CheckReport> {
+    crate::forcing::ensure_conservative(system, "the geometric check (symplecticity, energy)")?;
     let traj = integrator.integrate(system, 0.0, q0, p0, steps)?;
     ensure_finite_run(system, &traj)?;
     let (mut defect, mut relative) = (0.0f64, 0.0f64);

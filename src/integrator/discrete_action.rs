@@ -23,6 +23,7 @@
 
 use super::dd::dd_acc_columns;
 use super::legendre_transform::legendre_transforms_of_gradient;
+use super::node_model::node_gradient;
 use super::stage::Mode;
 use super::stage_scratch::StageScratch;
 use super::{GalerkinIntegrator, StepStats, Workspace};
@@ -85,6 +86,9 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         ensure_finite("Galerkin curve coefficients", curve.coefficients())?;
         let mut ws = self.workspace(lag)?;
         ws.need_velocities = true;
+        // A time-dependent or forced system is evaluated at the curve's own times.
+        ws.stage
+            .set_step_start(curve.start_time(), self.step_size(), &self.rule().nodes);
         let q0 = curve.start();
         ws.iterate.set_origin(q0);
         for (i, (row, q)) in ws
@@ -108,7 +112,8 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let mut value = 0.0;
         for j in 0..t.m {
             value += t.weights[j]
-                * lag.value(
+                * lag.value_at(
+                    ws.stage.tj[j],
                     &ws.stage.qj[j * d..(j + 1) * d],
                     &ws.stage.vj[j * d..(j + 1) * d],
                 );
@@ -291,16 +296,24 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             // grad += Φᵀ (h b ∘ L_q).
             gemm_transposed(n, m, d, &t.phi, &ws.stage.scaled, 1.0, &mut ws.stage.grad);
         } else {
+            let forced = ws.stage.forced();
             for j in 0..m {
                 let (lq, lv) = (
                     &mut ws.stage.lq[j * d..(j + 1) * d],
                     &mut ws.stage.lv[j * d..(j + 1) * d],
                 );
-                lag.gradient(
-                    &ws.stage.qj[j * d..(j + 1) * d],
-                    &ws.stage.vj[j * d..(j + 1) * d],
+                // L_q + f and L_v at the node time (node_model.rs).
+                node_gradient(
+                    lag,
+                    forced,
+                    (
+                        ws.stage.tj[j],
+                        &ws.stage.qj[j * d..(j + 1) * d],
+                        &ws.stage.vj[j * d..(j + 1) * d],
+                    ),
                     lq,
                     lv,
+                    &mut ws.stage.fj,
                 );
                 let w = t.weights[j];
                 for a in 0..n {

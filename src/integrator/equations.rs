@@ -25,6 +25,7 @@
 //! integrator re-evaluates the residual at the iterate a solver returns, so the step's
 //! momentum and statistics always describe the final iterate.
 
+use super::node_model::node_hessian;
 use super::stage::Mode;
 use super::{GalerkinIntegrator, NewtonOptions, StageSolver, StepFailure, StepStats, Workspace};
 use crate::basis::Basis;
@@ -413,15 +414,22 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let k = n - 1;
         let mut evals = 0;
         if !hessians_fresh {
+            let forced = ws.stage.forced();
+            let st = &mut ws.stage;
             for j in 0..m {
-                let (q, v) = (
-                    &ws.stage.qj[j * d..(j + 1) * d],
-                    &ws.stage.vj[j * d..(j + 1) * d],
-                );
-                let node = &mut ws.stage.node_hessians[3 * dd * j..3 * dd * (j + 1)];
+                let (q, v) = (&st.qj[j * d..(j + 1) * d], &st.vj[j * d..(j + 1) * d]);
+                let node = &mut st.node_hessians[4 * dd * j..4 * dd * (j + 1)];
                 let (hqq, rest) = node.split_at_mut(dd);
-                let (hqv, hvv) = rest.split_at_mut(dd);
-                lag.hessian(q, v, hqq, hqv, hvv);
+                let (hqv, rest) = rest.split_at_mut(dd);
+                let (hvq, hvv) = rest.split_at_mut(dd);
+                node_hessian(
+                    lag,
+                    forced,
+                    (st.tj[j], q, v),
+                    [hqq, hqv, hvq, hvv],
+                    &mut st.fq,
+                    &mut st.fv,
+                );
             }
             evals = m;
         }
@@ -441,13 +449,14 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                     dv[s] += dphi[b] * xb[s];
                 }
             }
-            let node = &ws.stage.node_hessians[3 * dd * j..3 * dd * (j + 1)];
-            let (hqq, hqv, hvv) = (&node[..dd], &node[dd..2 * dd], &node[2 * dd..]);
+            let node = &ws.stage.node_hessians[4 * dd * j..4 * dd * (j + 1)];
+            let (hqq, hqv) = (&node[..dd], &node[dd..2 * dd]);
+            let (hvq, hvv) = (&node[2 * dd..3 * dd], &node[3 * dd..]);
             for r in 0..d {
                 let (mut a, mut c) = (0.0, 0.0);
                 for s in 0..d {
                     a += h * hqq[r * d + s] * dq[s] + hqv[r * d + s] * dv[s];
-                    c += hqv[s * d + r] * dq[s] + hvv[r * d + s] * dv[s] / h;
+                    c += hvq[r * d + s] * dq[s] + hvv[r * d + s] * dv[s] / h;
                 }
                 fq[r] = a;
                 fv[r] = c;

@@ -173,10 +173,11 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             sep.solve_mass(&mut ws.stage.vel, &mut ws.stage.small_scratch);
             return;
         }
-        // Newton on L_v(q, v) = p with Jacobian L_vv.
+        // Newton on L_v(t_k, q, v) = p with Jacobian L_vv.
+        let t_k = ws.stage.step_start();
         for _ in 0..20 {
             let (lq, lv) = (&mut ws.stage.lq[..d], &mut ws.stage.lv[..d]);
-            lag.gradient(q, &ws.stage.vel, lq, lv);
+            lag.gradient_at(t_k, q, &ws.stage.vel, lq, lv);
             let mut err = 0.0f64;
             for r in 0..d {
                 ws.stage.small_rhs[r] = p[r] - lv[r];
@@ -185,7 +186,8 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             if err <= 1e-15 * (1.0 + max_abs(p)) {
                 return;
             }
-            lag.hessian(
+            lag.hessian_at(
+                t_k,
                 q,
                 &ws.stage.vel,
                 &mut ws.stage.hqq,

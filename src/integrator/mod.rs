@@ -40,6 +40,7 @@ mod modal;
 mod newton;
 mod newton_system;
 mod nodal_newton;
+mod node_model;
 mod options;
 mod self_blocks;
 mod separable;

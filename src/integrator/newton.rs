@@ -43,7 +43,14 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             (q_next[r], p_next[r]) = (qn, pn);
         }
         self.finish_step(ws, q_next);
+        self.advance_time(ws);
         Ok(stats)
+    }
+
+    /// t_k ← t_k + h after a completed step (the node times are set when a step starts).
+    fn advance_time(&self, ws: &mut Workspace) {
+        let t = ws.stage.step_start() + self.step_size();
+        ws.stage.set_step_start(t, 0.0, &[]);
     }
 
     /// [`step`](Self::step) with compensated summation of the state, in place: (q, p) is
@@ -73,6 +80,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 ws.iterate.advance(r, (q[r], q_err[r]), (p[r], p_err[r]));
         }
         self.finish_step(ws, q);
+        self.advance_time(ws);
         Ok(stats)
     }
 
@@ -142,6 +150,11 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         p: &[f64],
     ) -> std::result::Result<StepStats, StepFailure> {
         ws.iterate.set_origin(q);
+        if ws.stage.timed() {
+            let t0 = ws.stage.step_start();
+            ws.stage
+                .set_step_start(t0, self.step_size(), &self.rule().nodes);
+        }
         let mut stats = StepStats::default();
         if self.velocity_form_applies(ws) {
             let solved = self.solve_velocity_form(lag, ws, q, p, &mut stats);

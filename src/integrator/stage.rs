@@ -4,6 +4,7 @@
 //! ([`legendre_transform`](super::legendre_transform)), and the exact Newton matrix
 //! ∂²S/∂Q_a∂Q_b.
 
+use super::node_model::node_hessian;
 use super::{GalerkinIntegrator, Tables, Workspace};
 use crate::basis::Basis;
 use crate::lagrangian::Lagrangian;
@@ -158,18 +159,21 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             }
             return m;
         }
+        let forced = ws.stage.forced();
         for j in 0..m {
-            let q = &ws.stage.qj[j * d..(j + 1) * d];
             let w = t.weights[j];
             let (phi, dphi) = (&t.phi[j * n..(j + 1) * n], &t.dphi[j * n..(j + 1) * n]);
             {
-                let v = &ws.stage.vj[j * d..(j + 1) * d];
-                lag.hessian(
-                    q,
-                    v,
-                    &mut ws.stage.hqq,
-                    &mut ws.stage.hqv,
-                    &mut ws.stage.hvv,
+                let st = &mut ws.stage;
+                let (q, v) = (&st.qj[j * d..(j + 1) * d], &st.vj[j * d..(j + 1) * d]);
+                // ∂(L_q + f)/∂(q, v) and ∂L_v/∂(q, v) at the node time (node_model.rs).
+                node_hessian(
+                    lag,
+                    forced,
+                    (st.tj[j], q, v),
+                    [&mut st.hqq, &mut st.hqv, &mut st.hvq, &mut st.hvv],
+                    &mut st.fq,
+                    &mut st.fv,
                 );
                 for a in 0..cnt {
                     let (pa, da) = (phi[a + r0], dphi[a + r0]);
@@ -184,7 +188,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                             for s in 0..d {
                                 jac[row + s] += cqq * ws.stage.hqq[r * d + s]
                                     + cqv * ws.stage.hqv[r * d + s]
-                                    + cvq * ws.stage.hqv[s * d + r]
+                                    + cvq * ws.stage.hvq[r * d + s]
                                     + cvv * ws.stage.hvv[r * d + s];
                             }
                         }

@@ -43,8 +43,8 @@ pub(crate) struct StageScratch {
     pub gram: Vec<f64>,
     /// One (n−1)×(n−1) block of the Newton matrix.
     pub block: Vec<f64>,
-    /// Non-separable Lagrangians: L_qq, L_qv, L_vv at every node (m × 3 × D²), for matrix-free
-    /// Jacobian products; empty otherwise.
+    /// Non-separable Lagrangians: the node second derivatives (m × 4 × D², see
+    /// [`super::node_model`]), for matrix-free Jacobian products; empty otherwise.
     pub node_hessians: Vec<f64>,
     /// Four D-vectors of scratch for those products (empty for separable Lagrangians).
     pub jvp_scratch: Vec<f64>,
@@ -54,6 +54,24 @@ pub(crate) struct StageScratch {
     pub hqv: Vec<f64>,
     /// See `hqq`.
     pub hvv: Vec<f64>,
+    /// ∂L_v/∂q at one node (D×D): L_qv transposed, or with forcing the block that ∂f/∂v does
+    /// not enter (see [`super::node_model`]).
+    pub hvq: Vec<f64>,
+    /// The force f at one node (D) and its Jacobians ∂f/∂q, ∂f/∂v (D×D each).
+    pub fj: Vec<f64>,
+    /// See `fj`.
+    pub fq: Vec<f64>,
+    /// See `fj`.
+    pub fv: Vec<f64>,
+    /// The node times t_k + c_j h of the step (m), which non-autonomous and forced systems are
+    /// evaluated at; see [`StageScratch::set_step_start`].
+    pub tj: Vec<f64>,
+    /// The step's start time t_k.
+    step_start: f64,
+    /// The system depends on t explicitly or is forced: the nodes take the `_at` evaluations.
+    timed: bool,
+    /// A non-conservative force acts: f is added to L_q at the nodes.
+    forced: bool,
     /// Double-double accumulators, one pair per coordinate (D each).
     pub dd_hi: Vec<f64>,
     /// See `dd_hi`.
@@ -104,6 +122,36 @@ impl StageScratch {
     pub(crate) fn curve_of_candidate(&self) -> bool {
         self.curve_from_cand
     }
+    /// Mark the system as time-dependent (`timed`) and forced (`forced`), once, when the
+    /// workspace is made.
+    pub(crate) fn set_time_dependence(&mut self, timed: bool, forced: bool) {
+        self.timed = timed || forced;
+        self.forced = forced;
+    }
+
+    /// Whether the node evaluations need the node times (time-dependent or forced system).
+    pub(crate) fn timed(&self) -> bool {
+        self.timed
+    }
+
+    /// Whether a non-conservative force acts.
+    pub(crate) fn forced(&self) -> bool {
+        self.forced
+    }
+
+    /// The step's start time t_k and the node times t_k + c_j h.
+    pub(crate) fn set_step_start(&mut self, t: f64, h: f64, nodes: &[f64]) {
+        self.step_start = t;
+        for (tj, c) in self.tj.iter_mut().zip(nodes) {
+            *tj = t + c * h;
+        }
+    }
+
+    /// The step's start time t_k.
+    pub(crate) fn step_start(&self) -> f64 {
+        self.step_start
+    }
+
     /// q_j ← q_j + q_k at every node: the curve's constant part added last, after the small
     /// parts (increments and compensation terms), so that they are not rounded away.
     pub(crate) fn add_to_nodes(&mut self, base: &[f64]) {
@@ -132,7 +180,7 @@ impl StageScratch {
             gram: vec![0.0; n * m],
             block: vec![0.0; n * n],
             node_hessians: if general {
-                vec![0.0; 3 * m * d * d]
+                vec![0.0; 4 * m * d * d]
             } else {
                 Vec::new()
             },
@@ -144,6 +192,14 @@ impl StageScratch {
             hqq: vec![0.0; d * d],
             hqv: vec![0.0; d * d],
             hvv: vec![0.0; d * d],
+            hvq: vec![0.0; d * d],
+            fj: vec![0.0; d],
+            fq: vec![0.0; d * d],
+            fv: vec![0.0; d * d],
+            tj: vec![0.0; m],
+            step_start: 0.0,
+            timed: false,
+            forced: false,
             dd_hi: vec![0.0; d],
             dd_lo: vec![0.0; d],
             vel: vec![0.0; d],

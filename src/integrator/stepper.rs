@@ -98,6 +98,8 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> Stepper<'_, B, Q, L> {
     /// state is then unchanged (the last completed step's), so the run so far is kept.
     pub fn step(&mut self) -> Result<StepStats> {
         let gvi = self.integrator;
+        // t_k = t0 + k h exactly (not accumulated), for time-dependent and forced systems.
+        self.workspace.stage.set_step_start(self.time(), 0.0, &[]);
         let result = if gvi.options().compensated {
             gvi.step_compensated(
                 self.lagrangian,

@@ -132,6 +132,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
     /// Buffers for [`step_jacobian_into`](Self::step_jacobian_into) with this integrator and
     /// Lagrangian.
     pub fn tangent_workspace<L: Lagrangian>(&self, lag: &L) -> Result<TangentWorkspace> {
+        crate::forcing::ensure_conservative(lag, "the exact step Jacobian")?;
         let t = self.tables();
         let (n, m, d) = (t.n, t.m, lag.dim());
         let mass = match lag.mass_matrix() {

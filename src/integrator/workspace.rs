@@ -129,9 +129,12 @@ impl Workspace {
             });
         }
         let (n, m, h) = (t.n, t.m, gvi.step_size());
+        // A time-dependent or forced system takes the general path with the node times
+        // (node_model.rs): the structured solvers rest on a time-independent L_q(q) alone.
+        let (timed, forced) = (!lagrangian.is_autonomous(), lagrangian.is_forced());
         let separable = match lagrangian.mass_matrix() {
-            None => None,
-            Some(mass) => Some(Separable::new(&mass, t, d, h)?),
+            Some(mass) if !timed && !forced => Some(Separable::new(&mass, t, d, h)?),
+            _ => None,
         };
         let kron = match (&t.kron, &separable) {
             (Some(kt), Some(sep)) => super::kronecker::KroneckerWork::new(
@@ -170,6 +173,8 @@ impl Workspace {
             }
             _ => None,
         };
+        let mut stage = StageScratch::new(n, m, d, general, block_entries);
+        stage.set_time_dependence(timed, forced);
         Ok(Workspace {
             made_for: MadeFor::of(gvi, d),
             d,
@@ -177,7 +182,7 @@ impl Workspace {
             separable,
             matrix_free,
             need_velocities: false,
-            stage: StageScratch::new(n, m, d, general, block_entries),
+            stage,
             iterate: Iterate::new(n, d),
             system: NewtonSystem::new(n, d, kron, krylov),
             guess: GuessState::new(n, d, substeps),
@@ -239,6 +244,23 @@ impl Workspace {
         crate::error::ensure_finite("warm-start coefficients", coefficients)?;
         self.guess.set_warm_start(coefficients);
         Ok(())
+    }
+
+    /// Set the start time t_k of the next step. Non-autonomous and forced systems are
+    /// evaluated at the node times t_k + c_j h; [`GalerkinIntegrator::step`] advances the time
+    /// by h after each step, and a [`Stepper`](super::Stepper) sets it itself. Autonomous,
+    /// unforced systems ignore it.
+    ///
+    /// Errors: a non-finite t.
+    pub fn set_time(&mut self, t: f64) -> Result<()> {
+        crate::error::ensure_finite("step start time t_k", &[t])?;
+        self.stage.set_step_start(t, 0.0, &[]);
+        Ok(())
+    }
+
+    /// The start time t_k of the next step (see [`set_time`](Self::set_time)).
+    pub fn time(&self) -> f64 {
+        self.stage.step_start()
     }
 
     /// Dimension D.

@@ -48,6 +48,7 @@ pub fn monodromy<L: Lagrangian>(
     period: f64,
     steps: usize,
 ) -> Result<Floquet> {
+    crate::forcing::ensure_conservative(lag, "the monodromy of a periodic orbit")?;
     if steps == 0 {
         return Err(GviError::InvalidStepCount {
             steps,

@@ -211,6 +211,7 @@ pub fn solve<L: Lagrangian>(
     symmetries: &[Symmetry],
     options: &PeriodicOptions,
 ) -> Result<PeriodicSolution> {
+    crate::forcing::ensure_conservative(lag, "the periodic-orbit solver")?;
     let curve = guess;
     crate::error::ensure_len("configuration dimension", lag.dim(), curve.layout.dim())?;
     ensure_finite("periodic guess", &curve.coefficients)?;
