@@ -185,6 +185,51 @@ impl Lagrangian for AnySystem {
     fn energy(&self, q: &[f64], v: &[f64]) -> f64 {
         dispatch!(self, s => s.energy(q, v))
     }
+    fn is_autonomous(&self) -> bool {
+        dispatch!(self, s => s.is_autonomous())
+    }
+    fn value_at(&self, t: f64, q: &[f64], v: &[f64]) -> f64 {
+        dispatch!(self, s => s.value_at(t, q, v))
+    }
+    fn gradient_at(&self, t: f64, q: &[f64], v: &[f64], lq: &mut [f64], lv: &mut [f64]) {
+        dispatch!(self, s => s.gradient_at(t, q, v, lq, lv))
+    }
+    fn hessian_at(
+        &self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        lqq: &mut [f64],
+        lqv: &mut [f64],
+        lvv: &mut [f64],
+    ) {
+        dispatch!(self, s => s.hessian_at(t, q, v, lqq, lqv, lvv))
+    }
+    fn time_derivative(&self, t: f64, q: &[f64], v: &[f64]) -> f64 {
+        dispatch!(self, s => s.time_derivative(t, q, v))
+    }
+    fn legendre_transform_at(&self, t: f64, q: &[f64], v: &[f64], p: &mut [f64]) {
+        dispatch!(self, s => s.legendre_transform_at(t, q, v, p))
+    }
+    fn energy_at(&self, t: f64, q: &[f64], v: &[f64]) -> f64 {
+        dispatch!(self, s => s.energy_at(t, q, v))
+    }
+    fn is_forced(&self) -> bool {
+        dispatch!(self, s => s.is_forced())
+    }
+    fn external_force(&self, t: f64, q: &[f64], v: &[f64], f: &mut [f64]) {
+        dispatch!(self, s => s.external_force(t, q, v, f))
+    }
+    fn external_force_jacobian(
+        &self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        fq: &mut [f64],
+        fv: &mut [f64],
+    ) {
+        dispatch!(self, s => s.external_force_jacobian(t, q, v, fq, fv))
+    }
 }
 
 impl System for AnySystem {

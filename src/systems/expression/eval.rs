@@ -165,6 +165,11 @@ impl Tape {
         self.ops.is_empty()
     }
 
+    /// Whether the expression reads the coordinate slot `i` (slot D is the time `t`).
+    pub(crate) fn reads_q(&self, i: usize) -> bool {
+        self.ops.contains(&Op::Q(i as u32))
+    }
+
     /// Whether the expression reads the velocity `i`.
     pub(crate) fn reads_v(&self, i: usize) -> bool {
         self.ops.contains(&Op::V(i as u32))

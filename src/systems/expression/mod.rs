@@ -33,6 +33,7 @@ mod eval;
 mod parse;
 mod separable;
 mod spec;
+mod time_force;
 mod vectorised;
 
 pub use crate::error::{ExpressionError, Position};
@@ -68,6 +69,10 @@ pub struct ExpressionLagrangian {
     energy: bool,
     exact: Option<Arc<ExactTapes>>,
     separable: Option<separable::Separable>,
+    /// L reads `t` (compiled as the coordinate slot D).
+    time_dependent: bool,
+    /// Non-conservative force expressions ([`ExpressionLagrangian::with_force`]).
+    force: Option<Arc<time_force::ForceTapes>>,
 }
 
 /// q(t) as compiled expressions in `t`, with the Lagrangian to form p = ∂L/∂v(q, q̇).
@@ -142,8 +147,11 @@ impl ExpressionLagrangian {
             symbols.push((name.to_string(), Symbol::Value(value)));
         }
         symbols.push(("pi".to_string(), Symbol::Value(std::f64::consts::PI)));
+        // `t`: the slot after the coordinates (time_force.rs).
+        symbols.push(("t".to_string(), Symbol::Q(coordinates.len() as u32)));
         let expr = parse(lagrangian)?;
         let tape = Tape::compile(&expr, lagrangian, &symbols)?;
+        let time_dependent = tape.reads_q(coordinates.len());
         for (i, c) in coordinates.iter().enumerate() {
             if !tape.reads_v(i) {
                 return Err(ExpressionError::MissingVelocity {
@@ -152,9 +160,15 @@ impl ExpressionLagrangian {
                 .into());
             }
         }
-        let separable = separable::split(&expr, lagrangian, &symbols, coordinates.len());
+        let separable = if time_dependent {
+            None
+        } else {
+            separable::split(&expr, lagrangian, &symbols, coordinates.len())
+        };
         Ok(ExpressionLagrangian {
             separable,
+            time_dependent,
+            force: None,
             text: lagrangian.to_string(),
             expr,
             tape,
@@ -227,16 +241,22 @@ impl ExpressionLagrangian {
         self.separable.is_some()
     }
 
-    /// ∂L/∂v and ∂²L/∂v∂v (row-major) at (q, v).
-    fn velocity_derivatives(&self, q: &[f64], v: &[f64], lv: &mut [f64], lvv: &mut [f64]) {
-        let qc: Vec<num_dual::HyperDual64> = q.iter().map(|&x| x.into()).collect();
+    /// ∂L/∂v and ∂²L/∂v∂v (row-major) at (t, q, v).
+    fn velocity_derivatives(&self, t: f64, q: &[f64], v: &[f64], lv: &mut [f64], lvv: &mut [f64]) {
+        let qc: Vec<num_dual::HyperDual64> = q.iter().chain([&t]).map(|&x| x.into()).collect();
         ad::hessian(|y| self.tape.eval(&qc, y), v, lv, lvv);
     }
 
     /// A NaN or infinite L, ∂L/∂v or ∂²L/∂v² at (q, v) is a [`GviError::NonFinite`] naming
     /// the state (a singularity of L there), not a singular velocity Hessian.
-    fn ensure_finite_at(&self, q: &[f64], v: &[f64], lv: &[f64], lvv: &[f64]) -> Result<()> {
-        let l = self.value(q, v);
+    fn ensure_finite_at(
+        &self,
+        t: f64,
+        (q, v): (&[f64], &[f64]),
+        lv: &[f64],
+        lvv: &[f64],
+    ) -> Result<()> {
+        let l = self.value_with_time(t, q, v);
         let bad = std::iter::once(l)
             .chain(lv.iter().copied())
             .chain(lvv.iter().copied())
@@ -258,6 +278,11 @@ impl ExpressionLagrangian {
     /// input, a singular velocity Hessian at an iterate
     /// ([`ExpressionError::SingularHessian`]), no convergence.
     pub fn velocity(&self, q: &[f64], p: &[f64]) -> Result<Vec<f64>> {
+        self.velocity_at(0.0, q, p)
+    }
+
+    /// [`velocity`](Self::velocity) at time t (for Lagrangians that read `t`).
+    pub fn velocity_at(&self, t: f64, q: &[f64], p: &[f64]) -> Result<Vec<f64>> {
         let d = self.dim();
         ensure_len("q (number of coordinates)", d, q.len())?;
         ensure_len("p (number of coordinates)", d, p.len())?;
@@ -268,13 +293,13 @@ impl ExpressionLagrangian {
         let scale = 1.0 + p.iter().fold(0.0f64, |m, x| m.max(x.abs()));
         let mut residual = f64::INFINITY;
         for _ in 0..50 {
-            self.velocity_derivatives(q, &v, &mut lv, &mut lvv);
+            self.velocity_derivatives(t, q, &v, &mut lv, &mut lvv);
             let r = DVector::from_iterator(d, p.iter().zip(&lv).map(|(p, l)| p - l));
             residual = r.amax();
             if residual <= 4.0 * f64::EPSILON * scale {
                 return Ok(v);
             }
-            self.ensure_finite_at(q, &v, &lv, &lvv)?;
+            self.ensure_finite_at(t, (q, &v), &lv, &lvv)?;
             let m = DMatrix::from_row_slice(d, d, &lvv);
             let rcond = reciprocal_condition(&m);
             if rcond.is_nan() || rcond <= MIN_RCOND {
@@ -289,7 +314,7 @@ impl ExpressionLagrangian {
             let Some(dv) = m.lu().solve(&r) else { break };
             v.iter_mut().zip(dv.iter()).for_each(|(v, d)| *v += d);
             if dv.amax() <= 1e-15 * (1.0 + v.iter().fold(0.0f64, |m, x| m.max(x.abs()))) {
-                self.velocity_derivatives(q, &v, &mut lv, &mut lvv);
+                self.velocity_derivatives(t, q, &v, &mut lv, &mut lvv);
                 residual = p
                     .iter()
                     .zip(&lv)
@@ -311,13 +336,18 @@ impl ExpressionLagrangian {
     /// Check a state before integrating: lengths, finiteness, and that the Lagrangian is
     /// regular there (the velocity Hessian is invertible, so p determines v). Returns v.
     pub fn check_state(&self, q: &[f64], p: &[f64]) -> Result<Vec<f64>> {
+        self.check_state_at(0.0, q, p)
+    }
+
+    /// [`check_state`](Self::check_state) at time t (for Lagrangians that read `t`).
+    pub fn check_state_at(&self, t: f64, q: &[f64], p: &[f64]) -> Result<Vec<f64>> {
         ensure_len("initial q (number of coordinates)", self.dim(), q.len())?;
         ensure_len("initial p (number of coordinates)", self.dim(), p.len())?;
-        let v = self.velocity(q, p)?;
+        let v = self.velocity_at(t, q, p)?;
         let d = self.dim();
         let (mut lv, mut lvv) = (vec![0.0; d], vec![0.0; d * d]);
-        self.velocity_derivatives(q, &v, &mut lv, &mut lvv);
-        self.ensure_finite_at(q, &v, &lv, &lvv)?;
+        self.velocity_derivatives(t, q, &v, &mut lv, &mut lvv);
+        self.ensure_finite_at(t, (q, &v), &lv, &lvv)?;
         let rcond = reciprocal_condition(&DMatrix::from_row_slice(d, d, &lvv));
         if rcond.is_nan() || rcond <= MIN_RCOND {
             return Err(ExpressionError::SingularHessian {
@@ -420,6 +450,80 @@ impl Lagrangian for ExpressionLagrangian {
             }
         }
     }
+
+    // Time and forcing (time_force.rs): autonomous expressions keep the fast paths above.
+
+    fn is_autonomous(&self) -> bool {
+        !self.time_dependent
+    }
+
+    fn value_at(&self, t: f64, q: &[f64], v: &[f64]) -> f64 {
+        self.value_with_time(t, q, v)
+    }
+
+    fn gradient_at(&self, t: f64, q: &[f64], v: &[f64], lq: &mut [f64], lv: &mut [f64]) {
+        if self.time_dependent {
+            self.gradient_with_time(t, q, v, lq, lv);
+        } else {
+            self.gradient(q, v, lq, lv);
+        }
+    }
+
+    fn hessian_at(
+        &self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        lqq: &mut [f64],
+        lqv: &mut [f64],
+        lvv: &mut [f64],
+    ) {
+        if self.time_dependent {
+            self.hessian_with_time(t, q, v, [lqq, lqv, lvv]);
+        } else {
+            self.hessian(q, v, lqq, lqv, lvv);
+        }
+    }
+
+    fn time_derivative(&self, t: f64, q: &[f64], v: &[f64]) -> f64 {
+        if !self.time_dependent {
+            return 0.0;
+        }
+        let d = self.dim();
+        let (mut lq, mut lv) = (vec![0.0; d], vec![0.0; d]);
+        self.gradient_with_time(t, q, v, &mut lq, &mut lv)
+    }
+
+    fn legendre_transform_at(&self, t: f64, q: &[f64], v: &[f64], p: &mut [f64]) {
+        let mut lq = vec![0.0; self.dim()];
+        self.gradient_at(t, q, v, &mut lq, p);
+    }
+
+    fn energy_at(&self, t: f64, q: &[f64], v: &[f64]) -> f64 {
+        let d = self.dim();
+        let (mut lq, mut lv) = (vec![0.0; d], vec![0.0; d]);
+        self.gradient_at(t, q, v, &mut lq, &mut lv);
+        lv.iter().zip(v).map(|(a, b)| a * b).sum::<f64>() - self.value_at(t, q, v)
+    }
+
+    fn is_forced(&self) -> bool {
+        self.force.is_some()
+    }
+
+    fn external_force(&self, t: f64, q: &[f64], v: &[f64], f: &mut [f64]) {
+        self.force_with_time(t, q, v, f)
+    }
+
+    fn external_force_jacobian(
+        &self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        fq: &mut [f64],
+        fv: &mut [f64],
+    ) {
+        self.force_jacobian_with_time(t, q, v, fq, fv)
+    }
 }
 
 impl System for ExpressionLagrangian {
@@ -427,8 +531,14 @@ impl System for ExpressionLagrangian {
         "lagrangian"
     }
 
+    /// `energy` unless switched off, or L reads `t`, or a force acts (then the energy
+    /// balance replaces it: [`crate::forcing::energy_balance`]).
     fn invariant_names(&self) -> &'static [&'static str] {
-        if self.energy { &["energy"] } else { &[] }
+        if self.energy && !self.time_dependent && self.force.is_none() {
+            &["energy"]
+        } else {
+            &[]
+        }
     }
 
     /// The energy E = p·v − L(q, v), v from the inverse Legendre transform (NaN if that
@@ -495,11 +605,16 @@ fn exact_state(exact: &ExactTapes, t: f64) -> (Vec<f64>, Vec<f64>) {
             (x.re, x.eps)
         })
         .unzip();
+    // p = ∂L/∂v at (q, t, v): the time sits in the slot after the coordinates.
     let d = q.len();
-    let x: Vec<f64> = q.iter().chain(&v).copied().collect();
-    let mut g = vec![0.0; 2 * d];
-    ad::gradient(|y| exact.lagrangian.eval(&y[..d], &y[d..]), &x, &mut g);
-    (q, g[d..].to_vec())
+    let x: Vec<f64> = q.iter().chain([&t]).chain(&v).copied().collect();
+    let mut g = vec![0.0; 2 * d + 1];
+    ad::gradient(
+        |y| exact.lagrangian.eval(&y[..d + 1], &y[d + 1..]),
+        &x,
+        &mut g,
+    );
+    (q, g[d + 1..].to_vec())
 }
 
 #[cfg(test)]

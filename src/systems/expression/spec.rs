@@ -15,7 +15,10 @@ use std::collections::BTreeMap;
 /// lagrangian = "(x_dot^2 + y_dot^2)/2 - (x^2 + y^2)/2 - lambda*(x^2*y - y^3/3)"
 /// invariants = { energy = true }           # optional (default: energy reported)
 /// exact = ["...", "..."]                   # optional: q(t), one expression in t per coordinate
+/// force = ["-0.1*x_dot", "0"]              # optional: f(t, q, q̇), one per coordinate
 /// ```
+///
+/// The Lagrangian and the force may read the time `t`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LagrangianSpec {
@@ -33,6 +36,10 @@ pub struct LagrangianSpec {
     /// (and the parameters) per coordinate; runs then report the error against it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub exact: Option<Vec<String>>,
+    /// A non-conservative force f(t, q, q̇), one expression per coordinate (discrete
+    /// Lagrange–d'Alembert principle).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub force: Option<Vec<String>>,
 }
 
 /// The invariants an expression Lagrangian reports.
@@ -63,8 +70,12 @@ impl LagrangianSpec {
             .iter()
             .map(|(n, v)| (n.as_str(), *v))
             .collect();
-        let system = ExpressionLagrangian::parse(&self.lagrangian, &coordinates, &parameters)?
+        let mut system = ExpressionLagrangian::parse(&self.lagrangian, &coordinates, &parameters)?
             .with_energy(self.invariants.energy);
+        if let Some(force) = &self.force {
+            let force: Vec<&str> = force.iter().map(String::as_str).collect();
+            system = system.with_force(&force)?;
+        }
         match &self.exact {
             Some(exact) => {
                 let exact: Vec<&str> = exact.iter().map(String::as_str).collect();
@@ -74,11 +85,16 @@ impl LagrangianSpec {
         }
     }
 
-    /// Build the system and check the initial state: lengths of q and p, and that the
-    /// Lagrangian is regular there ([`ExpressionLagrangian::check_state`]).
+    /// Build the system and check the initial state at t = 0: lengths of q and p, and that
+    /// the Lagrangian is regular there ([`ExpressionLagrangian::check_state`]).
     pub fn check(&self, q: &[f64], p: &[f64]) -> Result<ExpressionLagrangian> {
+        self.check_at(0.0, q, p)
+    }
+
+    /// [`check`](Self::check) at the initial time t0.
+    pub fn check_at(&self, t0: f64, q: &[f64], p: &[f64]) -> Result<ExpressionLagrangian> {
         let system = self.build()?;
-        system.check_state(q, p)?;
+        system.check_state_at(t0, q, p)?;
         Ok(system)
     }
 }

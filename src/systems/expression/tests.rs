@@ -140,3 +140,73 @@ mod parse_tests {
         assert_eq!(lvv, 2.0 * (0..999).sum::<i32>() as f64);
     }
 }
+
+/// x'' + δx' − x + x³ = γ cos ωt, written in Rust.
+struct RustDuffing;
+impl crate::forcing::NonAutonomousLagrangian for RustDuffing {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn lagrangian<T: num_dual::DualNum<Primitive = f64> + Copy>(
+        &self,
+        t: T,
+        q: &[T],
+        v: &[T],
+    ) -> T {
+        // The drive as a time-dependent potential term x γ cos ωt; the damping is a force.
+        v[0] * v[0] * 0.5 + q[0] * q[0] * 0.5 - q[0].powi(4) * 0.25 + q[0] * (t * 1.2).cos() * 0.5
+    }
+}
+
+#[test]
+fn forced_duffing_from_expressions_matches_the_rust_system() {
+    use crate::forcing::{Forced, LinearDamping, NonAutonomous};
+    let params = [("delta", 0.3), ("gamma", 0.5), ("omega", 1.2)];
+    // The drive as a force in one, as a time-dependent Lagrangian in the other.
+    let as_force = ExpressionLagrangian::parse("x_dot^2/2 + x^2/2 - x^4/4", &["x"], &params)
+        .unwrap()
+        .with_force(&["-delta*x_dot + gamma*cos(omega*t)"])
+        .unwrap();
+    let as_time = ExpressionLagrangian::parse(
+        "x_dot^2/2 + x^2/2 - x^4/4 + x*gamma*cos(omega*t)",
+        &["x"],
+        &params,
+    )
+    .unwrap()
+    .with_force(&["-delta*x_dot"])
+    .unwrap();
+    assert!(as_force.is_autonomous() && as_force.is_forced());
+    assert!(!as_time.is_autonomous() && as_time.is_time_dependent());
+    assert!(as_force.invariant_names().is_empty() && !as_force.is_separable());
+    let rust = Forced::new(
+        NonAutonomous(RustDuffing),
+        LinearDamping::uniform(1, 0.3).unwrap(),
+    )
+    .unwrap();
+    let gvi = crate::GalerkinIntegrator::spectral(12, 0.5).unwrap();
+    let run = |l: &dyn Fn() -> crate::Trajectory| l();
+    let a = run(&|| gvi.integrate(&as_force, 1.0, &[1.0], &[0.0], 60).unwrap());
+    let b = run(&|| gvi.integrate(&as_time, 1.0, &[1.0], &[0.0], 60).unwrap());
+    let c = run(&|| gvi.integrate(&rust, 1.0, &[1.0], &[0.0], 60).unwrap());
+    for k in 0..=60 {
+        assert!((a.q[k][0] - c.q[k][0]).abs() < 1e-12, "k = {k}");
+        assert!((b.q[k][0] - c.q[k][0]).abs() < 1e-12, "k = {k}");
+    }
+    // ∂L/∂t of the expression agrees with the Rust one's.
+    let (t, q, v) = (0.7, [0.4], [0.2]);
+    let lt = as_time.time_derivative(t, &q, &v);
+    assert!((lt - rust.time_derivative(t, &q, &v)).abs() < 1e-15);
+    assert!((lt - (-0.4 * 0.5 * 1.2 * (1.2f64 * 0.7).sin())).abs() < 1e-15);
+}
+
+#[test]
+fn a_force_of_the_wrong_length_or_unknown_symbol_is_refused() {
+    let l = ExpressionLagrangian::parse("x_dot^2/2 - x^2/2", &["x"], &[]).unwrap();
+    assert!(l.clone().with_force(&["0", "1"]).is_err());
+    let err = l.clone().with_force(&["-k*x_dot"]).unwrap_err();
+    assert!(err.to_string().contains('k'), "{err}");
+    // `t` is a symbol, not a name a parameter may take.
+    assert!(ExpressionLagrangian::parse("x_dot^2/2", &["x"], &[("t", 1.0)]).is_err());
+    // Negative control: an autonomous L is not time-dependent.
+    assert!(l.is_autonomous() && !l.is_forced());
+}
