@@ -136,7 +136,8 @@ fn time_dependent_steps_are_symplectic_and_damped_ones_are_not() {
     });
     let sys = damped(0.1);
     let gvi = GalerkinIntegrator::spectral(12, 0.5).unwrap();
-    let defect = |lag: &dyn Fn(&[f64], &[f64]) -> (Vec<f64>, Vec<f64>)| {
+    type StepMap<'a> = &'a dyn Fn(&[f64], &[f64]) -> (Vec<f64>, Vec<f64>);
+    let defect = |lag: StepMap| {
         relative_symplecticity_defect(&finite_difference_jacobian(lag, &[0.7], &[0.2], 1e-5))
     };
     let step_timed = |q: &[f64], p: &[f64]| {
@@ -196,7 +197,7 @@ fn forced_and_time_dependent_systems_are_refused_where_autonomy_is_assumed() {
 #[test]
 fn bad_forces_are_typed_errors() {
     let ho = HarmonicOscillator::new(1.0, 1.0).unwrap();
-    assert!(Forced::new(ho.clone(), LinearDamping::uniform(2, 0.1).unwrap()).is_err());
+    assert!(Forced::new(ho, LinearDamping::uniform(2, 0.1).unwrap()).is_err());
     assert!(LinearDamping::uniform(1, -0.1).is_err());
     assert!(LinearDamping::uniform(1, f64::NAN).is_err());
     assert!(LinearDamping::uniform(0, 0.1).is_err());
