@@ -43,6 +43,7 @@ pub mod progress;
 pub mod ring;
 pub mod run;
 pub mod scene;
+pub mod section;
 pub mod studies;
 pub mod table;
 

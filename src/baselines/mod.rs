@@ -118,6 +118,9 @@ impl CanonicalParts {
         if !(h.is_finite() && h > 0.0) {
             return Err(GviError::InvalidStepSize { h });
         }
+        // The classical baselines integrate Hamilton's equations of H(q, p) alone: a force or
+        // an explicit time would be ignored silently.
+        crate::forcing::ensure_conservative(lag, "the classical baselines")?;
         let d = lag.dim();
         let mass = lag.mass_matrix().ok_or_else(|| {
             GviError::Unsupported(

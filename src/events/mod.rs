@@ -32,9 +32,12 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+mod expression;
 mod locate;
 #[cfg(test)]
 mod tests;
+
+pub use expression::ExpressionEvent;
 
 use crate::basis::Basis;
 use crate::curve::GalerkinCurveRef;

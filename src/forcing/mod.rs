@@ -39,7 +39,7 @@ pub(crate) fn ensure_conservative<L: Lagrangian + ?Sized>(lag: &L, what: &str) -
         (false, true) => "depends on time explicitly and is forced",
     };
     Err(GviError::Unsupported(format!(
-        "{what} assumes an autonomous, unforced system, but this one {why}: measure it with \
-         galerkin_vi::forcing::energy_balance and momentum_balance instead"
+        "{what} assumes an autonomous, unforced system, but this one {why} (the Galerkin \
+         integrator steps it; its energy and momentum balances are in galerkin_vi::forcing)"
     )))
 }

@@ -20,6 +20,7 @@ mod nbody;
 mod periodic;
 mod run;
 mod scaling;
+mod section;
 mod study;
 mod study2;
 mod tolerance;
@@ -77,6 +78,9 @@ enum Command {
     /// row per member (final state, invariant errors, Lyapunov estimate), summary statistics
     /// and the throughput on all threads against one.
     Ensemble(Box<ensemble::EnsembleArgs>),
+    /// Poincaré section g(t, q, p) = 0 or stroboscopic map, located on the Galerkin curves,
+    /// for one orbit or a fan of orbits on one energy surface (CSV, SVG).
+    Section(Box<section::SectionArgs>),
     /// List the built-in scenes.
     Scenes,
 }
@@ -97,6 +101,7 @@ pub fn main_with(cli: Cli) -> Result<(), LabError> {
         Command::SolverScaling(args) => scaling::run_solver_scaling(*args),
         Command::Periodic(args) => periodic::run_periodic(*args),
         Command::Ensemble(args) => ensemble::run_ensemble_command(*args),
+        Command::Section(args) => section::run_section_command(*args),
         Command::Scenes => {
             let mut text = String::new();
             for name in crate::scene::Scene::builtin_names() {

@@ -11,6 +11,24 @@ pub fn number(s: &str) -> Result<f64, String> {
         .map_err(|_| format!("'{s}' is not a number (expected a comma-separated list)"))
 }
 
+/// A finite number, or a constant expression such as `2*pi/1.2` (no variables).
+pub fn expression_number(s: &str) -> Result<f64, String> {
+    if let Ok(x) = number(s) {
+        return Ok(x);
+    }
+    use galerkin_vi::events::{EventFunction, ExpressionEvent};
+    let e = ExpressionEvent::parse(s, &[], &[]).map_err(|e| e.to_string())?;
+    // `t` reads as NaN here: an expression in t is not a constant.
+    let x = e.value(f64::NAN, &[], &[]);
+    if x.is_finite() {
+        Ok(x)
+    } else {
+        Err(format!(
+            "`{s}` is not a finite constant (numbers, pi and functions only)"
+        ))
+    }
+}
+
 /// Any value with a `FromStr` (bases, quadratures, error controls); the type's own message.
 pub fn parsed<T: FromStr>(s: &str) -> Result<T, String>
 where

@@ -127,7 +127,7 @@ impl Scene {
             SystemSpec::Lagrangian(spec) => {
                 // Lengths and regularity of L at the initial state, with the expression's own
                 // messages (the number of coordinates, the singular velocity Hessian).
-                let system = spec.check(&initial.q, &initial.p)?;
+                let system = spec.check_at(initial.t0, &initial.q, &initial.p)?;
                 // The exact formula is for one initial state; from another (a scene's typo,
                 // --q0) the library drops it. Say so rather than drop it silently.
                 if spec.exact.is_some()

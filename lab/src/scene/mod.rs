@@ -39,7 +39,7 @@ pub use build::{AnyRigidBody, BuiltScene, BuiltSystem};
 pub use overrides::Overrides;
 
 /// The built-in scenes: (name, TOML text).
-pub const BUILTIN_SCENES: [(&str, &str); 15] = [
+pub const BUILTIN_SCENES: [(&str, &str); 17] = [
     ("harmonic", include_str!("../../../scenes/harmonic.toml")),
     ("kepler", include_str!("../../../scenes/kepler.toml")),
     ("pendulum", include_str!("../../../scenes/pendulum.toml")),
@@ -82,6 +82,11 @@ pub const BUILTIN_SCENES: [(&str, &str); 15] = [
         include_str!("../../../scenes/double-pendulum.toml"),
     ),
     ("magnetic", include_str!("../../../scenes/magnetic.toml")),
+    ("duffing", include_str!("../../../scenes/duffing.toml")),
+    (
+        "damped-oscillator",
+        include_str!("../../../scenes/damped-oscillator.toml"),
+    ),
 ];
 
 /// A complete experiment: system, initial state and method.

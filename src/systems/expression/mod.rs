@@ -37,6 +37,7 @@ mod time_force;
 mod vectorised;
 
 pub use crate::error::{ExpressionError, Position};
+pub(crate) use eval::Symbol;
 pub use eval::Tape;
 pub use parse::{BinOp, Expr, Func, MAX_DEPTH, parse};
 pub use spec::{ExpressionInvariants, LagrangianSpec};
@@ -45,7 +46,6 @@ use super::{ExactSolution, System};
 use crate::ad;
 use crate::error::{GviError, Result, ensure_finite, ensure_len};
 use crate::lagrangian::Lagrangian;
-use eval::Symbol;
 use nalgebra::{DMatrix, DVector};
 use num_dual::{Dual64, DualNum};
 use std::sync::Arc;
@@ -232,6 +232,11 @@ impl ExpressionLagrangian {
     /// Coordinate names.
     pub fn coordinates(&self) -> &[String] {
         &self.coordinates
+    }
+
+    /// The named parameters and their values.
+    pub fn parameters(&self) -> &[(String, f64)] {
+        &self.parameters
     }
 
     /// Whether L was recognised as separable, ½ vᵀ M v + U(q) with a constant
