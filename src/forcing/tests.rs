@@ -307,7 +307,6 @@ impl NonAutonomousLagrangian for DrivenDuffing {
         1
     }
     fn lagrangian<T: DualNum<Primitive = f64> + Copy>(&self, t: T, q: &[T], v: &[T]) -> T {
-        v[0] * v[0] * 0.5 + q[0] * q[0] * 0.5 - q[0].powi(4) * 0.25
-            + q[0] * (t * 1.2).cos() * 0.5
+        v[0] * v[0] * 0.5 + q[0] * q[0] * 0.5 - q[0].powi(4) * 0.25 + q[0] * (t * 1.2).cos() * 0.5
     }
 }

@@ -23,7 +23,7 @@ pub struct SectionArgs {
     pub direction: String,
     /// A stroboscopic map instead: the state at t0 + k·PERIOD (e.g. 2π/ω for a drive of
     /// frequency ω; `2*pi/1.2` is accepted).
-    #[arg(long, value_parser = super::values::expression_number)]
+    #[arg(long, allow_hyphen_values = true, value_parser = super::values::expression_number)]
     pub every: Option<f64>,
     /// Number of orbits (default 1: the scene's initial state).
     #[arg(long, default_value_t = 1)]
