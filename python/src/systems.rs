@@ -158,18 +158,22 @@ impl NBody {
 
 /// A Lagrangian written as an expression in the coordinates, their velocities `x_dot` and
 /// named parameters, e.g. `Expression("x_dot^2/2 - x^2/2", ["x"])`. Derivatives by automatic
-/// differentiation; the energy p·v − L is the reported invariant.
+/// differentiation; the energy p·v − L is the reported invariant. L may read the time `t`, and
+/// `force=["-0.1*x_dot + cos(t)"]` (one expression per coordinate) adds a non-conservative
+/// force by the discrete Lagrange–d'Alembert principle; the energy is then not an invariant
+/// (see `Trajectory.energy_balance`).
 #[pyclass(extends = System, frozen, module = "galerkin_vi.systems")]
 pub struct Expression;
 
 #[pymethods]
 impl Expression {
     #[new]
-    #[pyo3(signature = (lagrangian, coordinates, parameters = None))]
+    #[pyo3(signature = (lagrangian, coordinates, parameters = None, force = None))]
     fn new(
         lagrangian: &str,
         coordinates: Vec<String>,
         parameters: Option<BTreeMap<String, f64>>,
+        force: Option<Vec<String>>,
     ) -> PyResult<PyClassInitializer<Self>> {
         let params: Vec<(String, f64)> = parameters.unwrap_or_default().into_iter().collect();
         for (name, value) in &params {
@@ -177,7 +181,11 @@ impl Expression {
         }
         let coords: Vec<&str> = coordinates.iter().map(String::as_str).collect();
         let p: Vec<(&str, f64)> = params.iter().map(|(n, v)| (n.as_str(), *v)).collect();
-        let s = ExpressionLagrangian::parse(lagrangian, &coords, &p).py_err()?;
+        let mut s = ExpressionLagrangian::parse(lagrangian, &coords, &p).py_err()?;
+        if let Some(force) = &force {
+            let force: Vec<&str> = force.iter().map(String::as_str).collect();
+            s = s.with_force(&force).py_err()?;
+        }
         Ok(PyClassInitializer::from(System::new(SysKind::Expression(s))).add_subclass(Expression))
     }
 }

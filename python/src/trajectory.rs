@@ -237,7 +237,9 @@ impl Trajectory {
     }
 
     /// The zero crossings of `g(t, q, p)` (a Python callable returning a float; q and p
-    /// numpy arrays of shape (D,)) along the Galerkin curves, located on each step's curve:
+    /// numpy arrays of shape (D,); or an expression string over the coordinate names, the
+    /// momenta `p_<name>`, `t` and the parameters, e.g. "x") along the Galerkin curves,
+    /// located on each step's curve:
     /// g is sampled `samples_per_step` times per step and a sign change is refined on the
     /// curve (regula falsi). `direction`: "either", "rising" (g from − to +) or "falling".
     /// Returns a list of dicts with `t`, `q`, `p` (arrays), `step` and `rising`, in time order.
@@ -261,9 +263,30 @@ impl Trajectory {
                 )));
             }
         };
+        // g as text: an expression over the coordinate names, p_<name>, t and the parameters.
+        if let Ok(text) = g.extract::<String>() {
+            use galerkin_vi::events::ExpressionEvent;
+            let (names, params) = galerkin_vi_lab::section::names_of(&self.kind);
+            let coords: Vec<&str> = names.iter().map(String::as_str).collect();
+            let pars: Vec<(&str, f64)> = params.iter().map(|(n, v)| (n.as_str(), *v)).collect();
+            let g = ExpressionEvent::parse(&text, &coords, &pars).py_err()?;
+            let events = [Event::new("g", g).direction(direction)];
+            let options = EventOptions {
+                samples_per_step,
+                ..EventOptions::default()
+            };
+            let found = with_system!(&*self.kind, s => {
+                crossings_on_trajectory(&self.inner, s, &events, &options)
+            });
+            return found
+                .py_err()?
+                .into_iter()
+                .map(|c| crossing_dict(py, c))
+                .collect();
+        }
         if !g.is_callable() {
             return Err(crate::errors::InvalidInputError::new_err(
-                "g: expected a callable g(t, q, p) -> float",
+                "g: expected a callable g(t, q, p) -> float or an expression string",
             ));
         }
         // The first exception raised by g (or a non-float result): the scan then sees NaN and
@@ -296,16 +319,26 @@ impl Trajectory {
         found
             .py_err()?
             .into_iter()
-            .map(|c| {
-                let dict = PyDict::new(py);
-                dict.set_item("t", c.t)?;
-                dict.set_item("q", c.q.into_pyarray(py))?;
-                dict.set_item("p", c.p.into_pyarray(py))?;
-                dict.set_item("step", c.step)?;
-                dict.set_item("rising", c.rising)?;
-                Ok(dict)
-            })
+            .map(|c| crossing_dict(py, c))
             .collect()
+    }
+
+    /// The energy balance of a forced or time-dependent run: a dict of arrays `t`, `energy`
+    /// (E_k at the step ends), `source` (the work of the force minus ∫∂L/∂t from t0 to t_k,
+    /// integrated along the Galerkin curves) and `defect` = E_k − E_0 − source_k, zero for
+    /// the exact motion (galerkin_vi::forcing::energy_balance).
+    fn energy_balance<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let balance = with_system!(&*self.kind, s => {
+            galerkin_vi::forcing::energy_balance(s, &self.inner)
+        })
+        .py_err()?;
+        let dict = PyDict::new(py);
+        let defects = balance.defects();
+        dict.set_item("t", balance.t.into_pyarray(py))?;
+        dict.set_item("energy", balance.value.into_pyarray(py))?;
+        dict.set_item("source", balance.source.into_pyarray(py))?;
+        dict.set_item("defect", defects.into_pyarray(py))?;
+        Ok(dict)
     }
 
     /// The invariants at every step end, as a dict name → array (steps + 1).
@@ -394,4 +427,15 @@ impl Trajectory {
             self.inner.dim
         )
     }
+}
+
+/// A crossing as the dict `Trajectory.crossings` returns.
+fn crossing_dict(py: Python<'_>, c: galerkin_vi::events::Crossing) -> PyResult<Bound<'_, PyDict>> {
+    let dict = PyDict::new(py);
+    dict.set_item("t", c.t)?;
+    dict.set_item("q", c.q.into_pyarray(py))?;
+    dict.set_item("p", c.p.into_pyarray(py))?;
+    dict.set_item("step", c.step)?;
+    dict.set_item("rising", c.rising)?;
+    Ok(dict)
 }
