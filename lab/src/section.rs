@@ -386,8 +386,15 @@ impl Section {
                 .filter(|pt| pt.orbit == j)
                 .map(|pt| (value(pt, a), value(pt, b)))
                 .collect();
+            // A fan of orbits is told apart by colour; a legend of many entries would only
+            // cover the section.
+            let label = if orbits <= 4 {
+                format!("orbit {j}")
+            } else {
+                String::new()
+            };
             if !pts.is_empty() {
-                chart.push(Series::markers(format!("orbit {j}"), pts).with_color(j));
+                chart.push(Series::markers(label, pts).with_color(j));
             }
         }
         Ok(chart)

@@ -30,6 +30,7 @@
 //! ```
 
 mod eval;
+mod legendre;
 mod parse;
 mod separable;
 mod spec;
@@ -44,9 +45,9 @@ pub use spec::{ExpressionInvariants, LagrangianSpec};
 
 use super::{ExactSolution, System};
 use crate::ad;
-use crate::error::{GviError, Result, ensure_finite, ensure_len};
+use crate::error::{GviError, Result, ensure_len};
 use crate::lagrangian::Lagrangian;
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DMatrix;
 use num_dual::{Dual64, DualNum};
 use std::sync::Arc;
 
@@ -245,140 +246,6 @@ impl ExpressionLagrangian {
     pub fn is_separable(&self) -> bool {
         self.separable.is_some()
     }
-
-    /// ∂L/∂v and ∂²L/∂v∂v (row-major) at (t, q, v).
-    fn velocity_derivatives(&self, t: f64, q: &[f64], v: &[f64], lv: &mut [f64], lvv: &mut [f64]) {
-        let qc: Vec<num_dual::HyperDual64> = q.iter().chain([&t]).map(|&x| x.into()).collect();
-        ad::hessian(|y| self.tape.eval(&qc, y), v, lv, lvv);
-    }
-
-    /// A NaN or infinite L, ∂L/∂v or ∂²L/∂v² at (q, v) is a [`GviError::NonFinite`] naming
-    /// the state (a singularity of L there), not a singular velocity Hessian.
-    fn ensure_finite_at(
-        &self,
-        t: f64,
-        (q, v): (&[f64], &[f64]),
-        lv: &[f64],
-        lvv: &[f64],
-    ) -> Result<()> {
-        let l = self.value_with_time(t, q, v);
-        let bad = std::iter::once(l)
-            .chain(lv.iter().copied())
-            .chain(lvv.iter().copied())
-            .find(|x| !x.is_finite());
-        match bad {
-            Some(value) => Err(GviError::NonFinite {
-                what: format!(
-                    "the Lagrangian or its velocity derivatives at q = {q:?}, v = {v:?} (L is \
-                     singular there)"
-                ),
-                value,
-            }),
-            None => Ok(()),
-        }
-    }
-
-    /// The velocity v with ∂L/∂v(q, v) = p (inverse Legendre transform), by Newton's method
-    /// from v = 0 (one step for Lagrangians quadratic in v). Errors: wrong lengths, non-finite
-    /// input, a singular velocity Hessian at an iterate
-    /// ([`ExpressionError::SingularHessian`]), no convergence.
-    pub fn velocity(&self, q: &[f64], p: &[f64]) -> Result<Vec<f64>> {
-        self.velocity_at(0.0, q, p)
-    }
-
-    /// [`velocity`](Self::velocity) at time t (for Lagrangians that read `t`).
-    pub fn velocity_at(&self, t: f64, q: &[f64], p: &[f64]) -> Result<Vec<f64>> {
-        let d = self.dim();
-        ensure_len("q (number of coordinates)", d, q.len())?;
-        ensure_len("p (number of coordinates)", d, p.len())?;
-        ensure_finite("q", q)?;
-        ensure_finite("p", p)?;
-        let mut v = vec![0.0; d];
-        let (mut lv, mut lvv) = (vec![0.0; d], vec![0.0; d * d]);
-        let scale = 1.0 + p.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        let mut residual = f64::INFINITY;
-        for _ in 0..50 {
-            self.velocity_derivatives(t, q, &v, &mut lv, &mut lvv);
-            let r = DVector::from_iterator(d, p.iter().zip(&lv).map(|(p, l)| p - l));
-            residual = r.amax();
-            if residual <= 4.0 * f64::EPSILON * scale {
-                return Ok(v);
-            }
-            self.ensure_finite_at(t, (q, &v), &lv, &lvv)?;
-            let m = DMatrix::from_row_slice(d, d, &lvv);
-            let rcond = reciprocal_condition(&m);
-            if rcond.is_nan() || rcond <= MIN_RCOND {
-                return Err(ExpressionError::SingularHessian {
-                    what: "the initial state".into(),
-                    q: q.to_vec(),
-                    v: v.clone(),
-                    rcond,
-                }
-                .into());
-            }
-            let Some(dv) = m.lu().solve(&r) else { break };
-            v.iter_mut().zip(dv.iter()).for_each(|(v, d)| *v += d);
-            if dv.amax() <= 1e-15 * (1.0 + v.iter().fold(0.0f64, |m, x| m.max(x.abs()))) {
-                self.velocity_derivatives(t, q, &v, &mut lv, &mut lvv);
-                residual = p
-                    .iter()
-                    .zip(&lv)
-                    .fold(0.0f64, |m, (p, l)| m.max((p - l).abs()));
-                if residual <= 1e-10 * scale {
-                    return Ok(v);
-                }
-                break;
-            }
-        }
-        Err(ExpressionError::Legendre {
-            q: q.to_vec(),
-            p: p.to_vec(),
-            residual,
-        }
-        .into())
-    }
-
-    /// Check a state before integrating: lengths, finiteness, and that the Lagrangian is
-    /// regular there (the velocity Hessian is invertible, so p determines v). Returns v.
-    pub fn check_state(&self, q: &[f64], p: &[f64]) -> Result<Vec<f64>> {
-        self.check_state_at(0.0, q, p)
-    }
-
-    /// [`check_state`](Self::check_state) at time t (for Lagrangians that read `t`).
-    pub fn check_state_at(&self, t: f64, q: &[f64], p: &[f64]) -> Result<Vec<f64>> {
-        ensure_len("initial q (number of coordinates)", self.dim(), q.len())?;
-        ensure_len("initial p (number of coordinates)", self.dim(), p.len())?;
-        let v = self.velocity_at(t, q, p)?;
-        let d = self.dim();
-        let (mut lv, mut lvv) = (vec![0.0; d], vec![0.0; d * d]);
-        self.velocity_derivatives(t, q, &v, &mut lv, &mut lvv);
-        self.ensure_finite_at(t, (q, &v), &lv, &lvv)?;
-        let rcond = reciprocal_condition(&DMatrix::from_row_slice(d, d, &lvv));
-        if rcond.is_nan() || rcond <= MIN_RCOND {
-            return Err(ExpressionError::SingularHessian {
-                what: "the initial state".into(),
-                q: q.to_vec(),
-                v,
-                rcond,
-            }
-            .into());
-        }
-        Ok(v)
-    }
-}
-
-/// min|λ| / max|λ| of the symmetric part of `m`; 0 if not finite or zero.
-fn reciprocal_condition(m: &DMatrix<f64>) -> f64 {
-    if m.iter().any(|x| !x.is_finite()) {
-        return 0.0;
-    }
-    let sym = (m + m.transpose()) * 0.5;
-    let eig = sym.symmetric_eigenvalues();
-    let hi = eig.amax();
-    if hi == 0.0 {
-        return 0.0;
-    }
-    eig.iter().fold(f64::INFINITY, |m, x| m.min(x.abs())) / hi
 }
 
 impl Lagrangian for ExpressionLagrangian {
