@@ -99,6 +99,62 @@ pub fn hessian(
     })
 }
 
+/// L_q and L_v of `f(y)` with y = (q, v): the gradient split into its two D-blocks. Stack
+/// scratch up to D = 32, so a step allocates nothing.
+pub fn gradient_blocks(
+    f: impl Fn(&[Dual64]) -> Dual64,
+    q: &[f64],
+    v: &[f64],
+    lq: &mut [f64],
+    lv: &mut [f64],
+) {
+    let d = q.len();
+    let (mut xs, mut gs) = ([0.0; 64], [0.0; 64]);
+    let mut heap: (Vec<f64>, Vec<f64>);
+    let (x, g): (&mut [f64], &mut [f64]) = if 2 * d <= xs.len() {
+        (&mut xs[..2 * d], &mut gs[..2 * d])
+    } else {
+        heap = (vec![0.0; 2 * d], vec![0.0; 2 * d]);
+        (&mut heap.0, &mut heap.1)
+    };
+    x[..d].copy_from_slice(q);
+    x[d..].copy_from_slice(v);
+    gradient(f, x, g);
+    lq.copy_from_slice(&g[..d]);
+    lv.copy_from_slice(&g[d..]);
+}
+
+/// L_qq, L_qv (entry (r, s) = ∂²f/∂q_r∂v_s) and L_vv of `f(y)` with y = (q, v), each row-major
+/// D×D. Stack scratch up to D = 16; above it the scratch is allocated per call.
+pub fn hessian_blocks(
+    f: impl Fn(&[HyperDual64]) -> HyperDual64,
+    (q, v): (&[f64], &[f64]),
+    lqq: &mut [f64],
+    lqv: &mut [f64],
+    lvv: &mut [f64],
+) {
+    let d = q.len();
+    let n = 2 * d;
+    let (mut xs, mut gs, mut hs) = ([0.0; 32], [0.0; 32], [0.0; 32 * 32]);
+    let mut heap: (Vec<f64>, Vec<f64>, Vec<f64>);
+    let (x, g, h): (&mut [f64], &mut [f64], &mut [f64]) = if n <= 32 {
+        (&mut xs[..n], &mut gs[..n], &mut hs[..n * n])
+    } else {
+        heap = (vec![0.0; n], vec![0.0; n], vec![0.0; n * n]);
+        (&mut heap.0, &mut heap.1, &mut heap.2)
+    };
+    x[..d].copy_from_slice(q);
+    x[d..].copy_from_slice(v);
+    hessian(f, x, g, h);
+    for r in 0..d {
+        for s in 0..d {
+            lqq[r * d + s] = h[r * n + s];
+            lqv[r * d + s] = h[r * n + d + s];
+            lvv[r * d + s] = h[(d + r) * n + d + s];
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -57,25 +57,7 @@ pub trait Lagrangian {
     /// The gradients L_q and L_v at (q, v).
     fn gradient(&self, q: &[f64], v: &[f64], lq: &mut [f64], lv: &mut [f64]) {
         let d = self.dim();
-        let mut x = [0.0; 64];
-        if 2 * d <= x.len() {
-            x[..d].copy_from_slice(q);
-            x[d..2 * d].copy_from_slice(v);
-            let mut g = [0.0; 64];
-            ad::gradient(
-                |y| self.lagrangian(&y[..d], &y[d..]),
-                &x[..2 * d],
-                &mut g[..2 * d],
-            );
-            lq.copy_from_slice(&g[..d]);
-            lv.copy_from_slice(&g[d..2 * d]);
-        } else {
-            let x: Vec<f64> = q.iter().chain(v).copied().collect();
-            let mut g = vec![0.0; 2 * d];
-            ad::gradient(|y| self.lagrangian(&y[..d], &y[d..]), &x, &mut g);
-            lq.copy_from_slice(&g[..d]);
-            lv.copy_from_slice(&g[d..]);
-        }
+        ad::gradient_blocks(|y| self.lagrangian(&y[..d], &y[d..]), q, v, lq, lv);
     }
 
     /// The second derivatives L_qq, L_qv (entry (r, s) = ∂²L/∂q_r∂v_s) and L_vv, each a
@@ -83,27 +65,7 @@ pub trait Lagrangian {
     /// D > 16 is allocated per call, so large systems should override this.
     fn hessian(&self, q: &[f64], v: &[f64], lqq: &mut [f64], lqv: &mut [f64], lvv: &mut [f64]) {
         let d = self.dim();
-        let n = 2 * d;
-        let mut xs = [0.0; 32];
-        let mut gs = [0.0; 32];
-        let mut hs = [0.0; 32 * 32];
-        let mut heap: (Vec<f64>, Vec<f64>, Vec<f64>);
-        let (x, g, h): (&mut [f64], &mut [f64], &mut [f64]) = if n <= 32 {
-            (&mut xs[..n], &mut gs[..n], &mut hs[..n * n])
-        } else {
-            heap = (vec![0.0; n], vec![0.0; n], vec![0.0; n * n]);
-            (&mut heap.0, &mut heap.1, &mut heap.2)
-        };
-        x[..d].copy_from_slice(q);
-        x[d..].copy_from_slice(v);
-        ad::hessian(|y| self.lagrangian(&y[..d], &y[d..]), x, g, h);
-        for r in 0..d {
-            for s in 0..d {
-                lqq[r * d + s] = h[r * n + s];
-                lqv[r * d + s] = h[r * n + d + s];
-                lvv[r * d + s] = h[(d + r) * n + d + s];
-            }
-        }
+        ad::hessian_blocks(|y| self.lagrangian(&y[..d], &y[d..]), (q, v), lqq, lqv, lvv);
     }
 
     /// The constant mass matrix M when L = ½ vᵀ M v − V(q). The integrator then precomputes

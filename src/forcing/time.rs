@@ -90,36 +90,9 @@ impl<L: NonAutonomousLagrangian> Lagrangian for NonAutonomous<L> {
     }
 
     fn gradient_at(&self, t: f64, q: &[f64], v: &[f64], lq: &mut [f64], lv: &mut [f64]) {
-        let d = self.0.dim();
-        let mut stack = [0.0; 2 * STACK_DIM];
-        let mut heap;
-        let x: &mut [f64] = if d <= STACK_DIM {
-            &mut stack[..2 * d]
-        } else {
-            heap = vec![0.0; 2 * d];
-            &mut heap
-        };
-        x[..d].copy_from_slice(q);
-        x[d..].copy_from_slice(v);
-        let mut gs = [0.0; 2 * STACK_DIM];
-        let mut gheap;
-        let g: &mut [f64] = if d <= STACK_DIM {
-            &mut gs[..2 * d]
-        } else {
-            gheap = vec![0.0; 2 * d];
-            &mut gheap
-        };
         // t is a constant of the differentiation: a plain dual with zero derivative.
-        ad::gradient(
-            |y| {
-                self.0
-                    .lagrangian(num_dual::Dual64::from_re(t), &y[..d], &y[d..])
-            },
-            x,
-            g,
-        );
-        lq.copy_from_slice(&g[..d]);
-        lv.copy_from_slice(&g[d..]);
+        let (d, t) = (self.0.dim(), num_dual::Dual64::from_re(t));
+        ad::gradient_blocks(|y| self.0.lagrangian(t, &y[..d], &y[d..]), q, v, lq, lv);
     }
 
     fn hessian_at(
@@ -131,35 +104,14 @@ impl<L: NonAutonomousLagrangian> Lagrangian for NonAutonomous<L> {
         lqv: &mut [f64],
         lvv: &mut [f64],
     ) {
-        let d = self.0.dim();
-        let n = 2 * d;
-        // Stack scratch up to D = 16 (as the autonomous default), so a step allocates nothing.
-        let (mut xs, mut gs, mut hs) = ([0.0; 32], [0.0; 32], [0.0; 32 * 32]);
-        let mut heap: (Vec<f64>, Vec<f64>, Vec<f64>);
-        let (x, g, h): (&mut [f64], &mut [f64], &mut [f64]) = if n <= 32 {
-            (&mut xs[..n], &mut gs[..n], &mut hs[..n * n])
-        } else {
-            heap = (vec![0.0; n], vec![0.0; n], vec![0.0; n * n]);
-            (&mut heap.0, &mut heap.1, &mut heap.2)
-        };
-        x[..d].copy_from_slice(q);
-        x[d..].copy_from_slice(v);
-        ad::hessian(
-            |y| {
-                self.0
-                    .lagrangian(num_dual::HyperDual64::from_re(t), &y[..d], &y[d..])
-            },
-            x,
-            g,
-            h,
+        let (d, t) = (self.0.dim(), num_dual::HyperDual64::from_re(t));
+        ad::hessian_blocks(
+            |y| self.0.lagrangian(t, &y[..d], &y[d..]),
+            (q, v),
+            lqq,
+            lqv,
+            lvv,
         );
-        for r in 0..d {
-            for s in 0..d {
-                lqq[r * d + s] = h[r * n + s];
-                lqv[r * d + s] = h[r * n + d + s];
-                lvv[r * d + s] = h[(d + r) * n + d + s];
-            }
-        }
     }
 
     fn time_derivative(&self, t: f64, q: &[f64], v: &[f64]) -> f64 {

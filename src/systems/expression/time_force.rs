@@ -165,36 +165,14 @@ impl ExpressionLagrangian {
         v: &[f64],
         [lqq, lqv, lvv]: [&mut [f64]; 3],
     ) {
-        let d = q.len();
-        let n = 2 * d;
-        let (mut xs, mut gs, mut hs) = (
-            [0.0; 2 * STACK_DIM],
-            [0.0; 2 * STACK_DIM],
-            [0.0; 4 * STACK_DIM * STACK_DIM],
-        );
-        let mut heap: (Vec<f64>, Vec<f64>, Vec<f64>);
-        let (x, g, h): (&mut [f64], &mut [f64], &mut [f64]) = if d <= STACK_DIM {
-            (&mut xs[..n], &mut gs[..n], &mut hs[..n * n])
-        } else {
-            heap = (vec![0.0; n], vec![0.0; n], vec![0.0; n * n]);
-            (&mut heap.0, &mut heap.1, &mut heap.2)
-        };
-        x[..d].copy_from_slice(q);
-        x[d..].copy_from_slice(v);
-        let tt = HyperDual64::from_re(t);
-        ad::hessian(
+        let (d, tt) = (q.len(), HyperDual64::from_re(t));
+        ad::hessian_blocks(
             |y| with_qtv(&y[..d], tt, &y[d..], |qt, v| self.tape.eval(qt, v)),
-            x,
-            g,
-            h,
+            (q, v),
+            lqq,
+            lqv,
+            lvv,
         );
-        for r in 0..d {
-            for s in 0..d {
-                lqq[r * d + s] = h[r * n + s];
-                lqv[r * d + s] = h[r * n + d + s];
-                lvv[r * d + s] = h[(d + r) * n + d + s];
-            }
-        }
     }
 
     /// f(t, q, v) from the force expressions (zero without them).
@@ -224,25 +202,15 @@ impl ExpressionLagrangian {
             fv.iter_mut().for_each(|x| *x = 0.0);
             return;
         };
-        let (mut xs, mut gs) = ([0.0; 2 * STACK_DIM], [0.0; 2 * STACK_DIM]);
-        let mut heap: (Vec<f64>, Vec<f64>);
-        let (x, g): (&mut [f64], &mut [f64]) = if d <= STACK_DIM {
-            (&mut xs[..2 * d], &mut gs[..2 * d])
-        } else {
-            heap = (vec![0.0; 2 * d], vec![0.0; 2 * d]);
-            (&mut heap.0, &mut heap.1)
-        };
-        x[..d].copy_from_slice(q);
-        x[d..].copy_from_slice(v);
         let tt = Dual64::from_re(t);
         for (r, tape) in force.tapes.iter().enumerate() {
-            ad::gradient(
+            ad::gradient_blocks(
                 |y| with_qtv(&y[..d], tt, &y[d..], |qt, v| tape.eval(qt, v)),
-                x,
-                g,
+                q,
+                v,
+                &mut fq[r * d..(r + 1) * d],
+                &mut fv[r * d..(r + 1) * d],
             );
-            fq[r * d..(r + 1) * d].copy_from_slice(&g[..d]);
-            fv[r * d..(r + 1) * d].copy_from_slice(&g[d..]);
         }
     }
 }
