@@ -56,68 +56,151 @@ impl Balance {
 }
 
 /// Gauss–Legendre points per step for the source integrals: well beyond the curve's degree.
-fn source_points(traj: &Trajectory) -> usize {
-    let n = (0..traj.steps())
-        .map(|k| traj.n_of_step(k))
-        .max()
-        .unwrap_or(2);
+fn source_points(n: usize) -> usize {
     (2 * n).max(8)
 }
 
-/// ∫ over step k of `integrand(t, q, q̇)` along the Galerkin curve.
-fn integrate_step(
-    traj: &Trajectory,
-    k: usize,
-    nodes: &[f64],
-    weights: &[f64],
-    mut integrand: impl FnMut(f64, &[f64], &[f64]) -> f64,
-) -> Result<f64> {
-    let (t0, t1) = (traj.time(k), traj.time(k + 1));
-    let h = t1 - t0;
-    let mut sum = 0.0;
-    for (&c, &b) in nodes.iter().zip(weights) {
-        let t = t0 + c * h;
-        let (q, v) = traj.state_on_curve(t)?;
-        sum += b * integrand(t, &q, &v);
+/// The energy balance accumulated step by step, for runs that do not keep their trajectory
+/// (a streamed `gvi run`): feed it every step's Galerkin curve and end state.
+#[derive(Debug, Clone)]
+pub struct EnergyMeter {
+    rule: crate::quadrature::QuadratureRule,
+    balance: Balance,
+    work: f64,
+    /// Scratch: basis values, a state, the force.
+    phi: Vec<f64>,
+    dphi: Vec<f64>,
+    q: Vec<f64>,
+    v: Vec<f64>,
+    f: Vec<f64>,
+}
+
+impl EnergyMeter {
+    /// Start at (t0, q0, p0), with steps of at most n basis functions; v0 from the inverse
+    /// Legendre transform, starting from `v_guess`.
+    ///
+    /// Errors: wrong lengths, an inverse Legendre transform that does not converge.
+    pub fn new<L: Lagrangian>(
+        lagrangian: &L,
+        n: usize,
+        (t0, q0, p0): (f64, &[f64], &[f64]),
+        v_guess: &[f64],
+    ) -> Result<Self> {
+        let d = lagrangian.dim();
+        ensure_len("q0", d, q0.len())?;
+        ensure_len("p0", d, p0.len())?;
+        let rule = QuadratureKind::GaussLegendre.build(source_points(n))?;
+        let v0 = velocity_of_momentum(lagrangian, t0, q0, p0, v_guess)?;
+        let mut meter = EnergyMeter {
+            rule,
+            balance: Balance::default(),
+            work: 0.0,
+            phi: vec![0.0; n],
+            dphi: vec![0.0; n],
+            q: vec![0.0; d],
+            v: vec![0.0; d],
+            f: vec![0.0; d],
+        };
+        meter.record(lagrangian, t0, q0, &v0);
+        Ok(meter)
     }
-    Ok(h * sum)
+
+    fn record<L: Lagrangian>(&mut self, lagrangian: &L, t: f64, q: &[f64], v: &[f64]) {
+        self.balance.t.push(t);
+        self.balance.value.push(lagrangian.energy_at(t, q, v));
+        self.balance.source.push(self.work);
+    }
+
+    /// Add one step: its curve (in `basis`, starting at its own time) and the end state
+    /// (q_{k+1}, p_{k+1}).
+    ///
+    /// Errors: a curve of more basis functions than the meter was made for, wrong lengths, an
+    /// inverse Legendre transform that does not converge.
+    pub fn step<L: Lagrangian, B: crate::basis::Basis + ?Sized>(
+        &mut self,
+        lagrangian: &L,
+        curve: crate::curve::GalerkinCurveRef<'_>,
+        basis: &B,
+        (q1, p1): (&[f64], &[f64]),
+    ) -> Result<()> {
+        let n = curve.n();
+        if n > self.phi.len() {
+            self.phi.resize(n, 0.0);
+            self.dphi.resize(n, 0.0);
+        }
+        ensure_len("step dimension", self.q.len(), curve.dim())?;
+        let (t0, h) = (curve.start_time(), curve.h());
+        let mut sum = 0.0;
+        for (&c, &b) in self.rule.nodes.iter().zip(&self.rule.weights) {
+            curve.state_into(
+                basis,
+                c,
+                &mut self.phi,
+                &mut self.dphi,
+                &mut self.q,
+                &mut self.v,
+            );
+            let t = t0 + c * h;
+            lagrangian.external_force(t, &self.q, &self.v, &mut self.f);
+            let power: f64 = self.f.iter().zip(&self.v).map(|(a, b)| a * b).sum();
+            sum += b * (power - lagrangian.time_derivative(t, &self.q, &self.v));
+        }
+        self.work += h * sum;
+        // The curve's end velocity starts the inverse Legendre transform at t_{k+1}.
+        curve.state_into(
+            basis,
+            1.0,
+            &mut self.phi,
+            &mut self.dphi,
+            &mut self.q,
+            &mut self.v,
+        );
+        let t1 = t0 + h;
+        let v1 = velocity_of_momentum(lagrangian, t1, q1, p1, &self.v)?;
+        self.record(lagrangian, t1, q1, &v1);
+        Ok(())
+    }
+
+    /// The balance so far.
+    pub fn balance(&self) -> &Balance {
+        &self.balance
+    }
+
+    /// The balance, consuming the meter.
+    pub fn into_balance(self) -> Balance {
+        self.balance
+    }
 }
 
 /// The energy balance E_k − E_0 = ∫ (f·q̇ − ∂L/∂t) dt of a trajectory of `lagrangian`
 /// (forced or time-dependent or both): E_k from the step-end state (q_k, p_k) (the velocity
 /// from the inverse Legendre transform at t_k), the source integrated along the Galerkin curves
-/// with a Gauss–Legendre rule of max(2n, 8) points per step.
+/// with a Gauss–Legendre rule of max(2n, 8) points per step ([`EnergyMeter`]).
 ///
 /// Errors: a trajectory of another dimension; an inverse Legendre transform that does not
 /// converge (L_vv singular).
 pub fn energy_balance<L: Lagrangian>(lagrangian: &L, traj: &Trajectory) -> Result<Balance> {
     let d = lagrangian.dim();
     ensure_len("trajectory dimension", d, traj.dim)?;
-    let rule = QuadratureKind::GaussLegendre.build(source_points(traj))?;
-    let mut f = vec![0.0; d];
-    let mut balance = Balance::default();
-    let mut work = 0.0;
-    for k in 0..=traj.steps() {
-        let t = traj.time(k);
-        let v = velocity_of_momentum(lagrangian, traj, k)?;
-        balance.t.push(t);
-        balance.value.push(lagrangian.energy_at(t, &traj.q[k], &v));
-        balance.source.push(work);
-        if k < traj.steps() {
-            work += integrate_step(traj, k, &rule.nodes, &rule.weights, |t, q, v| {
-                lagrangian.external_force(t, q, v, &mut f);
-                let power: f64 = f.iter().zip(v).map(|(a, b)| a * b).sum();
-                power - lagrangian.time_derivative(t, q, v)
-            })?;
-        }
+    let n = (0..traj.steps())
+        .map(|k| traj.n_of_step(k))
+        .max()
+        .unwrap_or(2);
+    let t0 = traj.time(0);
+    let v_guess = traj.state_on_curve(t0)?.1;
+    let mut meter = EnergyMeter::new(lagrangian, n, (t0, &traj.q[0], &traj.p[0]), &v_guess)?;
+    for k in 0..traj.steps() {
+        let curve = traj.curve(k)?;
+        let basis = traj.basis_with(curve.n())?;
+        meter.step(lagrangian, curve, basis, (&traj.q[k + 1], &traj.p[k + 1]))?;
     }
-    Ok(balance)
+    Ok(meter.into_balance())
 }
 
 /// The momentum-map balance J_k − J_0 = ∫ f·ξ(q) dt for a symmetry of the Lagrangian with
 /// generator ξ (`map`): J_k = p_k·ξ(q_k) at the step ends, the impulse along the Galerkin
-/// curves as in [`energy_balance`]. Without a force the source is zero and the balance is
-/// Noether's conservation law.
+/// curves with a Gauss–Legendre rule of max(2n, 8) points per step. Without a force the source
+/// is zero and the balance is Noether's conservation law.
 ///
 /// Errors: a trajectory of another dimension.
 pub fn momentum_balance<L: Lagrangian, M: MomentumMap + ?Sized>(
@@ -127,36 +210,45 @@ pub fn momentum_balance<L: Lagrangian, M: MomentumMap + ?Sized>(
 ) -> Result<Balance> {
     let d = lagrangian.dim();
     ensure_len("trajectory dimension", d, traj.dim)?;
-    let rule = QuadratureKind::GaussLegendre.build(source_points(traj))?;
+    let n = (0..traj.steps())
+        .map(|k| traj.n_of_step(k))
+        .max()
+        .unwrap_or(2);
+    let rule = QuadratureKind::GaussLegendre.build(source_points(n))?;
     let (mut f, mut xi) = (vec![0.0; d], vec![0.0; d]);
     let mut balance = Balance::default();
     let mut impulse = 0.0;
     for k in 0..=traj.steps() {
-        balance.t.push(traj.time(k));
+        let t = traj.time(k);
+        balance.t.push(t);
         balance.value.push(map.value(&traj.q[k], &traj.p[k]));
         balance.source.push(impulse);
         if k < traj.steps() {
-            impulse += integrate_step(traj, k, &rule.nodes, &rule.weights, |t, q, v| {
-                lagrangian.external_force(t, q, v, &mut f);
-                map.generator(q, &mut xi);
-                f.iter().zip(&xi).map(|(a, b)| a * b).sum()
-            })?;
+            let h = traj.time(k + 1) - t;
+            let mut sum = 0.0;
+            for (&c, &b) in rule.nodes.iter().zip(&rule.weights) {
+                let (q, v) = traj.state_on_curve(t + c * h)?;
+                lagrangian.external_force(t + c * h, &q, &v, &mut f);
+                map.generator(&q, &mut xi);
+                sum += b * f.iter().zip(&xi).map(|(a, b)| a * b).sum::<f64>();
+            }
+            impulse += h * sum;
         }
     }
     Ok(balance)
 }
 
-/// The velocity v with ∂L/∂v(t_k, q_k, v) = p_k at step end k: Newton's method on the
-/// Legendre transform from the Galerkin curve's velocity there.
+/// The velocity v with ∂L/∂v(t, q, v) = p: Newton's method on the Legendre transform from
+/// `v_guess` (the Galerkin curve's velocity there).
 pub(crate) fn velocity_of_momentum<L: Lagrangian>(
     lagrangian: &L,
-    traj: &Trajectory,
-    k: usize,
+    t: f64,
+    q: &[f64],
+    p: &[f64],
+    v_guess: &[f64],
 ) -> Result<Vec<f64>> {
     let d = lagrangian.dim();
-    let t = traj.time(k);
-    let (q, p) = (&traj.q[k], &traj.p[k]);
-    let mut v = traj.state_on_curve(t)?.1;
+    let mut v = v_guess.to_vec();
     let (mut lq, mut lv) = (vec![0.0; d], vec![0.0; d]);
     let (mut a, mut b, mut lvv) = (vec![0.0; d * d], vec![0.0; d * d], vec![0.0; d * d]);
     let scale = 1.0 + p.iter().fold(0.0f64, |m, x| m.max(x.abs()));

@@ -19,7 +19,7 @@ mod balance;
 mod force;
 mod time;
 
-pub use balance::{Balance, energy_balance, momentum_balance};
+pub use balance::{Balance, EnergyMeter, energy_balance, momentum_balance};
 pub use force::{ExternalForce, Forced, LinearDamping, StokesDrag};
 pub use time::{NonAutonomous, NonAutonomousLagrangian};
 
