@@ -6,6 +6,8 @@
 
 mod convert;
 mod errors;
+mod guard;
+mod interrupt;
 mod systems;
 mod trajectory;
 
@@ -63,7 +65,9 @@ fn apply_overrides(scene: &mut Scene, overrides: &Bound<'_, PyDict>, dim: usize)
 
 /// Run a scene (a built-in name such as "kepler", or the path of a TOML scene file) with
 /// optional overrides of its method and initial state: n, h, steps, basis, quadrature,
-/// solver, tol, q0, p0. Returns the `Trajectory`.
+/// solver, tol, q0, p0. Returns the `Trajectory`. A run whose estimated memory is above the
+/// `gvi` tool's limit is refused before any work (`MemoryLimitError`); Ctrl-C stops it within
+/// a step (`KeyboardInterrupt`).
 #[pyfunction]
 #[pyo3(signature = (name_or_path, **overrides))]
 fn run_scene(
@@ -78,13 +82,26 @@ fn run_scene(
     }
     let scene = scene.build().py_err()?;
     let kind = std::sync::Arc::new(systems::system_of(&scene)?);
+    // The estimate `gvi run` holds a run kept in memory to (it counts the output text, which
+    // the Python arrays returned later stand for).
+    let (_, estimate) = galerkin_vi_lab::run::in_memory_bytes(&scene, false);
+    galerkin_vi_lab::memory::ensure_fits(
+        format!(
+            "run_scene('{}') with {} steps",
+            scene.name, scene.method.steps
+        ),
+        estimate,
+        "the whole run is kept: fewer steps (the steps override)",
+    )
+    .py_err()?;
     let options = RunOptions {
         curve_samples_per_step: 0,
         chart: false,
     };
-    let result = py
-        .detach(|| galerkin_vi_lab::run::run_scene(&scene, options))
-        .py_err()?;
+    let result = interrupt::interruptible(py, |stop| {
+        galerkin_vi_lab::run::run_scene_until(&scene, options, &|| stop.requested())
+    })?
+    .py_err()?;
     if let Some(failure) = result.failure {
         return Err(errors::lab_error(failure));
     }
@@ -97,6 +114,9 @@ fn run_scene(
 /// Integrate many initial states of one system in parallel (rayon over members, the GIL
 /// released): `q0s`, `p0s` of shape (members, D). Returns a list of `Trajectory`, in order;
 /// equal to a loop of `integrator.integrate`. `integrator` defaults to `Integrator()`.
+/// Refused before any work: a member's start that `gvi run` refuses (the exception names the
+/// member), and members whose runs together are estimated above the memory limit
+/// (`MemoryLimitError`). Ctrl-C stops every member within a step (`KeyboardInterrupt`).
 #[pyfunction]
 #[pyo3(signature = (system, q0s, p0s, steps, integrator = None))]
 fn integrate_many(
@@ -122,12 +142,17 @@ fn integrate_many(
         Some(i) => i.get().method.clone(),
         None => galerkin_vi::method::MethodSpec::spectral(16, 1.0, 1),
     };
-    let results = py.detach(|| {
+    guard::ensure_steps(steps)?;
+    guard::ensure_runs_fit(q0s.len(), steps, method.n, d)?;
+    for (i, (q, p)) in q0s.iter().zip(&p0s).enumerate() {
+        guard::check_member_start(py, i, &kind, q, p)?;
+    }
+    let results = interrupt::interruptible(py, |stop| {
         q0s.par_iter()
             .zip(&p0s)
-            .map(|(q, p)| Integrator::run(&method, &kind, q, p, steps))
+            .map(|(q, p)| Integrator::run(&method, &kind, q, p, steps, stop))
             .collect::<Vec<_>>()
-    });
+    })?;
     results
         .into_iter()
         .map(|r| {
