@@ -16,6 +16,7 @@ use errors::{IntoPy, InvalidInputError, SolverError};
 use galerkin_vi::Lagrangian as _;
 use galerkin_vi_lab::run::RunOptions;
 use galerkin_vi_lab::scene::Scene;
+use pyo3::exceptions::PyRuntimeWarning;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use rayon::prelude::*;
@@ -65,7 +66,9 @@ fn apply_overrides(scene: &mut Scene, overrides: &Bound<'_, PyDict>, dim: usize)
 
 /// Run a scene (a built-in name such as "kepler", or the path of a TOML scene file) with
 /// optional overrides of its method and initial state: n, h, steps, basis, quadrature,
-/// solver, tol, q0, p0. Returns the `Trajectory`. A run whose estimated memory is above the
+/// solver, tol, q0, p0. Returns the `Trajectory`; the sanity warnings of `gvi run` (an energy
+/// or position error above 1 %, an unresolved close encounter) are issued as
+/// `RuntimeWarning`s. A run whose estimated memory is above the
 /// `gvi` tool's limit is refused before any work (`MemoryLimitError`); Ctrl-C stops it within
 /// a step (`KeyboardInterrupt`).
 #[pyfunction]
@@ -104,6 +107,14 @@ fn run_scene(
     .py_err()?;
     if let Some(failure) = result.failure {
         return Err(errors::lab_error(failure));
+    }
+    // The sanity warnings `gvi run` prints (an energy or position error above 1 %, an
+    // unresolved close encounter, a tolerance not met) as Python warnings: a run that
+    // returns is not silently trusted.
+    for warning in &result.summary.warnings {
+        let message = std::ffi::CString::new(format!("run_scene('{}'): {warning}", scene.name))
+            .unwrap_or_default();
+        PyErr::warn(py, &py.get_type::<PyRuntimeWarning>(), &message, 1)?;
     }
     match result.trajectory {
         Some(traj) => Ok(Trajectory::new(traj, kind, scene.method.clone())),

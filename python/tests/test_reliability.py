@@ -8,6 +8,7 @@ import signal
 import subprocess
 import sys
 import textwrap
+import warnings
 
 import numpy as np
 import pytest
@@ -86,6 +87,19 @@ def test_check_raises_where_the_energy_is_nan_instead_of_reporting_it_as_zero():
     calm = gv.Integrator(n=8, h=0.05).integrate(e, [10.0], [0.0], 100)
     assert np.isfinite(calm.invariants["energy"]).all()
     assert calm.check()["max_energy_error"] < 1e-10
+
+
+def test_run_scene_issues_the_sanity_warnings_of_gvi_run():
+    # h = 1e300: the orbit is nonsense; gvi run warns, and so does run_scene.
+    with pytest.warns(RuntimeWarning) as record:
+        gv.run_scene("kepler", h=1e300, steps=10)
+    messages = [str(w.message) for w in record]
+    assert any("relative energy error" in m for m in messages), messages
+    assert any("relative position error" in m for m in messages), messages
+    # Negative control: the paper's run warns of nothing.
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        gv.run_scene("kepler", steps=20)
 
 
 # --- Ctrl-C ------------------------------------------------------------------------------------
