@@ -489,7 +489,7 @@ fn max_deviation(what: &str, series: &Series, traj: &Trajectory) -> PyResult<f64
         if !v.is_finite() {
             let (q, p) = (&traj.inner.q[k], &traj.inner.p[k]);
             let reason = match &*traj.kind {
-                SysKind::Expression(e) => match e.velocity(q, p) {
+                SysKind::Expression(e) => match e.velocity_at(t, q, p) {
                     Err(err) => format!(": {err}"),
                     Ok(_) => String::new(),
                 },
