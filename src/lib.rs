@@ -60,7 +60,7 @@ pub use forcing::{
 pub use integrator::{GalerkinIntegrator, IntegrationFailure, NewtonOptions, StepJacobian};
 pub use lagrangian::{Lagrangian, Mechanical};
 pub use num_dual::DualNum;
-pub use solve::{Solution, SolveFailure, solve};
+pub use solve::{Solution, SolveFailure, solve, solve_until};
 pub use trajectory::Trajectory;
 
 /// The names most programs need.

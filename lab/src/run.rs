@@ -15,8 +15,9 @@ use crate::error::LabError;
 use crate::error::Result;
 use crate::plot::{Chart, Series};
 use crate::scene::{BuiltScene, BuiltSystem, Scene};
+use galerkin_vi::GviError;
 use galerkin_vi::Lagrangian;
-use galerkin_vi::solve::{AdaptiveReport, Solution, solve};
+use galerkin_vi::solve::{AdaptiveReport, Solution, solve_until};
 use galerkin_vi::systems::{AnySystem, System};
 use galerkin_vi::trajectory::Trajectory;
 use serde::Serialize;
@@ -81,15 +82,25 @@ pub struct RunSummary {
     pub max_curve_error: Option<f64>,
     /// Max |I(t_k) − I(t_0)| for each invariant.
     pub invariant_errors: Vec<(String, f64)>,
-    /// Max |I(t_k) − I(t_0)| / |I(t_0)| for the energy (NaN for the other invariants, which
-    /// are often zero up to round-off, and where I(t_0) = 0).
+    /// Max |E(t_k) − E(t_0)| over the energy scale ([`RunSummary::energy_scale`]) for the
+    /// energy (NaN for the other invariants, which are often zero up to round-off, and where
+    /// the scale is 0).
     pub relative_invariant_errors: Vec<(String, f64)>,
-    /// For point masses: the closest approach of two bodies at a step end.
+    /// The scale of the relative energy error: how it was taken (`T₀ + |V₀|`, the kinetic
+    /// energy plus the magnitude of the potential at the start, for systems with a mass
+    /// matrix; `|E₀|` otherwise) and its value.
+    pub energy_scale: Option<(String, f64)>,
+    /// For point masses: the closest approach of two bodies on the Galerkin curves.
     pub closest_approach: Option<Encounter>,
     /// Newton iterations per step (mean).
     pub newton_iterations_per_step: f64,
-    /// Wall-clock seconds of the integration.
+    /// Wall-clock seconds of the integration (of a streamed run: with its rows written).
     pub seconds: f64,
+    /// Wall-clock seconds of the whole command, from its start to the last file written (set
+    /// by `gvi run` just before the summary is printed; the integration is often a small
+    /// part of it: tabulating, the errors along the curves, charts, writing).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub command_seconds: Option<f64>,
     /// Force (first-derivative) evaluations, including rejected attempts of `--tol` runs.
     pub force_evaluations: usize,
     /// Warnings (e.g. a tolerance not met at the largest n: best effort kept).
@@ -113,16 +124,19 @@ impl std::fmt::Display for RunSummary {
             .iter()
             .zip(&self.relative_invariant_errors)
         {
-            if rel.is_nan() {
-                writeln!(f, "  max {name} error: {e:.3e}")?;
-            } else {
-                writeln!(f, "  max {name} error: {e:.3e} (relative {rel:.3e})")?;
+            match (&self.energy_scale, name == "energy") {
+                _ if rel.is_nan() => writeln!(f, "  max {name} error: {e:.3e}")?,
+                (Some((label, scale)), true) => writeln!(
+                    f,
+                    "  max {name} error: {e:.3e} (relative {rel:.3e}, to {label} = {scale:.3e})"
+                )?,
+                _ => writeln!(f, "  max {name} error: {e:.3e} (relative {rel:.3e})")?,
             }
         }
         if let Some(c) = &self.closest_approach {
             writeln!(
                 f,
-                "  closest approach: {} and {} at {:.3e} (t = {:.6e})",
+                "  closest approach on the Galerkin curves: {} and {} at {:.3e} (t = {:.6e})",
                 c.a, c.b, c.separation, c.t
             )?;
         }
@@ -131,6 +145,9 @@ impl std::fmt::Display for RunSummary {
             "  Newton iterations per step: {:.2}; force evaluations: {}; integration time: {:.3} s",
             self.newton_iterations_per_step, self.force_evaluations, self.seconds
         )?;
+        if let Some(total) = self.command_seconds {
+            write!(f, "; whole command: {total:.3} s (wall clock)")?;
+        }
         if let Some(c) = &self.step_choice {
             write!(
                 f,
@@ -175,10 +192,34 @@ impl Default for RunOptions {
 /// Run a built scene. Invalid input is an `Err`; a Newton failure is `Ok` with
 /// [`RunResult::failure`] set and the partial trajectory kept.
 pub fn run_scene(scene: &BuiltScene, options: RunOptions) -> Result<RunResult> {
+    run_scene_until(scene, options, &|| false)
+}
+
+/// [`run_scene`], asking `stop` before every step (and every few thousand table rows) whether
+/// to stop (the Python layer's Ctrl-C): a `true` is an `Err` with
+/// [`GviError::Interrupted`] and nothing of the run is
+/// kept. Rigid bodies (Lie group runs) are not interrupted.
+pub fn run_scene_until(
+    scene: &BuiltScene,
+    options: RunOptions,
+    stop: &dyn Fn() -> bool,
+) -> Result<RunResult> {
     match &scene.system {
         BuiltSystem::RigidBody(body) => rigid_body::run_rigid_body(body, scene),
-        BuiltSystem::Euclidean(system) => run_system(system, scene, options),
+        BuiltSystem::Euclidean(system) => run_system(system, scene, options, stop),
     }
+}
+
+/// The memory an in-memory run of `scene` ([`run_scene`]) holds per step and in all: the
+/// trajectory at the largest n the method may use, the table row and, with `text`, the
+/// output text (JSON when `json`) ([`stream::bytes_per_step`]). `gvi run` refuses a chart,
+/// JSON or `--tol` run above [`crate::memory::LIMIT_BYTES`] with it; the Python layer holds
+/// its `run_scene` to the same estimate and limit.
+pub fn in_memory_bytes(scene: &BuiltScene, json: bool) -> (f64, f64) {
+    let d = scene.initial.q.len();
+    let columns = 2 + 2 * d + 6;
+    let per_step = stream::bytes_per_step(columns, scene.method.largest_n(), d, json);
+    (per_step, per_step * scene.method.steps as f64)
 }
 
 /// Run a built scene's initial state and method on its (Euclidean) system; the state was
@@ -186,7 +227,12 @@ pub fn run_scene(scene: &BuiltScene, options: RunOptions) -> Result<RunResult> {
 /// [`galerkin_vi::solve::solve`] decides how (fixed n, or n chosen per step with `tol`, h
 /// chosen with `auto_h`); the table adds the n, indicator and estimate columns when the
 /// solution has a tolerance-driven report.
-fn run_system(system: &AnySystem, scene: &BuiltScene, options: RunOptions) -> Result<RunResult> {
+fn run_system(
+    system: &AnySystem,
+    scene: &BuiltScene,
+    options: RunOptions,
+    stop: &dyn Fn() -> bool,
+) -> Result<RunResult> {
     let m = &scene.method;
     let init = &scene.initial;
     // The method's own parameter errors (h) come before the time span's, which depends on h.
@@ -195,8 +241,10 @@ fn run_system(system: &AnySystem, scene: &BuiltScene, options: RunOptions) -> Re
     let exact = system.exact_solution(init.t0, &init.q, &init.p)?;
     let start = Instant::now();
     monitor::check_time_span(init.t0, m.h, m.steps)?;
-    let (solution, failure) = match solve(system, init, m) {
+    let (solution, failure) = match solve_until(system, init, m, stop) {
         Ok(s) => (s, None),
+        // Stopped on request: nothing of the run is kept.
+        Err(f) if matches!(f.error, GviError::Interrupted { .. }) => return Err(f.error.into()),
         Err(f) => match f.partial {
             Some(partial) => (*partial, Some(f.error.into())),
             None => return Err(f.error.into()),
@@ -227,6 +275,9 @@ fn run_system(system: &AnySystem, scene: &BuiltScene, options: RunOptions) -> Re
     let mut failure = failure;
     for k in 0..trajectory.q.len() {
         let t = trajectory.time(k);
+        if k % 4096 == 4095 && stop() {
+            return Err(GviError::Interrupted { step: k, t }.into());
+        }
         let (q, p) = (&trajectory.q[k], &trajectory.p[k]);
         let mut row = vec![k as f64, t];
         row.extend_from_slice(q);
@@ -236,6 +287,11 @@ fn run_system(system: &AnySystem, scene: &BuiltScene, options: RunOptions) -> Re
             failure = Some(e);
             truncate(&mut trajectory, k);
             break;
+        }
+        if let (Some(nbody), true) = (system.as_nbody(), k > 0) {
+            let curves = &trajectory;
+            let position = |s: f64| curves.position_at(s).ok();
+            monitor.closest_on_curve(nbody, curves.time(k - 1), t, &position);
         }
         if let Some(a) = &adaptive {
             // Row k is the state at t_k: report the n, indicator and embedded estimate (NaN:
@@ -325,9 +381,11 @@ fn run_system(system: &AnySystem, scene: &BuiltScene, options: RunOptions) -> Re
             .map(|s| s.to_string())
             .zip(monitor.relative_errors())
             .collect(),
+        energy_scale: monitor.energy_scale.map(|(l, s)| (l.to_string(), s)),
         closest_approach: monitor.encounter.clone(),
         newton_iterations_per_step: trajectory.newton_iterations() as f64 / steps.max(1) as f64,
         seconds,
+        command_seconds: None,
     };
     let (chart, inner_chart) = if options.chart && steps > 0 {
         match system.body_names() {
@@ -383,7 +441,7 @@ pub use crate::error::fmt_number;
 /// The start checks of a run, for every command built from a scene: coincident bodies (a
 /// collision) and non-finite initial invariants (a singular start such as Kepler at the
 /// origin), with the messages `gvi run` gives.
-pub(crate) fn check_start<S: System>(system: &S, q0: &[f64], p0: &[f64], t0: f64) -> Result<()> {
+pub fn check_start<S: System>(system: &S, q0: &[f64], p0: &[f64], t0: f64) -> Result<()> {
     // In the run's order: the exact solution's own errors (Kepler elements that overflow
     // name `mu`) come before the monitor's.
     system.exact_solution(t0, q0, p0)?;

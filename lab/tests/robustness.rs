@@ -122,7 +122,10 @@ fn nbody_runs_report_relative_energy_errors_and_the_closest_approach() {
         err.contains("max energy error:") && err.contains("(relative"),
         "{err}"
     );
-    assert!(err.contains("closest approach: body 1 and body 2"), "{err}");
+    assert!(
+        err.contains("closest approach on the Galerkin curves: body 1 and body 2"),
+        "{err}"
+    );
 }
 
 fn write_scene(dir: &Path, name: &str, text: &str) -> PathBuf {
@@ -145,7 +148,10 @@ fn coincident_bodies_are_a_collision_error() {
     let scene = write_scene(&dir, "head-on.toml", &text);
     let o = gvi(&["run", s(&scene), "--steps", "40", "--h", "0.01", "--n", "8"]);
     let err = stderr(&o);
-    assert!(err.contains("closest approach: body 1 and body 2"), "{err}");
+    assert!(
+        err.contains("closest approach on the Galerkin curves: body 1 and body 2"),
+        "{err}"
+    );
     assert!(err.contains("close encounter not resolved"), "{err}");
     fails_with(
         &gvi(&[

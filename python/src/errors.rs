@@ -1,11 +1,11 @@
 //! Typed Python exceptions: a base class `GalerkinError` and one subclass per kind of failure.
 //! Bad input (`InvalidInputError` and its subclasses: shapes, non-finite values, the method,
-//! parameters, expressions, scenes) is told apart from failures of a valid run (`SolverError`,
+//! parameters, expressions, scenes, work above the memory limit) is told apart from failures of a valid run (`SolverError`,
 //! `NonFiniteResultError`, `UnsupportedError`).
 
 use galerkin_vi::GviError;
 use galerkin_vi_lab::error::LabError;
-use pyo3::exceptions::PyException;
+use pyo3::exceptions::{PyException, PyKeyboardInterrupt};
 use pyo3::prelude::*;
 use pyo3::{PyErr, create_exception};
 
@@ -59,6 +59,13 @@ create_exception!(
 );
 create_exception!(
     galerkin_vi,
+    MemoryLimitError,
+    InvalidInputError,
+    "The work would need more memory than the limit (4 GB, the gvi tool's): refused before \
+     any work, the message quoting the estimate and the limit."
+);
+create_exception!(
+    galerkin_vi,
     SolverError,
     GalerkinError,
     "The stage equations of a step could not be solved (Newton did not converge)."
@@ -90,6 +97,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     )?;
     m.add("ExpressionError", py.get_type::<ExpressionError>())?;
     m.add("SceneError", py.get_type::<SceneError>())?;
+    m.add("MemoryLimitError", py.get_type::<MemoryLimitError>())?;
     m.add("SolverError", py.get_type::<SolverError>())?;
     m.add(
         "NonFiniteResultError",
@@ -120,6 +128,9 @@ pub fn core_error(e: GviError) -> PyErr {
         GviError::NonFiniteResult { .. } => NonFiniteResultError::new_err(msg),
         GviError::Unsupported(_) => UnsupportedError::new_err(msg),
         GviError::Expression(_) => ExpressionError::new_err(msg),
+        // Only a run stopped by a Python signal is interrupted, and then the signal's own
+        // exception is raised instead (crate::interrupt).
+        GviError::Interrupted { .. } => PyKeyboardInterrupt::new_err(msg),
     }
 }
 
@@ -130,6 +141,9 @@ pub fn lab_error(e: LabError) -> PyErr {
         LabError::Scene { .. } | LabError::Io { .. } => SceneError::new_err(e.to_string()),
         LabError::InvalidArgument { .. } => InvalidInputError::new_err(e.to_string()),
         LabError::Collision { .. } => NonFiniteResultError::new_err(e.to_string()),
+        LabError::MemoryEstimate { .. } | LabError::MemoryTooHigh { .. } => {
+            MemoryLimitError::new_err(e.to_string())
+        }
         other => GalerkinError::new_err(other.to_string()),
     }
 }

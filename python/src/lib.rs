@@ -6,6 +6,8 @@
 
 mod convert;
 mod errors;
+mod guard;
+mod interrupt;
 mod systems;
 mod trajectory;
 
@@ -14,6 +16,7 @@ use errors::{IntoPy, InvalidInputError, SolverError};
 use galerkin_vi::Lagrangian as _;
 use galerkin_vi_lab::run::RunOptions;
 use galerkin_vi_lab::scene::Scene;
+use pyo3::exceptions::PyRuntimeWarning;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use rayon::prelude::*;
@@ -63,7 +66,11 @@ fn apply_overrides(scene: &mut Scene, overrides: &Bound<'_, PyDict>, dim: usize)
 
 /// Run a scene (a built-in name such as "kepler", or the path of a TOML scene file) with
 /// optional overrides of its method and initial state: n, h, steps, basis, quadrature,
-/// solver, tol, q0, p0. Returns the `Trajectory`.
+/// solver, tol, q0, p0. Returns the `Trajectory`; the sanity warnings of `gvi run` (an energy
+/// or position error above 1 %, an unresolved close encounter) are issued as
+/// `RuntimeWarning`s. A run whose estimated memory is above the
+/// `gvi` tool's limit is refused before any work (`MemoryLimitError`); Ctrl-C stops it within
+/// a step (`KeyboardInterrupt`).
 #[pyfunction]
 #[pyo3(signature = (name_or_path, **overrides))]
 fn run_scene(
@@ -78,15 +85,36 @@ fn run_scene(
     }
     let scene = scene.build().py_err()?;
     let kind = std::sync::Arc::new(systems::system_of(&scene)?);
+    // The estimate `gvi run` holds a run kept in memory to (it counts the output text, which
+    // the Python arrays returned later stand for).
+    let (_, estimate) = galerkin_vi_lab::run::in_memory_bytes(&scene, false);
+    galerkin_vi_lab::memory::ensure_fits(
+        format!(
+            "run_scene('{}') with {} steps",
+            scene.name, scene.method.steps
+        ),
+        estimate,
+        "the whole run is kept: fewer steps (the steps override)",
+    )
+    .py_err()?;
     let options = RunOptions {
         curve_samples_per_step: 0,
         chart: false,
     };
-    let result = py
-        .detach(|| galerkin_vi_lab::run::run_scene(&scene, options))
-        .py_err()?;
+    let result = interrupt::interruptible(py, |stop| {
+        galerkin_vi_lab::run::run_scene_until(&scene, options, &|| stop.requested())
+    })?
+    .py_err()?;
     if let Some(failure) = result.failure {
         return Err(errors::lab_error(failure));
+    }
+    // The sanity warnings `gvi run` prints (an energy or position error above 1 %, an
+    // unresolved close encounter, a tolerance not met) as Python warnings: a run that
+    // returns is not silently trusted.
+    for warning in &result.summary.warnings {
+        let message = std::ffi::CString::new(format!("run_scene('{}'): {warning}", scene.name))
+            .unwrap_or_default();
+        PyErr::warn(py, &py.get_type::<PyRuntimeWarning>(), &message, 1)?;
     }
     match result.trajectory {
         Some(traj) => Ok(Trajectory::new(traj, kind, scene.method.clone())),
@@ -97,6 +125,9 @@ fn run_scene(
 /// Integrate many initial states of one system in parallel (rayon over members, the GIL
 /// released): `q0s`, `p0s` of shape (members, D). Returns a list of `Trajectory`, in order;
 /// equal to a loop of `integrator.integrate`. `integrator` defaults to `Integrator()`.
+/// Refused before any work: a member's start that `gvi run` refuses (the exception names the
+/// member), and members whose runs together are estimated above the memory limit
+/// (`MemoryLimitError`). Ctrl-C stops every member within a step (`KeyboardInterrupt`).
 #[pyfunction]
 #[pyo3(signature = (system, q0s, p0s, steps, integrator = None))]
 fn integrate_many(
@@ -122,12 +153,17 @@ fn integrate_many(
         Some(i) => i.get().method.clone(),
         None => galerkin_vi::method::MethodSpec::spectral(16, 1.0, 1),
     };
-    let results = py.detach(|| {
+    guard::ensure_steps(steps)?;
+    guard::ensure_runs_fit(q0s.len(), steps, method.n, d)?;
+    for (i, (q, p)) in q0s.iter().zip(&p0s).enumerate() {
+        guard::check_member_start(py, i, &kind, q, p)?;
+    }
+    let results = interrupt::interruptible(py, |stop| {
         q0s.par_iter()
             .zip(&p0s)
-            .map(|(q, p)| Integrator::run(&method, &kind, q, p, steps))
+            .map(|(q, p)| Integrator::run(&method, &kind, q, p, steps, stop))
             .collect::<Vec<_>>()
-    });
+    })?;
     results
         .into_iter()
         .map(|r| {

@@ -2,12 +2,15 @@
 //! Galerkin coefficients, dense output, invariants and the geometric check).
 
 use crate::convert::{finite, vector};
-use crate::errors::{IntoPy, NonFiniteError};
+use crate::errors::{IntoPy, NonFiniteError, NonFiniteResultError};
+use crate::guard;
+use crate::interrupt::{Stop, interruptible};
 use crate::systems::{SysKind, System};
 use crate::with_system;
 use galerkin_vi::Lagrangian as _;
-use galerkin_vi::geometry::{relative_symplecticity_defect, symplecticity_defect};
-use galerkin_vi::method::MethodSpec;
+use galerkin_vi::geometry::{Series, relative_symplecticity_defect, symplecticity_defect};
+use galerkin_vi::method::{InitialState, MethodSpec};
+use galerkin_vi::solve::solve_until;
 use galerkin_vi::systems::System as _;
 use numpy::ndarray::{Array1, Array2, Array3};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3};
@@ -23,16 +26,29 @@ pub struct Integrator {
 }
 
 impl Integrator {
-    /// Integrate one member without the GIL's help (pure Rust).
+    /// Integrate one member without the GIL's help (pure Rust), from t = 0; `stop` is asked
+    /// before every step ([`galerkin_vi::solve::solve_until`]: the trajectory is
+    /// `GalerkinIntegrator::integrate`'s bit for bit).
     pub(crate) fn run(
         method: &MethodSpec,
         kind: &SysKind,
         q0: &[f64],
         p0: &[f64],
         steps: usize,
+        stop: &Stop,
     ) -> Result<galerkin_vi::Trajectory, galerkin_vi::GviError> {
-        let gvi = method.integrator()?;
-        with_system!(kind, s => gvi.integrate(s, 0.0, q0, p0, steps)).map_err(Into::into)
+        let method = MethodSpec {
+            steps,
+            ..method.clone()
+        };
+        let initial = InitialState {
+            t0: 0.0,
+            q: q0.to_vec(),
+            p: p0.to_vec(),
+        };
+        with_system!(kind, s => solve_until(s, &initial, &method, &|| stop.requested()))
+            .map(|solution| solution.trajectory)
+            .map_err(|failure| failure.error)
     }
 }
 
@@ -63,7 +79,9 @@ impl Integrator {
         Ok(Integrator { method })
     }
 
-    /// Integrate `steps` steps of `system` from (q0, p0) at t = 0.
+    /// Integrate `steps` steps of `system` from (q0, p0) at t = 0. Refused before any work:
+    /// a start `gvi run` refuses, and work whose estimated memory is above the limit
+    /// (`MemoryLimitError`). Ctrl-C stops the run within a step (`KeyboardInterrupt`).
     fn integrate(
         &self,
         py: Python<'_>,
@@ -76,10 +94,14 @@ impl Integrator {
         let d = kind.dim();
         let q0 = vector(q0, "q0", Some(d))?;
         let p0 = vector(p0, "p0", Some(d))?;
+        guard::ensure_steps(steps)?;
+        guard::ensure_runs_fit(1, steps, self.method.n, d)?;
+        guard::check_start(&kind, &q0, &p0).py_err()?;
         let method = self.method.clone();
-        let traj = py
-            .detach(|| Integrator::run(&method, &kind, &q0, &p0, steps))
-            .py_err()?;
+        let traj = interruptible(py, |stop| {
+            Integrator::run(&method, &kind, &q0, &p0, steps, stop)
+        })?
+        .py_err()?;
         Ok(Trajectory::new(traj, kind, method))
     }
 
@@ -364,7 +386,9 @@ impl Trajectory {
 
     /// Geometric check of the run: the symplecticity defect ‖JᵀΩJ − Ω‖_F of every step's
     /// exact Jacobian (max, and relative to ‖J‖_F²), the max energy error and the max error
-    /// of each momentum map of the system's symmetries at step ends (a dict).
+    /// of each momentum map of the system's symmetries at step ends (a dict). A quantity that
+    /// is NaN or infinite at some step is a `NonFiniteResultError` naming it and the step,
+    /// never a max that skips it.
     fn check<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         if !self.inner.step_n.is_empty() {
             return Err(crate::errors::UnsupportedError::new_err(
@@ -374,41 +398,55 @@ impl Trajectory {
         let method = self.method.clone();
         let inner = &self.inner;
         let kind = self.kind.clone();
-        let (defect, relative, energy, momenta) = py
-            .detach(|| -> Result<_, galerkin_vi::GviError> {
-                let mut m = method.clone();
-                m.n = inner.n;
-                let gvi = m.integrator()?;
-                with_system!(&*kind, s => {
-                    let (mut defect, mut relative) = (0.0f64, 0.0f64);
-                    for c in &inner.coefficients {
-                        let j = gvi.step_jacobian_from_coefficients(s, c)?;
-                        defect = defect.max(symplecticity_defect(&j));
-                        relative = relative.max(relative_symplecticity_defect(&j));
+        let (defects, energy, momenta) = interruptible(py, |stop| {
+            let mut m = method.clone();
+            m.n = inner.n;
+            let gvi = m.integrator()?;
+            with_system!(&*kind, s => {
+                let mut defects = Vec::with_capacity(inner.coefficients.len());
+                for c in &inner.coefficients {
+                    if stop.requested() {
+                        break;
                     }
-                    let energy = galerkin_vi::geometry::energy_at_step_ends(s, inner)
-                        .ok()
-                        .map(|e| e.max_deviation());
-                    let momenta: Vec<(String, f64)> = s
-                        .symmetries()
-                        .iter()
-                        .map(|sym| {
-                            let series =
-                                galerkin_vi::geometry::momentum_at_step_ends(&*sym.map, inner);
-                            (sym.name.clone(), series.max_deviation())
-                        })
-                        .collect();
-                    Ok((defect, relative, energy, momenta))
-                })
+                    let j = gvi.step_jacobian_from_coefficients(s, c)?;
+                    defects.push((symplecticity_defect(&j), relative_symplecticity_defect(&j)));
+                }
+                let energy = galerkin_vi::geometry::energy_at_step_ends(s, inner).ok();
+                let momenta: Vec<(String, Series)> = s
+                    .symmetries()
+                    .iter()
+                    .map(|sym| {
+                        let series =
+                            galerkin_vi::geometry::momentum_at_step_ends(&*sym.map, inner);
+                        (sym.name.clone(), series)
+                    })
+                    .collect();
+                Ok::<_, galerkin_vi::GviError>((defects, energy, momenta))
             })
-            .py_err()?;
+        })?
+        .py_err()?;
+        let (mut defect, mut relative) = (0.0f64, 0.0f64);
+        for (k, &(d, r)) in defects.iter().enumerate() {
+            if !(d.is_finite() && r.is_finite()) {
+                return Err(NonFiniteResultError::new_err(format!(
+                    "check(): the symplecticity defect of step {k} (t = {}) is {d} (its \
+                     Jacobian is not finite)",
+                    self.inner.time(k)
+                )));
+            }
+            (defect, relative) = (defect.max(d), relative.max(r));
+        }
+        let energy = energy
+            .map(|e| max_deviation("the energy", &e, self))
+            .transpose()?;
         let dict = PyDict::new(py);
         dict.set_item("max_symplecticity_defect", defect)?;
         dict.set_item("max_relative_symplecticity_defect", relative)?;
         dict.set_item("max_energy_error", energy)?;
         let m = PyDict::new(py);
-        for (name, e) in momenta {
-            m.set_item(name, e)?;
+        for (name, series) in momenta {
+            let what = format!("the momentum map {name}");
+            m.set_item(&name, max_deviation(&what, &series, self)?)?;
         }
         dict.set_item("momentum_errors", m)?;
         Ok(dict)
@@ -438,4 +476,32 @@ fn crossing_dict(py: Python<'_>, c: galerkin_vi::events::Crossing) -> PyResult<B
     dict.set_item("step", c.step)?;
     dict.set_item("rising", c.rising)?;
     Ok(dict)
+}
+
+/// Max |value − first value| of a conserved quantity at the step ends, or a
+/// `NonFiniteResultError` naming the first step where it is NaN or infinite (a max that
+/// skipped NaN would report a broken run as exact) and, for an expression Lagrangian, why its
+/// velocity (which the energy needs) cannot be had from the state there.
+fn max_deviation(what: &str, series: &Series, traj: &Trajectory) -> PyResult<f64> {
+    let first = series.values.first().copied().unwrap_or(0.0);
+    let mut worst = 0.0f64;
+    for (k, (&t, &v)) in series.t.iter().zip(&series.values).enumerate() {
+        if !v.is_finite() {
+            let (q, p) = (&traj.inner.q[k], &traj.inner.p[k]);
+            let reason = match &*traj.kind {
+                SysKind::Expression(e) => match e.velocity_at(t, q, p) {
+                    Err(err) => format!(": {err}"),
+                    Ok(_) => String::new(),
+                },
+                _ => String::new(),
+            };
+            return Err(NonFiniteResultError::new_err(format!(
+                "check(): {what} is {v} at step {k} (t = {t}, q = {q:?}, p = {p:?}) of this {} \
+                 run although the state is finite; the system cannot evaluate it there{reason}",
+                traj.kind.name()
+            )));
+        }
+        worst = worst.max((v - first).abs());
+    }
+    Ok(worst)
 }

@@ -47,6 +47,8 @@ def test_integrator_matches_run_scene():
     np.testing.assert_array_equal(traj.p, again.p)
 
 
+# n = 12 at h = 2 is deliberately coarse: its 18 % position error draws gvi run's warning.
+@pytest.mark.filterwarnings("ignore:run_scene.*relative position error:RuntimeWarning")
 def test_overrides_and_convergence_in_n():
     # Spectral convergence at fixed h: raising n from 12 to 24 cuts the error by > 100×.
     errs = []

@@ -27,6 +27,21 @@ pub fn integrate_adaptive<L: Lagrangian>(
     p0: &[f64],
     steps: usize,
 ) -> std::result::Result<AdaptiveRun, IntegrationFailure> {
+    integrate_adaptive_until(lag, opts, t0, q0, p0, steps, &|| false)
+}
+
+/// [`integrate_adaptive`], asking `stop` before every step whether to stop there: a `true`
+/// ends the run with [`GviError::Interrupted`] and the steps before it as the partial
+/// trajectory ([`crate::solve::solve_until`]).
+pub(crate) fn integrate_adaptive_until<L: Lagrangian>(
+    lag: &L,
+    opts: &AdaptiveOptions,
+    t0: f64,
+    q0: &[f64],
+    p0: &[f64],
+    steps: usize,
+    stop: &dyn Fn() -> bool,
+) -> std::result::Result<AdaptiveRun, IntegrationFailure> {
     opts.validate()?;
     if steps == 0 || steps > crate::integrator::MAX_STEPS {
         return Err(GviError::InvalidStepCount {
@@ -159,6 +174,12 @@ pub fn integrate_adaptive<L: Lagrangian>(
     let mut last_check = None;
     for k in 0..steps {
         let t = t0 + k as f64 * opts.h;
+        if stop() {
+            return Err(IntegrationFailure {
+                error: GviError::Interrupted { step: k, t },
+                partial: Some(Box::new(traj)),
+            });
+        }
         for r in ladder.rungs.iter_mut() {
             r.solved = None;
         }

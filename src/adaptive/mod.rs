@@ -136,7 +136,7 @@
 //! kept whose stage residual is not at round-off (above 1e-8·max|p|) is redone cold.
 
 mod descent;
-mod driver;
+pub(crate) mod driver;
 mod embedded;
 mod indicator;
 mod ladder;

@@ -186,6 +186,16 @@ pub enum GviError {
         /// Its time.
         t: f64,
     },
+    /// The caller asked the run to stop (its `stop` callback returned true, e.g. on Ctrl-C)
+    /// before step `step`; the steps before it are kept
+    /// ([`solve_until`](crate::solve::solve_until)).
+    #[error("stopped on request before step {step} (t = {}); the {step} steps before it are kept", fmt_number(*.t))]
+    Interrupted {
+        /// Index of the first step not computed.
+        step: usize,
+        /// Its start time.
+        t: f64,
+    },
     /// An expression Lagrangian (`type = "lagrangian"`) was rejected: a syntax error, an
     /// unknown symbol, a degenerate or non-regular Lagrangian (see
     /// [`ExpressionError`]).

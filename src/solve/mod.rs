@@ -38,8 +38,10 @@
 //! indicators or estimates for a failed run).
 //!
 //! [`GalerkinIntegrator::integrate`]: crate::integrator::GalerkinIntegrator::integrate
+//! [`integrate_adaptive`]: crate::adaptive::integrate_adaptive
 
-use crate::adaptive::{ErrorControl, StepChoice, choose_step, integrate_adaptive};
+use crate::adaptive::driver::integrate_adaptive_until;
+use crate::adaptive::{ErrorControl, StepChoice, choose_step};
 use crate::basis::AnyBasis;
 use crate::curve::GalerkinCurveRef;
 use crate::error::{GviError, Result};
@@ -203,6 +205,7 @@ impl std::error::Error for SolveFailure<Solution> {
 /// [`MethodSpec::adaptive_options`] (after [`choose_step`] for `auto_h`), bit for bit.
 ///
 /// [`GalerkinIntegrator::integrate`]: crate::integrator::GalerkinIntegrator::integrate
+/// [`integrate_adaptive`]: crate::adaptive::integrate_adaptive
 ///
 /// Errors: [`MethodSpec::validate`] (`auto_h` without `tol`), the integrator's parameters,
 /// the initial state's lengths and finiteness, the step count, [`choose_step`]'s (no time
@@ -243,12 +246,60 @@ pub fn solve<S: System>(
     initial: &InitialState,
     method: &MethodSpec,
 ) -> std::result::Result<Solution, SolveFailure> {
+    solve_with(system, initial, method, None)
+}
+
+/// [`solve`], asking `stop` before every step whether to stop there (a caller's Ctrl-C, a
+/// deadline): a `true` ends the run with [`GviError::Interrupted`] and
+/// [`SolveFailure::partial`] holding the steps before it. `stop` is called once per step, so
+/// it should be cheap (an atomic load); the pilot runs of `auto_h` are not interrupted. With a
+/// `stop` that never says yes the solution is [`solve`]'s bit for bit.
+///
+/// ```
+/// use galerkin_vi::GviError;
+/// use galerkin_vi::method::{InitialState, MethodSpec};
+/// use galerkin_vi::solve::solve_until;
+/// use galerkin_vi::systems::HarmonicOscillator;
+/// use std::cell::Cell;
+///
+/// let oscillator = HarmonicOscillator::new(1.0, 1.0)?;
+/// let initial = InitialState { t0: 0.0, q: vec![1.0], p: vec![0.0] };
+/// let asked = Cell::new(0);
+/// let stop = || { asked.set(asked.get() + 1); asked.get() > 5 };
+/// let failure = solve_until(&oscillator, &initial, &MethodSpec::spectral(8, 0.5, 100), &stop)
+///     .unwrap_err();
+/// assert!(matches!(failure.error, GviError::Interrupted { step: 5, .. }));
+/// assert_eq!(failure.partial.map(|s| s.trajectory.steps()), Some(5));
+/// # Ok::<(), GviError>(())
+/// ```
+pub fn solve_until<S: System>(
+    system: &S,
+    initial: &InitialState,
+    method: &MethodSpec,
+    stop: &dyn Fn() -> bool,
+) -> std::result::Result<Solution, SolveFailure> {
+    solve_with(system, initial, method, Some(stop))
+}
+
+/// [`solve`] and [`solve_until`]: the fixed-n run is [`GalerkinIntegrator::integrate`]'s
+/// without `stop`, its stopping twin ([`until::integrate_until`]) with it.
+///
+/// [`GalerkinIntegrator::integrate`]: crate::integrator::GalerkinIntegrator::integrate
+fn solve_with<S: System>(
+    system: &S,
+    initial: &InitialState,
+    method: &MethodSpec,
+    stop: Option<&dyn Fn() -> bool>,
+) -> std::result::Result<Solution, SolveFailure> {
     method.validate()?;
     let (t0, q0, p0) = (initial.t0, &initial.q[..], &initial.p[..]);
     let Some(mut opts) = method.adaptive_options() else {
         let gvi = method.integrator()?;
-        return gvi
-            .integrate(system, t0, q0, p0, method.steps)
+        let run = match stop {
+            None => gvi.integrate(system, t0, q0, p0, method.steps),
+            Some(stop) => until::integrate_until(&gvi, system, t0, q0, p0, method.steps, stop),
+        };
+        return run
             .map(Solution::fixed)
             .map_err(|f: IntegrationFailure| SolveFailure {
                 error: f.error,
@@ -264,7 +315,8 @@ pub fn solve<S: System>(
     } else {
         None
     };
-    match integrate_adaptive(system, &opts, t0, q0, p0, steps) {
+    let never = || false;
+    match integrate_adaptive_until(system, &opts, t0, q0, p0, steps, stop.unwrap_or(&never)) {
         Ok(run) => {
             let (trajectory, report) = AdaptiveReport::split(opts.tol, run);
             Ok(Solution {
@@ -506,3 +558,4 @@ pub fn solve_rigid_body<R: RigidBody>(
 
 #[cfg(test)]
 mod tests;
+mod until;

@@ -1,6 +1,6 @@
 //! Tests of [`super`].
 use super::*;
-use crate::adaptive::AdaptiveOptions;
+use crate::adaptive::{AdaptiveOptions, integrate_adaptive};
 use crate::lagrangian::Mechanical;
 use crate::lie::FreeRigidBody;
 use crate::systems::{HarmonicOscillator, Kepler};
@@ -310,4 +310,35 @@ fn a_rigid_body_solve_is_the_lie_integrators_run() {
         solve_rigid_body(&body, &short, &method),
         Err(GviError::DimensionMismatch { .. })
     ));
+}
+
+/// `solve_until` with a `stop` that never says yes is `solve`, fixed n and tolerance-driven;
+/// a `stop` that says yes before step 7 keeps exactly the 7 steps before it, which are
+/// `solve`'s first 7 (negative control: the full runs differ from the partial ones).
+#[test]
+fn solve_until_stops_before_the_asked_step_and_otherwise_is_solve() {
+    let (kepler, initial) = kepler();
+    let mut fixed = MethodSpec::spectral(12, 0.5, 20);
+    let mut tolerance = fixed.clone();
+    tolerance.tol = Some(1e-8);
+    for method in [&mut fixed, &mut tolerance] {
+        let whole = solve(&kepler, &initial, method).unwrap();
+        let never = solve_until(&kepler, &initial, method, &|| false).unwrap();
+        assert_same(&whole.trajectory, &never.trajectory);
+        let asked = std::cell::Cell::new(0usize);
+        let stop = || {
+            asked.set(asked.get() + 1);
+            asked.get() > 7
+        };
+        let failure = solve_until(&kepler, &initial, method, &stop).unwrap_err();
+        let GviError::Interrupted { step, t } = failure.error else {
+            panic!("expected Interrupted, got {}", failure.error);
+        };
+        assert_eq!((step, t), (7, initial.t0 + 7.0 * 0.5));
+        let partial = failure.partial.unwrap().trajectory;
+        assert_eq!(partial.steps(), 7);
+        assert_eq!(partial.q[..], whole.trajectory.q[..8]);
+        assert_eq!(partial.coefficients[..], whole.trajectory.coefficients[..7]);
+        assert_ne!(partial.q.len(), whole.trajectory.q.len());
+    }
 }

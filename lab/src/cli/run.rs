@@ -4,7 +4,7 @@ use super::values;
 use super::write_output;
 use crate::error::LabError;
 use crate::output::{AtomicFile, Plan};
-use crate::run::stream::{bytes_per_step, stream_scene};
+use crate::run::stream::stream_scene;
 use crate::run::{RunOptions, RunSummary, run_scene};
 use crate::scene::{BuiltScene, BuiltSystem, Overrides, Scene};
 use clap::{Args, ValueEnum};
@@ -215,6 +215,7 @@ fn sibling(path: &Path, suffix: &str, fallback: &str) -> PathBuf {
 }
 
 pub fn run(args: RunArgs) -> Result<(), LabError> {
+    let started = std::time::Instant::now();
     refuse_fixed_n_flags_with_tol(&args)?;
     let scene = Scene::load(&args.scene.scene)?
         .with_overrides(&args.overrides()?)
@@ -251,7 +252,7 @@ pub fn run(args: RunArgs) -> Result<(), LabError> {
     let streamed =
         args.plot.is_none() && args.format == Format::Csv && !scene.method.chooses_n() && !on_so3;
     let samples = RunOptions::default().curve_samples_per_step;
-    let (summary, failure) = if streamed {
+    let (mut summary, failure) = if streamed {
         // The first Ctrl-C stops the stream after the step in progress; the rows are kept.
         let _sigint = crate::interrupt::catch();
         let outcome = match &args.output {
@@ -272,6 +273,7 @@ pub fn run(args: RunArgs) -> Result<(), LabError> {
         refuse_if_too_big(&scene, &args)?;
         run_in_memory(&scene, &args)?
     };
+    summary.command_seconds = Some(started.elapsed().as_secs_f64());
     eprintln!("{summary}");
     if let Some(LabError::Interrupted { step, .. }) = failure {
         let kept = match &args.output {
@@ -298,12 +300,8 @@ pub fn run(args: RunArgs) -> Result<(), LabError> {
 
 /// Refuse an in-memory run (chart, JSON or --tol) whose estimated memory is absurd.
 fn refuse_if_too_big(scene: &BuiltScene, args: &RunArgs) -> Result<(), LabError> {
-    let d = scene.initial.q.len();
     // A tolerance-driven run may use the largest n of its ladder.
-    let n = scene.method.largest_n();
-    let columns = 2 + 2 * d + 6;
-    let per_step = bytes_per_step(columns, n, d, args.format == Format::Json);
-    let estimate = per_step * scene.method.steps as f64;
+    let (per_step, estimate) = crate::run::in_memory_bytes(scene, args.format == Format::Json);
     if estimate > MEMORY_LIMIT_BYTES {
         return Err(LabError::MemoryTooHigh {
             steps: scene.method.steps,

@@ -7,7 +7,7 @@
 
 use crate::error::LabError;
 use crate::error::{GviError, Result};
-use galerkin_vi::systems::{ExactSolution, System};
+use galerkin_vi::systems::{ExactSolution, NBody, System};
 
 /// Relative error above which a run's result is called untrustworthy: a warning on stderr,
 /// an error with `--strict`. A 1 % drift of the energy or of the position is far outside any
@@ -22,7 +22,8 @@ pub struct Encounter {
     pub a: String,
     /// Second body.
     pub b: String,
-    /// Smallest separation at a step end.
+    /// Smallest separation, on the Galerkin curves (each step's curve is searched between
+    /// its ends, [`Monitor::closest_on_curve`]) or at a step end.
     pub separation: f64,
     /// Its time.
     pub t: f64,
@@ -49,6 +50,8 @@ pub(crate) struct Monitor {
     pub encounter: Option<Encounter>,
     /// Initial separation of each pair (a, b > a), row-major over a.
     initial_separation: Vec<f64>,
+    /// The scale of the relative energy error and how it was taken ([`energy_scale`]).
+    pub energy_scale: Option<(&'static str, f64)>,
     /// The first close encounter the step cannot resolve: a pair within a tenth of its
     /// initial separation that moved more than its separation relative to each other in the
     /// step that ended there. (Ordinary orbital motion over long spectral steps, such as the
@@ -86,6 +89,7 @@ impl Monitor {
             encounter: None,
             initial_separation: Vec::new(),
             unresolved: None,
+            energy_scale: None,
         };
         m.closest(q0, 0, t0)?;
         for (name, &v) in m.names.iter().zip(&m.inv0) {
@@ -97,6 +101,12 @@ impl Monitor {
                 .into());
             }
         }
+        let e0 = m
+            .names
+            .iter()
+            .position(|n| n == "energy")
+            .map(|i| m.inv0[i]);
+        m.energy_scale = e0.map(|e0| energy_scale(system, q0, p0, e0));
         Ok(m)
     }
 
@@ -222,17 +232,95 @@ impl Monitor {
         Ok(())
     }
 
-    /// Relative invariant errors max|I − I0| / |I0| of the energy; NaN for the other
-    /// invariants (momenta are often zero up to round-off in the barycentric frame, where a
-    /// relative error is meaningless) and where I0 = 0.
+    /// Search the Galerkin curve of the step from `t_a` to `t_b` (whose ends were observed)
+    /// for a closer approach than the one so far: the closest pair
+    /// ([`NBody::closest_pair`]) at [`CURVE_SAMPLES`] interior points, then a golden-section
+    /// search of that pair's separation around the smallest sample. `position(t)` is the
+    /// curve's q(t). A closest approach between step ends is otherwise missed entirely (two
+    /// bodies that pass each other within a step).
+    pub fn closest_on_curve(
+        &mut self,
+        nbody: &NBody,
+        t_a: f64,
+        t_b: f64,
+        position: &dyn Fn(f64) -> Option<Vec<f64>>,
+    ) {
+        let Some(bodies) = &self.bodies else {
+            return;
+        };
+        let record = self
+            .encounter
+            .as_ref()
+            .map_or(f64::INFINITY, |e| e.separation);
+        let dt = (t_b - t_a) / CURVE_SAMPLES as f64;
+        let mut best: Option<(f64, usize, usize, f64)> = None;
+        for j in 0..=CURVE_SAMPLES {
+            let t = t_a + j as f64 * dt;
+            let Some((a, b, r)) = position(t).and_then(|q| nbody.closest_pair(&q)) else {
+                continue;
+            };
+            if best.is_none_or(|(_, _, _, rb)| r < rb) {
+                best = Some((t, a, b, r));
+            }
+        }
+        let Some((t_best, a, b, r_best)) = best else {
+            return;
+        };
+        // Only a sample within a factor of the record can lead to a closer approach (the
+        // pair's separation is smooth over a step's fraction).
+        if r_best.is_nan() || r_best >= 2.0 * record {
+            return;
+        }
+        let d = self.spatial;
+        let pair = |t: f64| -> f64 {
+            position(t).map_or(f64::INFINITY, |q| {
+                (0..d)
+                    .map(|c| (q[a * d + c] - q[b * d + c]).powi(2))
+                    .sum::<f64>()
+                    .sqrt()
+            })
+        };
+        let (t, r) = golden_minimum(&pair, (t_best - dt).max(t_a), (t_best + dt).min(t_b));
+        let (t, r) = if r < r_best { (t, r) } else { (t_best, r_best) };
+        if r < record {
+            let step = |q: Option<Vec<f64>>| {
+                q.map(|q| {
+                    (0..d)
+                        .map(|c| q[a * d + c] - q[b * d + c])
+                        .collect::<Vec<_>>()
+                })
+            };
+            let moved = match (step(position(t_a)), step(position(t_b))) {
+                (Some(ra), Some(rb)) => ra
+                    .iter()
+                    .zip(&rb)
+                    .map(|(x, y)| (x - y).powi(2))
+                    .sum::<f64>()
+                    .sqrt(),
+                _ => f64::NAN,
+            };
+            self.encounter = Some(Encounter {
+                a: bodies[a].clone(),
+                b: bodies[b].clone(),
+                separation: r,
+                t,
+                relative_step: moved,
+            });
+        }
+    }
+
+    /// Relative invariant errors of the energy, max|E − E₀| over its [`energy_scale`] (which
+    /// does not vanish for a parabolic orbit, as E₀ does); NaN for the other invariants
+    /// (momenta are often zero up to round-off in the barycentric frame, where a relative
+    /// error is meaningless) and where the scale is 0.
     pub fn relative_errors(&self) -> Vec<f64> {
+        let scale = self.energy_scale.map_or(0.0, |(_, s)| s);
         self.inv_err
             .iter()
-            .zip(&self.inv0)
             .zip(&self.names)
-            .map(|((e, i0), name)| {
-                if name == "energy" && *i0 != 0.0 {
-                    e / i0.abs()
+            .map(|(e, name)| {
+                if name == "energy" && scale != 0.0 {
+                    e / scale
                 } else {
                     f64::NAN
                 }
@@ -250,10 +338,11 @@ impl Monitor {
             .zip(&self.inv_err)
         {
             if name == "energy" && rel > SANITY_THRESHOLD {
+                let (label, scale) = self.energy_scale.unwrap_or(("|E₀|", f64::NAN));
                 w.push(format!(
-                    "relative energy error {rel:.3e} (absolute {abs:.3e}) exceeds \
-                     {SANITY_THRESHOLD:e}: the step is too large for this system or the orbit \
-                     has escaped"
+                    "relative energy error {rel:.3e} (absolute {abs:.3e} over {label} = \
+                     {scale:.3e}) exceeds {SANITY_THRESHOLD:e}: the step is too large for this \
+                     system or the orbit has escaped"
                 ));
             }
         }
@@ -276,6 +365,64 @@ impl Monitor {
             ));
         }
         w
+    }
+}
+
+/// Interior points of each step's curve at which [`Monitor::closest_on_curve`] looks for the
+/// closest pair before refining.
+pub const CURVE_SAMPLES: usize = 8;
+
+/// The minimum of `f` on [lo, hi] by golden-section search to a relative width of 1e-12 of
+/// the interval (at most 80 evaluations): (argmin, minimum).
+fn golden_minimum(f: &dyn Fn(f64) -> f64, mut lo: f64, mut hi: f64) -> (f64, f64) {
+    let g = 0.5 * (5f64.sqrt() - 1.0);
+    let width = hi - lo;
+    let (mut x1, mut x2) = (hi - g * (hi - lo), lo + g * (hi - lo));
+    let (mut f1, mut f2) = (f(x1), f(x2));
+    for _ in 0..80 {
+        if hi - lo <= 1e-12 * width.abs() {
+            break;
+        }
+        if f1 < f2 {
+            (hi, x2, f2) = (x2, x1, f1);
+            x1 = hi - g * (hi - lo);
+            f1 = f(x1);
+        } else {
+            (lo, x1, f1) = (x1, x2, f2);
+            x2 = lo + g * (hi - lo);
+            f2 = f(x2);
+        }
+    }
+    if f1 < f2 { (x1, f1) } else { (x2, f2) }
+}
+
+/// The scale of a run's relative energy error: T₀ + |V₀| at the start, the kinetic energy
+/// plus the magnitude of the potential (V₀ = T₀ − L(q₀, v₀), v₀ = M⁻¹p₀), for a system with a
+/// constant mass matrix M; |E₀| otherwise (and if T₀ + |V₀| is not a positive finite number).
+/// T₀ + |V₀| ≥ |E₀| always, and it does not vanish where E₀ does (a parabolic orbit, E₀ ≈ 0,
+/// whose relative error over |E₀| is round-off over round-off). Returns the scale's label and
+/// value.
+pub(crate) fn energy_scale<S: System>(
+    system: &S,
+    q0: &[f64],
+    p0: &[f64],
+    e0: f64,
+) -> (&'static str, f64) {
+    let fallback = ("|E₀|", e0.abs());
+    let Some(mass) = system.mass_matrix() else {
+        return fallback;
+    };
+    let p = nalgebra::DVector::from_column_slice(p0);
+    let Some(v) = mass.lu().solve(&p) else {
+        return fallback;
+    };
+    let kinetic = 0.5 * p.dot(&v);
+    let potential = kinetic - system.value(q0, v.as_slice());
+    let scale = kinetic.abs() + potential.abs();
+    if scale.is_finite() && scale > 0.0 {
+        ("T₀ + |V₀|", scale)
+    } else {
+        fallback
     }
 }
 

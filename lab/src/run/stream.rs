@@ -127,6 +127,12 @@ fn stream_system(
         iterations += stats.iterations;
         evaluations += stats.gradient_evaluations;
         done += 1;
+        if let Some(nbody) = system.as_nbody() {
+            let t_a = init.t0 + (s.step - 1) as f64 * curve.h();
+            let on_curve = curve.starting_at(t_a);
+            let position = |t: f64| on_curve.state_at(s.basis, t).ok().map(|(q, _)| q);
+            monitor.closest_on_curve(nbody, t_a, s.t, &position);
+        }
         if let (Some(ex), Some(worst)) = (&exact, curve_error.as_mut()) {
             // Sample this step's curve while its coefficients are in the workspace.
             let (c, k, h) = (curve.coefficients(), s.step - 1, curve.h());
@@ -197,9 +203,11 @@ fn stream_system(
         }),
         invariant_errors: label(monitor.inv_err.clone()),
         relative_invariant_errors: label(monitor.relative_errors()),
+        energy_scale: monitor.energy_scale.map(|(l, s)| (l.to_string(), s)),
         closest_approach: monitor.encounter.clone(),
         newton_iterations_per_step: iterations as f64 / done.max(1) as f64,
         seconds,
+        command_seconds: None,
         force_evaluations: evaluations,
         warnings: monitor.warnings(),
         step_choice: None,

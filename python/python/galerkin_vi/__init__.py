@@ -8,7 +8,9 @@ The numerics are the Rust crate galerkin-vi; this package is a thin layer over i
   steps)`` integrates a system of :mod:`galerkin_vi.systems`;
 - ``integrate_many(system, q0s, p0s, steps)`` integrates many initial states in parallel
   (all cores, the GIL released);
-- every error is a subclass of :class:`GalerkinError`.
+- every error is a subclass of :class:`GalerkinError` (work above the 4 GB memory limit is
+  refused before it starts with :class:`MemoryLimitError`); Ctrl-C stops long calls with
+  ``KeyboardInterrupt``.
 
 >>> import galerkin_vi as gv
 >>> traj = gv.run_scene("kepler", n=16, steps=10)
@@ -23,6 +25,7 @@ from ._native import (
     InvalidInputError,
     InvalidMethodError,
     InvalidParameterError,
+    MemoryLimitError,
     NonFiniteError,
     NonFiniteResultError,
     SceneError,
@@ -42,6 +45,7 @@ __all__ = [
     "InvalidInputError",
     "InvalidMethodError",
     "InvalidParameterError",
+    "MemoryLimitError",
     "NonFiniteError",
     "NonFiniteResultError",
     "SceneError",
