@@ -92,6 +92,10 @@ pub struct RunSummary {
     pub energy_scale: Option<(String, f64)>,
     /// For point masses: the closest approach of two bodies on the Galerkin curves.
     pub closest_approach: Option<Encounter>,
+    /// Forced or time-dependent systems (no conserved energy): the energy balance
+    /// E_k − E_0 = ∫(f·q̇ − ∂L/∂t) dt along the Galerkin curves (galerkin_vi::forcing).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub energy_balance: Option<EnergyBalance>,
     /// Newton iterations per step (mean).
     pub newton_iterations_per_step: f64,
     /// Wall-clock seconds of the integration (of a streamed run: with its rows written).
@@ -108,6 +112,31 @@ pub struct RunSummary {
     /// The step size chosen from the tolerance (`auto_h`), with its pilot runs (their force
     /// evaluations are not included in `force_evaluations`).
     pub step_choice: Option<galerkin_vi::adaptive::StepChoice>,
+}
+
+/// The energy balance of a forced or time-dependent run, summarised.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct EnergyBalance {
+    /// Largest |E_k − E_0|: how far the energy moved.
+    pub max_change: f64,
+    /// Largest |E_k − E_0 − source_k|: zero for the exact motion.
+    pub max_defect: f64,
+}
+
+impl EnergyBalance {
+    /// From the library's balance.
+    pub fn of(b: &galerkin_vi::forcing::Balance) -> Self {
+        EnergyBalance {
+            max_change: b.max_change(),
+            max_defect: b.max_defect(),
+        }
+    }
+}
+
+/// Whether a system has an energy balance instead of a conserved energy.
+pub(crate) fn has_energy_balance(system: &AnySystem) -> bool {
+    use galerkin_vi::Lagrangian;
+    !system.is_autonomous() || system.is_forced()
 }
 
 impl std::fmt::Display for RunSummary {
@@ -132,6 +161,14 @@ impl std::fmt::Display for RunSummary {
                 )?,
                 _ => writeln!(f, "  max {name} error: {e:.3e} (relative {rel:.3e})")?,
             }
+        }
+        if let Some(b) = &self.energy_balance {
+            writeln!(
+                f,
+                "  energy balance (E − E₀ − work of the force + ∫∂L/∂t): max {:.3e}, with E \
+                 changing by up to {:.3e}",
+                b.max_defect, b.max_change
+            )?;
         }
         if let Some(c) = &self.closest_approach {
             writeln!(
@@ -362,6 +399,17 @@ fn run_system(
         None => (Vec::new(), trajectory.gradient_evaluations()),
     };
     warnings.extend(monitor.warnings());
+    let energy_balance = if has_energy_balance(system) && steps > 0 {
+        match galerkin_vi::forcing::energy_balance(system, &trajectory) {
+            Ok(b) => Some(EnergyBalance::of(&b)),
+            Err(e) => {
+                warnings.push(format!("no energy balance: {e}"));
+                None
+            }
+        }
+    } else {
+        None
+    };
     let summary = RunSummary {
         system: system.name().to_string(),
         method,
@@ -383,6 +431,7 @@ fn run_system(
             .collect(),
         energy_scale: monitor.energy_scale.map(|(l, s)| (l.to_string(), s)),
         closest_approach: monitor.encounter.clone(),
+        energy_balance,
         newton_iterations_per_step: trajectory.newton_iterations() as f64 / steps.max(1) as f64,
         seconds,
         command_seconds: None,

@@ -150,6 +150,7 @@ fn tabulate<S: RigidBody>(
     let lnorm = (l0[0] * l0[0] + l0[1] * l0[1] + l0[2] * l0[2]).sqrt();
     let relative = |err: f64, scale: f64| if scale > 0.0 { err / scale } else { err };
     let summary = RunSummary {
+        energy_balance: None,
         system: body.name().to_string(),
         method: format!("Lie group Galerkin, {method}"),
         steps,

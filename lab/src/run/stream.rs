@@ -103,6 +103,24 @@ fn stream_system(
     let mut curve_error: Option<f64> = (exact.is_some() && samples > 0).then_some(0.0);
     // The library refuses a tolerance-driven method (it keeps the whole trajectory) before
     // the first visit, so the header is written only for a run that starts.
+    // Forced or time-dependent: the energy balance, step by step (the run keeps no curves).
+    let mut balance_warning = None;
+    let mut meter = if super::has_energy_balance(system) {
+        match galerkin_vi::forcing::EnergyMeter::new(
+            system,
+            n,
+            (init.t0, &init.q, &init.p),
+            &init.p,
+        ) {
+            Ok(m) => Some(m),
+            Err(e) => {
+                balance_warning = Some(format!("no energy balance: {e}"));
+                None
+            }
+        }
+    } else {
+        None
+    };
     let visit = |s: StreamStep<'_>| -> Result<()> {
         if crate::interrupt::requested() {
             // Ctrl-C: stop here; the rows before this step are kept (the caller says where).
@@ -127,6 +145,12 @@ fn stream_system(
         iterations += stats.iterations;
         evaluations += stats.gradient_evaluations;
         done += 1;
+        if let Some(m) = meter.as_mut() {
+            if let Err(e) = m.step(system, curve, s.basis, (s.q, s.p)) {
+                balance_warning = Some(format!("no energy balance: {e}"));
+                meter = None;
+            }
+        }
         if let Some(nbody) = system.as_nbody() {
             let t_a = init.t0 + (s.step - 1) as f64 * curve.h();
             let on_curve = curve.starting_at(t_a);
@@ -205,11 +229,18 @@ fn stream_system(
         relative_invariant_errors: label(monitor.relative_errors()),
         energy_scale: monitor.energy_scale.map(|(l, s)| (l.to_string(), s)),
         closest_approach: monitor.encounter.clone(),
+        energy_balance: meter
+            .as_ref()
+            .map(|m| super::EnergyBalance::of(m.balance())),
         newton_iterations_per_step: iterations as f64 / done.max(1) as f64,
         seconds,
         command_seconds: None,
         force_evaluations: evaluations,
-        warnings: monitor.warnings(),
+        warnings: monitor
+            .warnings()
+            .into_iter()
+            .chain(balance_warning)
+            .collect(),
         step_choice: None,
     };
     Ok(StreamOutcome { summary, failure })
