@@ -23,7 +23,7 @@ pub struct Encounter {
     /// Second body.
     pub b: String,
     /// Smallest separation, on the Galerkin curves (each step's curve is searched between
-    /// its ends, [`Monitor::closest_on_curve`]) or at a step end.
+    /// its ends, `Monitor::closest_on_curve`) or at a step end.
     pub separation: f64,
     /// Its time.
     pub t: f64,
