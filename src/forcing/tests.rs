@@ -340,3 +340,48 @@ fn stokes_drag_on_a_planet_balances_the_total_momentum_and_shrinks_its_orbit() {
     };
     assert!(r(200) < 0.9 * r(0), "{}", r(200));
 }
+
+#[test]
+fn kepler_with_drag_agrees_with_an_independent_integration() {
+    // q'' = −q/|q|³ − γ q' from a circular start, γ = 1e-3, T = 200 (the orbit decays by 18 %
+    // in angular momentum): the Galerkin run against RK4 with dt = 1/2000 on (q, q').
+    let gamma = 1e-3;
+    let system = Forced::new(
+        Kepler::new(1.0).unwrap(),
+        LinearDamping::uniform(2, gamma).unwrap(),
+    )
+    .unwrap();
+    let gvi = GalerkinIntegrator::spectral(14, 0.5).unwrap();
+    let traj = gvi
+        .integrate(&system, 0.0, &[1.0, 0.0], &[0.0, 1.0], 400)
+        .unwrap();
+    let f = |y: [f64; 4]| {
+        let r3 = (y[0] * y[0] + y[1] * y[1]).powf(1.5);
+        [
+            y[2],
+            y[3],
+            -y[0] / r3 - gamma * y[2],
+            -y[1] / r3 - gamma * y[3],
+        ]
+    };
+    let (dt, per) = (1.0 / 2000.0, 1000);
+    let mut y = [1.0, 0.0, 0.0, 1.0];
+    let mut worst = 0.0f64;
+    for k in 1..=400 {
+        for _ in 0..per {
+            let add = |a: [f64; 4], b: [f64; 4], s: f64| std::array::from_fn(|i| a[i] + s * b[i]);
+            let k1 = f(y);
+            let k2 = f(add(y, k1, dt / 2.0));
+            let k3 = f(add(y, k2, dt / 2.0));
+            let k4 = f(add(y, k3, dt));
+            y = std::array::from_fn(|i| {
+                y[i] + dt / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+            });
+        }
+        worst = worst
+            .max((traj.q[k][0] - y[0]).abs())
+            .max((traj.q[k][1] - y[1]).abs());
+    }
+    // Measured 4.6e-12 over the 400 step ends.
+    assert!(worst < 1e-10, "{worst:e}");
+}
