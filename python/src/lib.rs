@@ -8,6 +8,7 @@ mod convert;
 mod errors;
 mod guard;
 mod interrupt;
+mod rigid;
 mod systems;
 mod trajectory;
 
@@ -15,7 +16,7 @@ use convert::{finite, matrix, vector};
 use errors::{IntoPy, InvalidInputError, SolverError};
 use galerkin_vi::Lagrangian as _;
 use galerkin_vi_lab::run::RunOptions;
-use galerkin_vi_lab::scene::Scene;
+use galerkin_vi_lab::scene::{BuiltScene, BuiltSystem, Overrides, Scene};
 use pyo3::exceptions::PyRuntimeWarning;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -23,80 +24,197 @@ use rayon::prelude::*;
 use systems::System;
 use trajectory::{Integrator, Trajectory};
 
-/// Apply `run_scene`'s keyword overrides to a scene, naming any unknown key.
-fn apply_overrides(scene: &mut Scene, overrides: &Bound<'_, PyDict>, dim: usize) -> PyResult<()> {
-    for (key, value) in overrides.iter() {
+/// The keyword options of `run_scene`, the method and initial-state flags of `gvi run`.
+const RUN_OPTIONS: &str = "n, h, steps, basis, quadrature, quad_points, economical, compact, \
+                           solver, retraction, tol, control, ladder, auto_h, q0 or p0";
+
+/// The options of `run_scene` beyond the lab's [`Overrides`]: `tol=None` (which `Overrides`
+/// cannot say: it turns a scene's own tolerance off) and `compact`.
+#[derive(Default)]
+struct Extra {
+    tol: Option<Option<f64>>,
+    compact: bool,
+}
+
+/// `run_scene`'s keyword options as the lab's [`Overrides`] (what `gvi run`'s flags become)
+/// and the [`Extra`] ones, each value checked for its type. Combinations `gvi run` refuses
+/// before it builds the scene are refused here the same way (`InvalidInputError`): n,
+/// quad_points, economical or compact with tol; control, ladder or auto_h without it; and
+/// more than one of quad_points, economical and compact.
+fn overrides_of(options: &Bound<'_, PyDict>) -> PyResult<(Overrides, Extra)> {
+    let mut o = Overrides::default();
+    let mut extra = Extra::default();
+    for (key, value) in options.iter() {
         let key: String = key.extract()?;
-        let m = &mut scene.method;
-        let bad = |what: &str| InvalidInputError::new_err(format!("{key}: expected {what}"));
+        let bad = |what: &str| {
+            let got = value
+                .get_type()
+                .name()
+                .map(|n| n.to_string())
+                .unwrap_or_else(|_| "?".into());
+            InvalidInputError::new_err(format!("{key}: expected {what}, got {got} {value}"))
+        };
+        let text = |what: &str| value.extract::<String>().map_err(|_| bad(what));
         match key.as_str() {
-            "n" => m.n = value.extract().map_err(|_| bad("a whole number ≥ 2"))?,
-            "steps" => m.steps = value.extract().map_err(|_| bad("a whole number ≥ 1"))?,
-            "h" => m.h = finite("h", value.extract().map_err(|_| bad("a number"))?)?,
+            "n" => o.n = Some(value.extract().map_err(|_| bad("a whole number ≥ 2"))?),
+            "steps" => o.steps = Some(value.extract().map_err(|_| bad("a whole number ≥ 1"))?),
+            "quad_points" => {
+                o.quad_points = value
+                    .extract()
+                    .map_err(|_| bad("a whole number of quadrature points or None"))?
+            }
+            "economical" => o.economical = value.extract().map_err(|_| bad("True or False"))?,
+            "compact" => extra.compact = value.extract().map_err(|_| bad("True or False"))?,
+            "auto_h" => o.auto_h = value.extract().map_err(|_| bad("True or False"))?,
+            "h" => o.h = Some(finite("h", value.extract().map_err(|_| bad("a number"))?)?),
             "tol" => {
                 let tol: Option<f64> = value.extract().map_err(|_| bad("a number or None"))?;
-                m.tol = tol.map(|t| finite("tol", t)).transpose()?;
+                let tol = tol.map(|t| finite("tol", t)).transpose()?;
+                o.tol = tol;
+                extra.tol = Some(tol);
             }
-            "basis" => {
-                let s: String = value.extract().map_err(|_| bad("a basis name"))?;
-                m.basis = s.parse::<galerkin_vi::basis::BasisKind>().py_err()?;
+            "basis" => o.basis = Some(text("a basis name")?.parse().py_err()?),
+            "quadrature" => o.quadrature = Some(text("a quadrature name")?.parse().py_err()?),
+            "solver" => o.solver = Some(text("a stage solver name")?.parse().py_err()?),
+            "retraction" => {
+                o.retraction = Some(text("a retraction name (exp or cayley)")?.parse().py_err()?)
             }
-            "quadrature" => {
-                let s: String = value.extract().map_err(|_| bad("a quadrature name"))?;
-                m.quadrature = s
-                    .parse::<galerkin_vi::quadrature::QuadratureKind>()
-                    .py_err()?;
+            "control" => {
+                o.control = Some(
+                    text("an error control name (embedded, indicator or calibrated)")?
+                        .parse()
+                        .py_err()?,
+                )
             }
-            "solver" => {
-                let s: String = value.extract().map_err(|_| bad("a stage solver name"))?;
-                m.solver = s.parse::<galerkin_vi::integrator::StageSolver>().py_err()?;
+            "ladder" => {
+                o.ladder = Some(
+                    value
+                        .extract()
+                        .map_err(|_| bad("a list of whole numbers (values of n)"))?,
+                )
             }
-            "q0" => scene.initial.q = vector(&value, "q0", Some(dim))?,
-            "p0" => scene.initial.p = vector(&value, "p0", Some(dim))?,
+            "q0" => o.q0 = Some(vector(&value, "q0", None)?),
+            "p0" => o.p0 = Some(vector(&value, "p0", None)?),
             other => {
                 return Err(InvalidInputError::new_err(format!(
-                    "unknown override '{other}' (expected n, h, steps, basis, quadrature, \
-                     solver, tol, q0 or p0)"
+                    "unknown option '{other}' (expected {RUN_OPTIONS})"
                 )));
             }
         }
+    }
+    let rules = [
+        ("quad_points", o.quad_points.is_some()),
+        ("economical", o.economical),
+        ("compact", extra.compact),
+    ];
+    let chosen: Vec<&str> = rules.iter().filter(|r| r.1).map(|r| r.0).collect();
+    if chosen.len() > 1 {
+        return Err(InvalidInputError::new_err(format!(
+            "{}: give one way of choosing the quadrature points",
+            chosen.join(" and ")
+        )));
+    }
+    if o.tol.is_some() {
+        for (name, given) in [("n", o.n.is_some())].into_iter().chain(rules) {
+            if given {
+                return Err(InvalidInputError::new_err(format!(
+                    "{name}: with tol, n is chosen per step from the ladder, each rung with \
+                     its quadrature's default points; {name} would be ignored"
+                )));
+            }
+        }
+    } else {
+        for (name, given) in [
+            ("control", o.control.is_some()),
+            ("ladder", o.ladder.is_some()),
+            ("auto_h", o.auto_h),
+        ] {
+            if given {
+                return Err(InvalidInputError::new_err(format!(
+                    "{name}: only a tolerance-driven run uses it; give tol as well"
+                )));
+            }
+        }
+    }
+    Ok((o, extra))
+}
+
+/// Refuse the options a built scene would ignore, as `gvi run` does: `retraction` outside
+/// the rigid-body scenes (only the Lie group integrator has a chart), `solver` on them (that
+/// integrator has no stage solver to choose).
+fn refuse_unused(scene: &BuiltScene, o: &Overrides) -> PyResult<()> {
+    let rigid = matches!(scene.system, BuiltSystem::RigidBody(_));
+    if o.retraction.is_some() && !rigid {
+        return Err(InvalidInputError::new_err(format!(
+            "retraction: {} is not a rigid-body scene; only those (rigid-body, heavy-top, \
+             pendulum-3d) run on SO(3) with a retraction",
+            scene.name
+        )));
+    }
+    if o.solver.is_some() && rigid {
+        return Err(InvalidInputError::new_err(format!(
+            "solver: {} is a rigid-body scene, run by the Lie group integrator, which has no \
+             stage solver to choose",
+            scene.name
+        )));
     }
     Ok(())
 }
 
 /// Run a scene (a built-in name such as "kepler", or the path of a TOML scene file) with
-/// optional overrides of its method and initial state: n, h, steps, basis, quadrature,
-/// solver, tol, q0, p0. Returns the `Trajectory`; the sanity warnings of `gvi run` (an energy
-/// or position error above 1 %, an unresolved close encounter) are issued as
-/// `RuntimeWarning`s. A run whose estimated memory is above the
+/// optional keyword options, the method and initial-state flags of `gvi run`: n, h, steps,
+/// basis, quadrature, quad_points (an explicit number of quadrature points), economical
+/// (True: the quadrature's economical number of points for n, ⌈3n/2⌉ Gauss–Legendre points),
+/// compact (True: the compact rule, n Gauss–Legendre points; `gvi run --quad-points n`),
+/// solver, retraction (rigid bodies: "exp" or "cayley"), tol (choose n per step; None turns a
+/// scene's own tol off), control, ladder and auto_h (with tol), q0, p0. Returns a
+/// `Trajectory`, or a `RigidBodyTrajectory` for a rigid-body scene (run on SO(3) by the Lie
+/// group integrator). Bad options raise `InvalidInputError` or one of its subclasses, naming
+/// the option; options `gvi run` refuses together (n with tol, control without tol,
+/// retraction outside rigid bodies, solver on them) are refused the same way. The sanity
+/// warnings of `gvi run` (an energy or position error above 1 %, an unresolved close
+/// encounter) are issued as `RuntimeWarning`s. A run whose estimated memory is above the
 /// `gvi` tool's limit is refused before any work (`MemoryLimitError`); Ctrl-C stops it within
 /// a step (`KeyboardInterrupt`).
 #[pyfunction]
-#[pyo3(signature = (name_or_path, **overrides))]
-fn run_scene(
-    py: Python<'_>,
+#[pyo3(signature = (name_or_path, **options))]
+fn run_scene<'py>(
+    py: Python<'py>,
     name_or_path: &str,
-    overrides: Option<&Bound<'_, PyDict>>,
-) -> PyResult<Trajectory> {
-    let mut scene = Scene::load(name_or_path).py_err()?;
-    if let Some(o) = overrides {
-        let dim = systems::system_of(&scene.build().py_err()?)?.dim();
-        apply_overrides(&mut scene, o, dim)?;
+    options: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let (overrides, extra) = match options {
+        Some(o) => overrides_of(o)?,
+        None => (Overrides::default(), Extra::default()),
+    };
+    let mut scene = Scene::load(name_or_path).py_err()?.with_overrides(&overrides);
+    if let Some(tol) = extra.tol {
+        scene.method.tol = tol;
+    }
+    if extra.compact {
+        let m = &mut scene.method;
+        m.quad_points = Some(m.quadrature.compact_points(m.n));
     }
     let scene = scene.build().py_err()?;
-    let kind = std::sync::Arc::new(systems::system_of(&scene)?);
+    refuse_unused(&scene, &overrides)?;
     // The estimate `gvi run` holds a run kept in memory to (it counts the output text, which
     // the Python arrays returned later stand for).
     let (_, estimate) = galerkin_vi_lab::run::in_memory_bytes(&scene, false);
+    guard::ensure_steps(scene.method.steps)?;
     galerkin_vi_lab::memory::ensure_fits(
         format!(
             "run_scene('{}') with {} steps",
             scene.name, scene.method.steps
         ),
         estimate,
-        "the whole run is kept: fewer steps (the steps override)",
+        "the whole run is kept: fewer steps (the steps option)",
     )
     .py_err()?;
+    if let BuiltSystem::RigidBody(body) = &scene.system {
+        let traj = rigid::run(py, body, &scene)?;
+        return Ok(Bound::new(py, traj)?.into_any());
+    }
+    let kind = std::sync::Arc::new(systems::system_of(&scene)?);
     let options = RunOptions {
         curve_samples_per_step: 0,
         chart: false,
@@ -117,7 +235,10 @@ fn run_scene(
         PyErr::warn(py, &py.get_type::<PyRuntimeWarning>(), &message, 1)?;
     }
     match result.trajectory {
-        Some(traj) => Ok(Trajectory::new(traj, kind, scene.method.clone())),
+        Some(traj) => {
+            let traj = Trajectory::new(traj, kind, scene.method.clone());
+            Ok(Bound::new(py, traj)?.into_any())
+        }
         None => Err(SolverError::new_err("the run produced no trajectory")),
     }
 }
@@ -180,6 +301,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     systems::register(m)?;
     m.add_class::<Integrator>()?;
     m.add_class::<Trajectory>()?;
+    m.add_class::<rigid::RigidBodyTrajectory>()?;
     m.add_function(wrap_pyfunction!(run_scene, m)?)?;
     m.add_function(wrap_pyfunction!(integrate_many, m)?)?;
     Ok(())

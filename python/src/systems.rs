@@ -12,7 +12,7 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 
 /// The concrete system behind a Python `System`: the library's [`AnySystem`], the built-in
-/// systems as one enum (rigid bodies, on SO(3), are not available from Python).
+/// systems as one enum (rigid bodies, on SO(3), are run by `run_scene` alone: crate::rigid).
 pub use galerkin_vi::systems::AnySystem as SysKind;
 
 /// Run `$body` with `$s` bound to the system. `AnySystem` dispatches every trait method to the
@@ -25,13 +25,14 @@ macro_rules! with_system {
     }};
 }
 
-/// The system of a built scene, or `UnsupportedError` for rigid bodies.
+/// The system of a built scene, or `UnsupportedError` for rigid bodies (which live on SO(3)
+/// and are not a `System`: `run_scene` runs them by the Lie group integrator).
 pub fn system_of(scene: &BuiltScene) -> PyResult<SysKind> {
     match &scene.system {
         BuiltSystem::Euclidean(s) => Ok(s.clone()),
         BuiltSystem::RigidBody(_) => Err(UnsupportedError::new_err(
-            "rigid bodies live on SO(3) and are run by the Lie group integrator: use the gvi \
-             command line (gvi run rigid-body)",
+            "rigid bodies live on SO(3), not in R^D: run them with run_scene (which returns a \
+             RigidBodyTrajectory), not as a System",
         )),
     }
 }
@@ -187,6 +188,45 @@ impl Expression {
             s = s.with_force(&force).py_err()?;
         }
         Ok(PyClassInitializer::from(System::new(SysKind::Expression(s))).add_subclass(Expression))
+    }
+
+    /// The Lagrangian's text (for a traced Python function, the text it was compiled from).
+    #[getter]
+    fn lagrangian(slf: &Bound<'_, Self>) -> String {
+        match &*slf.as_super().get().kind {
+            SysKind::Expression(e) => e.text().to_string(),
+            _ => String::new(),
+        }
+    }
+
+    /// The force expressions (one per coordinate), or None for a conservative system.
+    #[getter]
+    fn force(slf: &Bound<'_, Self>) -> Option<Vec<String>> {
+        match &*slf.as_super().get().kind {
+            SysKind::Expression(e) => e.force_expressions().map(<[String]>::to_vec),
+            _ => None,
+        }
+    }
+
+    /// A listing of the compiled tape the integrator evaluates (constants folded, common
+    /// subexpressions shared). Two systems with equal listings and parameters evaluate L
+    /// identically, bit for bit.
+    #[getter]
+    fn tape(slf: &Bound<'_, Self>) -> String {
+        match &*slf.as_super().get().kind {
+            SysKind::Expression(e) => format!("{:?}", e.tape()),
+            _ => String::new(),
+        }
+    }
+
+    /// Whether L was recognised as separable, ½ vᵀM v − V(q) with a constant positive-definite
+    /// M (the integrator then uses its separable path).
+    #[getter]
+    fn is_separable(slf: &Bound<'_, Self>) -> bool {
+        match &*slf.as_super().get().kind {
+            SysKind::Expression(e) => e.is_separable(),
+            _ => false,
+        }
     }
 }
 

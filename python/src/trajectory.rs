@@ -19,7 +19,11 @@ use pyo3::types::PyDict;
 use std::sync::Arc;
 
 /// A Galerkin variational integrator: `Integrator(basis="chebyshev", n=16,
-/// quadrature="gauss-legendre", h=1.0, solver="auto", quad_points=None)`.
+/// quadrature="gauss-legendre", h=1.0, solver="auto", quad_points=None, economical=False,
+/// compact=False)`. `quad_points` is an explicit number of quadrature points;
+/// `economical=True` takes the quadrature's economical number for n (⌈3n/2⌉ Gauss–Legendre
+/// points, as `gvi run --economical`), `compact=True` its compact rule (n Gauss–Legendre
+/// points); at most one of the three.
 #[pyclass(frozen, module = "galerkin_vi")]
 pub struct Integrator {
     pub(crate) method: MethodSpec,
@@ -56,7 +60,9 @@ impl Integrator {
 impl Integrator {
     #[new]
     #[pyo3(signature = (basis = "chebyshev", n = 16, quadrature = "gauss-legendre", h = 1.0,
-                        solver = "auto", quad_points = None))]
+                        solver = "auto", quad_points = None, economical = false,
+                        compact = false))]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         basis: &str,
         n: usize,
@@ -64,6 +70,8 @@ impl Integrator {
         h: f64,
         solver: &str,
         quad_points: Option<usize>,
+        economical: bool,
+        compact: bool,
     ) -> PyResult<Self> {
         let mut method = MethodSpec::spectral(n, finite("h", h)?, 1);
         method.basis = basis.parse::<galerkin_vi::basis::BasisKind>().py_err()?;
@@ -73,7 +81,17 @@ impl Integrator {
         method.solver = solver
             .parse::<galerkin_vi::integrator::StageSolver>()
             .py_err()?;
-        method.quad_points = quad_points;
+        method.quad_points = match (quad_points, economical, compact) {
+            (q, false, false) => q,
+            (None, true, false) => Some(method.quadrature.economical_points(n)),
+            (None, false, true) => Some(method.quadrature.compact_points(n)),
+            _ => {
+                return Err(crate::errors::InvalidInputError::new_err(
+                    "quad_points, economical and compact: give one way of choosing the \
+                     quadrature points",
+                ));
+            }
+        };
         // Build once now so that a bad n, h or quadrature is an error here, not later.
         method.integrator().py_err()?;
         Ok(Integrator { method })
@@ -117,15 +135,23 @@ impl Integrator {
         self.method.h
     }
 
+    /// Number of quadrature points per step (`quad_points`, or the quadrature's default for
+    /// n).
+    #[getter]
+    fn quad_points(&self) -> usize {
+        self.method.quadrature_points()
+    }
+
     fn __repr__(&self) -> String {
         let m = &self.method;
         format!(
-            "Integrator(basis='{}', n={}, quadrature='{}', h={}, solver='{}')",
+            "Integrator(basis='{}', n={}, quadrature='{}', h={}, solver='{}', quad_points={})",
             m.basis.as_str(),
             m.n,
             m.quadrature.as_str(),
             m.h,
-            m.solver.as_str()
+            m.solver.as_str(),
+            m.quadrature_points()
         )
     }
 }

@@ -2,12 +2,18 @@
 
 The numerics are the Rust crate galerkin-vi; this package is a thin layer over it:
 
-- ``run_scene(name_or_path, **overrides)`` runs a built-in scene ("kepler", "harmonic",
-  "double-pendulum", ...) or a TOML scene file and returns a :class:`Trajectory`;
+- ``run_scene(name_or_path, **options)`` runs a built-in scene ("kepler", "harmonic",
+  "double-pendulum", "rigid-body", ...) or a TOML scene file with the method options of
+  ``gvi run`` and returns a :class:`Trajectory` (a :class:`RigidBodyTrajectory` for a rigid
+  body, run on SO(3) by the Lie group integrator);
 - ``Integrator(basis=..., n=..., quadrature=..., h=..., solver=...).integrate(system, q0, p0,
   steps)`` integrates a system of :mod:`galerkin_vi.systems`;
 - ``integrate_many(system, q0s, p0s, steps)`` integrates many initial states in parallel
   (all cores, the GIL released);
+- ``systems.from_function(L, coordinates)`` compiles a Python function ``L(q, v)`` written
+  with ordinary arithmetic and ``sin``, ``cos``, ``exp``, ``sqrt``, ... of this package into
+  an expression Lagrangian by tracing it once (``systems.from_sympy`` does the same for a
+  sympy expression);
 - every error is a subclass of :class:`GalerkinError` (work above the 4 GB memory limit is
   refused before it starts with :class:`MemoryLimitError`); Ctrl-C stops long calls with
   ``KeyboardInterrupt``.
@@ -28,6 +34,7 @@ from ._native import (
     MemoryLimitError,
     NonFiniteError,
     NonFiniteResultError,
+    RigidBodyTrajectory,
     SceneError,
     ShapeError,
     SolverError,
@@ -36,7 +43,11 @@ from ._native import (
     integrate_many,
     run_scene,
 )
-from . import systems
+from . import systems, trace
+from .trace import atan2, cos, cosh, exp, log, pow, sin, sinh, sqrt, tan, tanh
+
+#: π, as the expression grammar's ``pi`` (a float: traced, it prints as the same number).
+pi = 3.141592653589793
 
 __all__ = [
     "ExpressionError",
@@ -48,12 +59,26 @@ __all__ = [
     "MemoryLimitError",
     "NonFiniteError",
     "NonFiniteResultError",
+    "RigidBodyTrajectory",
     "SceneError",
     "ShapeError",
     "SolverError",
     "Trajectory",
     "UnsupportedError",
+    "atan2",
+    "cos",
+    "cosh",
+    "exp",
     "integrate_many",
+    "log",
+    "pi",
+    "pow",
     "run_scene",
+    "sin",
+    "sinh",
+    "sqrt",
     "systems",
+    "tan",
+    "tanh",
+    "trace",
 ]
