@@ -68,7 +68,7 @@ BAD = [
     "gv.run_scene('/proc/version')",
     f"gv.run_scene('{LONG}.toml')",
     "gv.run_scene('broken.toml')",
-    "gv.run_scene('rigid-body')",
+    "gv.run_scene('rigid-body', solver='exact')",
     "gv.run_scene(42)",
     # run_scene: overrides
     "gv.run_scene('s.toml', steps=0)",

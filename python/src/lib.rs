@@ -55,6 +55,9 @@ fn overrides_of(options: &Bound<'_, PyDict>) -> PyResult<(Overrides, Extra)> {
             InvalidInputError::new_err(format!("{key}: expected {what}, got {got} {value}"))
         };
         let text = |what: &str| value.extract::<String>().map_err(|_| bad(what));
+        fn parsed<T: std::str::FromStr<Err = galerkin_vi::GviError>>(s: String) -> PyResult<T> {
+            s.parse::<T>().py_err()
+        }
         match key.as_str() {
             "n" => o.n = Some(value.extract().map_err(|_| bad("a whole number ≥ 2"))?),
             "steps" => o.steps = Some(value.extract().map_err(|_| bad("a whole number ≥ 1"))?),
@@ -73,18 +76,16 @@ fn overrides_of(options: &Bound<'_, PyDict>) -> PyResult<(Overrides, Extra)> {
                 o.tol = tol;
                 extra.tol = Some(tol);
             }
-            "basis" => o.basis = Some(text("a basis name")?.parse().py_err()?),
-            "quadrature" => o.quadrature = Some(text("a quadrature name")?.parse().py_err()?),
-            "solver" => o.solver = Some(text("a stage solver name")?.parse().py_err()?),
+            "basis" => o.basis = Some(parsed(text("a basis name")?)?),
+            "quadrature" => o.quadrature = Some(parsed(text("a quadrature name")?)?),
+            "solver" => o.solver = Some(parsed(text("a stage solver name")?)?),
             "retraction" => {
-                o.retraction = Some(text("a retraction name (exp or cayley)")?.parse().py_err()?)
+                o.retraction = Some(parsed(text("a retraction name (exp or cayley)")?)?)
             }
             "control" => {
-                o.control = Some(
-                    text("an error control name (embedded, indicator or calibrated)")?
-                        .parse()
-                        .py_err()?,
-                )
+                o.control = Some(parsed(text(
+                    "an error control name (embedded, indicator or calibrated)",
+                )?)?)
             }
             "ladder" => {
                 o.ladder = Some(
@@ -187,7 +188,33 @@ fn run_scene<'py>(
         Some(o) => overrides_of(o)?,
         None => (Overrides::default(), Extra::default()),
     };
-    let mut scene = Scene::load(name_or_path).py_err()?.with_overrides(&overrides);
+    let loaded = Scene::load(name_or_path).py_err()?;
+    if overrides.q0.is_some() || overrides.p0.is_some() {
+        // The lengths, named as the options (the built scene would name its `[initial]`).
+        let without_state = Overrides {
+            q0: None,
+            p0: None,
+            ..overrides.clone()
+        };
+        let built = loaded
+            .clone()
+            .with_overrides(&without_state)
+            .build()
+            .py_err()?;
+        let dim = match &built.system {
+            BuiltSystem::Euclidean(s) => s.dim(),
+            BuiltSystem::RigidBody(_) => 3,
+        };
+        for (name, given) in [("q0", &overrides.q0), ("p0", &overrides.p0)] {
+            if let Some(v) = given.as_ref().filter(|v| v.len() != dim) {
+                return Err(errors::ShapeError::new_err(format!(
+                    "{name}: expected a 1-D array of length {dim}, got shape ({},)",
+                    v.len()
+                )));
+            }
+        }
+    }
+    let mut scene = loaded.with_overrides(&overrides);
     if let Some(tol) = extra.tol {
         scene.method.tol = tol;
     }

@@ -119,9 +119,7 @@ fn reference<B: RigidBody>(body: &B, traj: &LieTrajectory) -> Option<Reference> 
     }
     let s0 = traj.states.first()?;
     let exact = FreeBodyExact::new(body.inertia(), &s0.r, &s0.mu).ok()?;
-    let times: Vec<f64> = (0..traj.states.len())
-        .map(|k| k as f64 * traj.h)
-        .collect();
+    let times: Vec<f64> = (0..traj.states.len()).map(|k| k as f64 * traj.h).collect();
     let orientations = exact.orientations(&times).ok()?;
     let mut orientation = Vec::with_capacity(times.len());
     let mut momentum = Vec::with_capacity(times.len());
@@ -161,7 +159,11 @@ pub fn run(
 
 impl RigidBodyTrajectory {
     /// One row of 3 numbers per step end.
-    fn rows3<'py>(&self, py: Python<'py>, f: impl Fn(&LieState) -> [f64; 3]) -> Bound<'py, PyArray2<f64>> {
+    fn rows3<'py>(
+        &self,
+        py: Python<'py>,
+        f: impl Fn(&LieState) -> [f64; 3],
+    ) -> Bound<'py, PyArray2<f64>> {
         let flat: Vec<f64> = self.traj.states.iter().flat_map(|s| f(s)).collect();
         Array2::from_shape_vec((self.traj.states.len(), 3), flat)
             .unwrap_or_else(|_| Array2::zeros((0, 3)))
@@ -169,7 +171,11 @@ impl RigidBodyTrajectory {
     }
 
     /// One number per step end.
-    fn column<'py>(&self, py: Python<'py>, f: impl Fn(&LieState) -> f64) -> Bound<'py, PyArray1<f64>> {
+    fn column<'py>(
+        &self,
+        py: Python<'py>,
+        f: impl Fn(&LieState) -> f64,
+    ) -> Bound<'py, PyArray1<f64>> {
         Array1::from(self.traj.states.iter().map(f).collect::<Vec<_>>()).into_pyarray(py)
     }
 
@@ -238,7 +244,10 @@ impl RigidBodyTrajectory {
     /// Body angular velocities Ω_k = 𝕀⁻¹μ_k, shape (steps + 1, 3).
     #[getter]
     fn omega<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        self.rows3(py, |s| with_body!(&self.body, b => b.angular_velocity(&s.mu)))
+        self.rows3(
+            py,
+            |s| with_body!(&self.body, b => b.angular_velocity(&s.mu)),
+        )
     }
 
     /// Spatial angular momenta L_k = R_k μ_k, shape (steps + 1, 3) (conserved for the free

@@ -69,7 +69,7 @@ gvi = gv.Integrator(n=8, h=0.5)
         (lambda: gv.run_scene("kepler", q0=[1.0]), gv.ShapeError, "q0"),
         (lambda: gv.run_scene("kepler", h=float("nan")), gv.NonFiniteError, "h"),
         (lambda: gv.run_scene("kepler", n=1), gv.InvalidMethodError, "n = 1"),
-        (lambda: gv.run_scene("rigid-body"), gv.UnsupportedError, "SO(3)"),
+        (lambda: gv.run_scene("rigid-body", solver="exact"), gv.InvalidInputError, "solver"),
         (lambda: gv.Integrator(basis="zzz"), gv.InvalidInputError, "basis"),
         (lambda: gv.Integrator(h=-1.0), gv.InvalidMethodError, "h = -1"),
         (lambda: gv.systems.Kepler(mu=float("nan")), gv.NonFiniteError, "mu"),

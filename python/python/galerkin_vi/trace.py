@@ -341,25 +341,21 @@ def _trace(function, names, parameters, what):
         signature = inspect.signature(function)
     except (TypeError, ValueError):
         signature = None
-    kwargs = {name: Traced(name) for name in parameters}
     if signature is None:
-        return function(q, v, **kwargs)
+        return function(q, v, **{name: Traced(name) for name in parameters})
     kinds = [p.kind for p in signature.parameters.values()]
     named = {
         p.name
         for p in signature.parameters.values()
         if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)
     }
+    # Each parameter the function takes by name (all of them with **kwargs); one it does not
+    # take is simply not read.
     takes_any = inspect.Parameter.VAR_KEYWORD in kinds
-    for name in parameters:
-        if not (takes_any or name in named):
-            raise TypeError(
-                f"{what} does not take the parameter {name!r}: parameters are passed by "
-                f"keyword, as {what}(q, v, {name}=...)"
-            )
+    kwargs = {name: Traced(name) for name in parameters if takes_any or name in named}
     positional = sum(
-        k in (inspect.Parameter.POSITIONAL_ONLY, inspect.Parameter.POSITIONAL_OR_KEYWORD)
-        for k in kinds
+        p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD) and p.name not in parameters
+        for p in signature.parameters.values()
     )
     if "t" in named and "t" not in parameters:
         kwargs["t"] = Traced("t")
@@ -376,8 +372,9 @@ def from_function(lagrangian, coordinates, parameters=None, force=None) -> Expre
     ``coordinates``: the coordinate names (``["x", "y"]``; the velocities are ``x_dot``, ...)
     or their number D (names ``q0``, ``q1``, ...). ``q`` and ``v`` are tuples of traced
     values, ``t`` (passed when L takes a third argument or one named ``t``) the time.
-    ``parameters``: a dict name → value; each is passed to L as a keyword argument of that
-    name and stays a named parameter of the expression. ``force``: None, a list of expression
+    ``parameters``: a dict name → value; each is passed to L (and to a force function) as a
+    keyword argument of that name if it takes one, and stays a named parameter of the
+    expression. ``force``: None, a list of expression
     strings, or a function ``f(q, v)`` / ``f(q, v, t)`` returning one value per coordinate,
     traced the same way.
 
