@@ -102,7 +102,7 @@ def test_coordinate_count_and_grouping_follow_python():
     [
         (lambda q, v: v[0] ** 2 / 2 - (q[0] if q[0] > 0 else -q[0]), "no truth value"),
         (lambda q, v: v[0] ** 2 / 2 - math.sin(q[0]), "gv.sin"),
-        (lambda q, v: v[0] ** 2 / 2 - float(q[0]), "galerkin_vi.sin"),
+        (lambda q, v: v[0] ** 2 / 2 - float(q[0]), "cannot become a float"),
         (lambda q, v: v[0] ** 2 / 2 - np.arcsin(q[0]), "numpy.arcsin"),
         (lambda q, v: v[0] ** 2 / 2 - q[0] // 2, "floor"),
         (lambda q, v: [v[0]], "scalar"),
@@ -112,8 +112,7 @@ def test_coordinate_count_and_grouping_follow_python():
 def test_what_one_trace_cannot_record_is_a_type_error(body, words):
     with pytest.raises(TypeError) as info:
         gv.systems.from_function(body, ["x"])
-    message = str(info.value).replace("galerkin_vi.", "gv.") + str(info.value)
-    assert words in message
+    assert words in str(info.value)
 
 
 def test_expression_errors_of_the_traced_text_are_typed():

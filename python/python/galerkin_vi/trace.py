@@ -53,8 +53,8 @@ _SUM, _PRODUCT, _NEGATION, _POWER, _ATOM = 1, 2, 3, 4, 5
 _FUNCTIONS = ("sin", "cos", "tan", "exp", "log", "sqrt", "abs", "sinh", "cosh", "tanh")
 
 _FLOAT_HINT = (
-    "use galerkin_vi.sin, galerkin_vi.cos, galerkin_vi.exp, galerkin_vi.log, "
-    "galerkin_vi.sqrt, ... (or numpy's ufuncs) instead of the math module"
+    "use gv.sin, gv.cos, gv.exp, gv.log, gv.sqrt, ... (the functions of galerkin_vi, "
+    "imported as gv) or numpy's ufuncs instead of the math module"
 )
 
 
@@ -172,7 +172,7 @@ class Traced:
             f"the Lagrangian is traced once, with symbols in place of numbers, so a traced "
             f"value ({self.text}) has no truth value: Python's if, while, and, or, not and "
             "comparisons cannot depend on q, v, t or the parameters. Write L without "
-            "branching (abs(x) or galerkin_vi.sqrt(x**2) instead of a test), or as an "
+            "branching (abs(x) or gv.sqrt(x**2) instead of a test), or as an "
             "expression string"
         )
 
