@@ -98,6 +98,14 @@ BAD = [
     "gv.run_scene('kepler', q0='ab')",
     "gv.run_scene('kepler', q0=[[0.4, 0]])",
     "gv.run_scene('s.toml', q0=[0, 0, 0, 0])",
+    # run_scene: the quadrature and tolerance options, rigid bodies
+    "gv.run_scene('kepler', economical=True, compact=True)",
+    "gv.run_scene('kepler', tol=1e-6, n=8)",
+    "gv.run_scene('kepler', ladder=[8, 16])",
+    "gv.run_scene('rigid-body', tol=1e-8)",
+    "gv.run_scene('rigid-body', retraction='zzz')",
+    "gv.run_scene('rigid-body', q0=[0, 0])",
+    "gv.run_scene('rigid-body', p0=[float('nan'), 0, 0])",
     # Integrator
     "gv.Integrator(n=0)",
     "gv.Integrator(n=-1)",
@@ -149,6 +157,11 @@ BAD = [
     "gv.systems.Expression('x_dot^2/2', ['x', 'x'])",
     "gv.systems.Expression('x_dot^2/2 - a*x', ['x'], {'a': float('nan')})",
     "gv.systems.Expression('(' * 100000 + 'x' + ')' * 100000, ['x'])",
+    # Lagrangians traced from Python functions
+    "gv.systems.from_function(42, ['x'])",
+    "gv.systems.from_function(lambda q, v: v[0]**2 if q[0] > 0 else 0, ['x'])",
+    "gv.systems.from_function(lambda q, v: v[0]**2/2 - __import__('math').sin(q[0]), ['x'])",
+    "gv.systems.from_function(lambda q, v: q[0]**2, ['x'])",
     # Trajectory
     "traj().position_at(float('nan'))",
     "traj().position_at(1e9)",
@@ -185,6 +198,7 @@ CTRL_C = [
     "gv.integrate_many(k, [[0.4, 0]] * 4, [[0, 2]] * 4, 10**6)",
     "gv.run_scene('kepler', steps=2 * 10**6)",
     "gv.run_scene('kepler', steps=10**6, tol=1e-10)",
+    "gv.run_scene('rigid-body', steps=4 * 10**6)",
     "gv.Integrator(n=48, h=1.0).integrate(k, [0.4, 0], [0, 2], 10**5).check()",
 ]
 

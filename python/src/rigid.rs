@@ -164,7 +164,7 @@ impl RigidBodyTrajectory {
         py: Python<'py>,
         f: impl Fn(&LieState) -> [f64; 3],
     ) -> Bound<'py, PyArray2<f64>> {
-        let flat: Vec<f64> = self.traj.states.iter().flat_map(|s| f(s)).collect();
+        let flat: Vec<f64> = self.traj.states.iter().flat_map(f).collect();
         Array2::from_shape_vec((self.traj.states.len(), 3), flat)
             .unwrap_or_else(|_| Array2::zeros((0, 3)))
             .into_pyarray(py)

@@ -42,3 +42,9 @@ def test_plot_kepler_writes_a_png(tmp_path):
     out = tmp_path / "kepler.png"
     assert load("plot_kepler").main(str(out)) == 0
     assert out.stat().st_size > 10_000
+
+
+def test_traced_vs_string_example_finds_the_same_tape():
+    m = load("traced_vs_string").measure(rounds=1, steps=50)
+    assert m["bit_identical"]
+    assert m["integrate_traced"] > 0 and m["integrate_string"] > 0
