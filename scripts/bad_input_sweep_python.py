@@ -198,7 +198,7 @@ CTRL_C = [
     "gv.integrate_many(k, [[0.4, 0]] * 4, [[0, 2]] * 4, 10**6)",
     "gv.run_scene('kepler', steps=2 * 10**6)",
     "gv.run_scene('kepler', steps=10**6, tol=1e-10)",
-    "gv.run_scene('rigid-body', steps=4 * 10**6)",
+    "gv.run_scene('rigid-body', steps=2 * 10**6)",
     "gv.Integrator(n=48, h=1.0).integrate(k, [0.4, 0], [0, 2], 10**5).check()",
 ]
 

@@ -28,6 +28,7 @@ k = gv.systems.Kepler()
         lambda: gv.integrate_many(k, [[0.4, 0]] * 8, [[0, 2]] * 8, 2 * 10**6),
         lambda: gv.run_scene("kepler", steps=10**7),
         lambda: gv.run_scene("kepler", steps=10**8),
+        lambda: gv.run_scene("rigid-body", steps=10**7),
     ],
 )
 def test_work_above_the_memory_limit_is_refused_with_the_estimate(call):
@@ -109,6 +110,8 @@ LONG_CALLS = {
     "integrate": "gv.Integrator(n=16, h=1.0).integrate(k, [0.4, 0], [0, 2], 2 * 10**6)",
     "integrate_many": "gv.integrate_many(k, [[0.4, 0]] * 4, [[0, 2]] * 4, 10**6)",
     "run_scene": "gv.run_scene('kepler', steps=2 * 10**6)",
+    # Hours of Lie group steps (within the memory limit): stopped between chunks of 16 steps.
+    "run_scene_rigid_body": "gv.run_scene('rigid-body', steps=2 * 10**6)",
 }
 
 CHILD = """
