@@ -152,3 +152,15 @@ def test_sympy_expression_compiles_to_the_same_tape():
         gv.systems.from_sympy(xd**2 / 2 - y, [x], [xd])
     with pytest.raises(gv.ExpressionError, match="no counterpart"):
         gv.systems.from_sympy(xd**2 / 2 - sympy.besselj(0, x), [x], [xd])
+
+
+def test_numpy_arrays_of_traced_values():
+    """np.array(q) of traced values: numpy's sums, products and ufuncs trace element by
+    element (numpy scalars are numbers)."""
+    sys = gv.systems.from_function(
+        lambda q, v: np.float64(0.5) * np.sum(np.array(v) ** 2) - np.sum(np.cos(np.array(q))),
+        ["a", "b"],
+    )
+    assert sys.lagrangian == "0.5*(a_dot^2 + b_dot^2) - (cos(a) + cos(b))"
+    text = gv.systems.Expression("0.5*(a_dot^2 + b_dot^2) - (cos(a) + cos(b))", ["a", "b"])
+    assert sys.tape == text.tape

@@ -211,38 +211,24 @@ class Traced:
             "log, sqrt, atan2, sinh, cosh, tanh, pow"
         )
 
-    # numpy calls these methods for object arrays of traced values (np.sin(np.array(q))).
-    def sin(self):
-        return _call("sin", self)
-
-    def cos(self):
-        return _call("cos", self)
-
-    def tan(self):
-        return _call("tan", self)
-
-    def exp(self):
-        return _call("exp", self)
-
-    def log(self):
-        return _call("log", self)
-
-    def sqrt(self):
-        return _call("sqrt", self)
-
-    def sinh(self):
-        return _call("sinh", self)
-
-    def cosh(self):
-        return _call("cosh", self)
-
-    def tanh(self):
-        return _call("tanh", self)
-
 
 def _call(name: str, *args) -> Traced:
     texts = ", ".join(Traced.of(a).text for a in args)
     return Traced(f"{name}({texts})")
+
+
+def _method(name: str):
+    def method(self):
+        return _call(name, self)
+
+    method.__name__ = name
+    method.__doc__ = f"The traced {name}(x) (numpy calls it for object arrays of traced values)."
+    return method
+
+
+# numpy applies np.sin, ... to object arrays (np.sin(np.array(q))) by calling these methods.
+for _name in ("sin", "cos", "tan", "exp", "log", "sqrt", "sinh", "cosh", "tanh"):
+    setattr(Traced, _name, _method(_name))
 
 
 def _power(base, exponent) -> Traced:
