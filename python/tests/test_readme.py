@@ -47,3 +47,16 @@ def test_python_guide_check_sees_a_drifted_number(repo):
     assert run_examples(first, path).failed == 0
     drifted = first.replace("\n1.93e-11\n", "\n1.77e-11\n")
     assert run_examples(drifted, path).failed == 1
+
+
+def test_python_guide_sweep_counts_are_the_scripts(repo):
+    """The guide's counts of the bad-input sweep are the script's lists (the sweep itself runs
+    each case in its own interpreter, minutes, outside the suite)."""
+    import runpy
+
+    sweep = runpy.run_path(str(repo / "scripts" / "bad_input_sweep_python.py"), run_name="sweep")
+    bad, long = len(sweep["BAD"]), len(sweep["CTRL_C"])
+    text = (repo / "docs" / "guide" / "python.md").read_text(encoding="utf-8")
+    assert f"runs {bad} bad calls" in text
+    assert f"and {long} long calls" in text
+    assert f"cases tried: {bad + long};" in text
