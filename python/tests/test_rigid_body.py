@@ -91,6 +91,7 @@ def test_states_equal_the_cli_csv(repo, tmp_path, scene):
     table = np.genfromtxt(csv, delimiter=",", names=True)
     traj = gv.run_scene(scene, steps=40)
     # The CSV prints shortest round-trip floats: the same numbers, bit for bit.
+    np.testing.assert_array_equal(traj.t, table["t"])
     for k in range(9):
         np.testing.assert_array_equal(traj.R[:, k // 3, k % 3], table[f"r{k // 3}{k % 3}"])
     for i in range(3):
