@@ -48,3 +48,8 @@ def test_traced_vs_string_example_finds_the_same_tape():
     m = load("traced_vs_string").measure(rounds=1, steps=50)
     assert m["bit_identical"]
     assert m["integrate_traced"] > 0 and m["integrate_string"] > 0
+
+
+def test_many_vs_loop_example_results_are_equal():
+    loop, many, equal = load("many_vs_loop").measure(rounds=1, members=4, steps=10)
+    assert equal and loop > 0 and many > 0
