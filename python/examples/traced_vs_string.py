@@ -73,7 +73,8 @@ def measure(rounds=7, steps=2000):
 if __name__ == "__main__":
     rounds = int(sys.argv[1]) if len(sys.argv) > 1 else 7
     m = measure(rounds)
-    print(f"build:      traced {m['build_traced'] * 1e6:.0f} µs, string {m['build_string'] * 1e6:.0f} µs")
+    traced, string = m["build_traced"] * 1e6, m["build_string"] * 1e6
+    print(f"build:      traced {traced:.0f} µs, string {string:.0f} µs")
     ratio = m["integrate_traced"] / m["integrate_string"]
     print(
         f"integrate:  traced {m['integrate_traced'] * 1e3:.1f} ms, string "

@@ -97,7 +97,8 @@ def test_states_equal_the_cli_csv(repo, tmp_path, scene):
     for i in range(3):
         np.testing.assert_array_equal(traj.mu[:, i], table[f"mu{i}"])
         np.testing.assert_array_equal(traj.omega[:, i], table[f"w{i}"])
-        np.testing.assert_array_equal(traj.angular_momentum[:, i], table["lxlylz"[2 * i : 2 * i + 2]])
+        name = ("lx", "ly", "lz")[i]
+        np.testing.assert_array_equal(traj.angular_momentum[:, i], table[name])
     np.testing.assert_array_equal(traj.energy, table["energy"])
     np.testing.assert_array_equal(traj.orthogonality, table["orthogonality"])
     if traj.orientation_error is not None:
