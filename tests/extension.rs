@@ -7,7 +7,7 @@
 //! fail it. Tolerances are measured (the numbers in the comments; `-- --nocapture` prints
 //! them) and docs/guide/extending.md quotes them.
 //!
-//! Run: `cargo test --test extension -- --nocapture`.
+//! Run: `cargo test --test integration extension:: -- --nocapture`.
 
 use galerkin_vi::basis::{Basis, ChebyshevLagrange};
 use galerkin_vi::geometry::{

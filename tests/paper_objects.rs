@@ -7,9 +7,7 @@ use galerkin_vi::curve::{GalerkinCurve, GalerkinCurveRef};
 use galerkin_vi::integrator::Workspace;
 use galerkin_vi::prelude::*;
 
-#[path = "common/counting.rs"]
-mod counting;
-use counting::allocations;
+use crate::counting::allocations;
 
 /// Charged particle in a magnetic field with a quartic potential: not separable (L_qv ≠ 0),
 /// so the general gradient path is exercised.

@@ -6,8 +6,7 @@ use galerkin_vi::adaptive::{AdaptiveOptions, DEFAULT_LADDER, ErrorControl, integ
 use galerkin_vi::geometry::relative_symplecticity_defect;
 use galerkin_vi::prelude::*;
 
-#[path = "common/adaptive.rs"]
-mod adaptive_common;
+use crate::common::adaptive as adaptive_common;
 use adaptive_common::*;
 
 #[test]

@@ -9,8 +9,7 @@ use galerkin_vi::prelude::*;
 use galerkin_vi::systems::ExactSolution;
 use galerkin_vi_lab::error::LabError;
 
-#[path = "common/adaptive.rs"]
-mod adaptive_common;
+use crate::common::adaptive as adaptive_common;
 use adaptive_common::*;
 
 fn max_error_kepler(run_q: &Trajectory, exact: &galerkin_vi::systems::ExactSolution) -> f64 {

@@ -5,11 +5,8 @@
 
 use galerkin_vi::prelude::*;
 
-#[path = "../../tests/common/counting.rs"]
-mod counting;
-use counting::allocations;
-#[path = "common/systems.rs"]
-mod systems;
+use crate::common::counting::allocations;
+use crate::common::systems;
 use systems::Magnetic;
 
 fn allocations_in_steps<L: Lagrangian>(

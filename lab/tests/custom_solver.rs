@@ -12,8 +12,7 @@ use galerkin_vi_lab::scene::Scene;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 
-#[path = "common/distance.rs"]
-mod distance;
+use crate::common::distance;
 use distance::final_state_distance as distance;
 
 fn fail(eq: &mut dyn StageEquations, reason: &str) -> StepFailure {

@@ -250,12 +250,9 @@ fn the_command_writes_csv_and_summary_and_reports_throughput() {
     }
 }
 
-#[path = "../../tests/common/counting.rs"]
-mod counting;
-
 #[test]
 fn the_member_step_loop_allocates_nothing() {
-    use counting::allocations;
+    use crate::common::counting::allocations;
     use galerkin_vi::systems::System;
     use galerkin_vi_lab::ensemble::run_member;
     let s = scene("kepler", 8, 0.5, 1);

@@ -1,11 +1,10 @@
 //! Every error variant of the core is reached through the API and through the CLI: typed
 //! errors, non-zero exit codes, a message on stderr, never a panic.
 
+use crate::common::cli;
+use cli::gvi;
 use galerkin_vi::prelude::*;
 use galerkin_vi_lab::scene::Scene;
-#[path = "common/cli.rs"]
-mod cli;
-use cli::gvi;
 
 fn kepler() -> Kepler {
     Kepler::new(1.0).unwrap()

@@ -3,14 +3,13 @@
 //! Rust, the separable form recognised, the built-in scenes through the library, and every
 //! input error through the CLI (typed, non-zero exit, a message, never a panic).
 
+use crate::common::cli;
+use cli::gvi;
 use galerkin_vi::prelude::*;
 use galerkin_vi::systems::ExpressionLagrangian;
 use galerkin_vi::systems::expression::ExpressionError;
 use galerkin_vi_lab::run::{RunOptions, run_scene};
 use galerkin_vi_lab::scene::Scene;
-#[path = "common/cli.rs"]
-mod cli;
-use cli::gvi;
 
 /// The exact motion of the `magnetic` scene, derived here independently of the scene's
 /// `exact` strings: ẍ = B ẏ, ÿ = −B ẋ from L = |q̇|²/2 + (B/2)(x ẏ − y ẋ); from q = (1.5, 0.2)

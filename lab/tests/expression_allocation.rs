@@ -6,9 +6,7 @@
 use galerkin_vi::prelude::*;
 use galerkin_vi_lab::scene::{Scene, SystemSpec};
 
-#[path = "../../tests/common/counting.rs"]
-mod counting;
-use counting::allocations;
+use crate::common::counting::allocations;
 
 #[test]
 fn expression_step_loops_do_not_allocate() {

@@ -3,6 +3,8 @@
 //! the fastest table and the chart; typed errors naming the file and line, with nothing
 //! written; and the up-front refusal of absurd horizons.
 
+use crate::common::cli;
+use cli::gvi;
 use galerkin_vi_lab::error::LabError;
 use galerkin_vi_lab::scene::Scene;
 use galerkin_vi_lab::studies::work_precision::{
@@ -10,9 +12,6 @@ use galerkin_vi_lab::studies::work_precision::{
     reference_csv, work_precision,
 };
 use std::path::{Path, PathBuf};
-#[path = "common/cli.rs"]
-mod cli;
-use cli::gvi;
 
 /// Real REBOUND rows (Kepler, T = 200), committed so that CI needs no Python.
 fn sample() -> PathBuf {

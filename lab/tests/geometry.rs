@@ -16,8 +16,7 @@ use galerkin_vi::prelude::*;
 use nalgebra::DMatrix;
 use proptest::prelude::*;
 
-#[path = "common/systems.rs"]
-mod systems;
+use crate::common::systems;
 use systems::Coupled;
 
 /// Charged particle in a uniform magnetic field B = 1 with an anisotropic potential

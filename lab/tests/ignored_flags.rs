@@ -2,8 +2,7 @@
 //! clear error naming it, before any work. Each refusal has a negative control: the flag in
 //! the setting where it is used is accepted.
 
-#[path = "common/robust.rs"]
-mod robust;
+use crate::common::robust;
 use robust::*;
 
 fn ok(args: &[&str]) {

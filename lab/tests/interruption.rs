@@ -3,8 +3,7 @@
 //! and the message says where), and the temporary files of runs that were killed are cleaned
 //! up the next time the same output is written.
 
-#[path = "common/robust.rs"]
-mod robust;
+use crate::common::robust;
 use robust::*;
 use std::process::{Command, Stdio};
 

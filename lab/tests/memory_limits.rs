@@ -4,8 +4,7 @@
 //! immediate (the sizes refused would take minutes to compute), and each has a negative
 //! control: the same command at a small size is not refused.
 
-#[path = "common/robust.rs"]
-mod robust;
+use crate::common::robust;
 use robust::*;
 use std::time::{Duration, Instant};
 

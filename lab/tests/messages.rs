@@ -4,8 +4,7 @@
 //! on the Galerkin curves (not only at step ends), and over-long output names are refused
 //! before the work by every command that writes a file.
 
-#[path = "common/robust.rs"]
-mod robust;
+use crate::common::robust;
 
 use robust::{fails_with, gvi, s, scratch, stderr};
 use std::path::Path;

@@ -5,8 +5,7 @@
 //! the atomic writer's temporary name, all before any work. Each refusal has a negative
 //! control: the same command with a harmless path succeeds, so the refusal is not vacuous.
 
-#[path = "common/robust.rs"]
-mod robust;
+use crate::common::robust;
 use robust::*;
 use std::path::Path;
 use std::process::{Command, Output};

@@ -3,8 +3,7 @@
 //! whole-trajectory runs that would need absurd memory are refused with the estimate. The rest
 //! of the robustness cases (typed failures, warnings, messages) are in `robustness.rs`.
 
-#[path = "common/robust.rs"]
-mod robust;
+use crate::common::robust;
 use robust::*;
 use std::process::Command;
 

@@ -4,8 +4,7 @@
 //! refuse invalid input, commands refuse flags they would ignore, and messages name the
 //! field and the value.
 
-#[path = "common/robust.rs"]
-mod robust;
+use crate::common::robust;
 use robust::*;
 use std::path::{Path, PathBuf};
 

@@ -2,8 +2,7 @@
 //! now an error or a visible NaN, with a negative control where the test could pass
 //! vacuously.
 
-#[path = "common/robust.rs"]
-mod robust;
+use crate::common::robust;
 use robust::*;
 
 #[test]

@@ -13,14 +13,10 @@ use galerkin_vi::prelude::*;
 use galerkin_vi_lab::scene::{InitialState, Scene};
 use nalgebra::DMatrix;
 
-#[path = "../../tests/common/counting.rs"]
-mod counting;
-use counting::allocations;
-#[path = "common/distance.rs"]
-mod distance;
+use crate::common::counting::allocations;
+use crate::common::distance;
+use crate::common::systems;
 use distance::final_state_distance;
-#[path = "common/systems.rs"]
-mod systems;
 use systems::{Coupled, Magnetic};
 
 /// The structured solvers and `Auto`, each compared with `Exact`.

@@ -4,8 +4,7 @@
 //! and nothing panics. Scene values get the range checks their flags get, and the message
 //! names the scene key, not the flag.
 
-#[path = "common/robust.rs"]
-mod robust;
+use crate::common::robust;
 use robust::*;
 use std::process::{Command, Output, Stdio};
 

@@ -1,59 +1,12 @@
 //! `gvi run` without a chart, JSON or `--tol` streams its CSV: peak heap memory is flat in the
-//! number of steps. Measured with a counting global allocator (not a timer), against the
-//! in-memory run as the negative control, whose peak grows linearly with the steps.
+//! number of steps. Measured with the counting global allocator (the test thread's own peak
+//! heap bytes, not a timer), against the in-memory run as the negative control, whose peak
+//! grows linearly with the steps.
 
+use crate::common::counting::peak_during;
 use galerkin_vi_lab::run::stream::stream_scene;
 use galerkin_vi_lab::run::{RunOptions, run_scene};
 use galerkin_vi_lab::scene::Scene;
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::Mutex;
-use std::sync::atomic::{AtomicUsize, Ordering};
-
-/// Live and peak heap bytes.
-struct Counting;
-static LIVE: AtomicUsize = AtomicUsize::new(0);
-static PEAK: AtomicUsize = AtomicUsize::new(0);
-/// Tests in this binary run one at a time, so that each peak is its own.
-static SERIAL: Mutex<()> = Mutex::new(());
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let p = unsafe { System.alloc(layout) };
-        if !p.is_null() {
-            let live = LIVE.fetch_add(layout.size(), Ordering::Relaxed) + layout.size();
-            PEAK.fetch_max(live, Ordering::Relaxed);
-        }
-        p
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) };
-        LIVE.fetch_sub(layout.size(), Ordering::Relaxed);
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        let p = unsafe { System.realloc(ptr, layout, new_size) };
-        if !p.is_null() {
-            if new_size > layout.size() {
-                let live = LIVE.fetch_add(new_size - layout.size(), Ordering::Relaxed) + new_size
-                    - layout.size();
-                PEAK.fetch_max(live, Ordering::Relaxed);
-            } else {
-                LIVE.fetch_sub(layout.size() - new_size, Ordering::Relaxed);
-            }
-        }
-        p
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
-
-/// Peak heap growth (bytes above the level at the start) while `f` runs.
-fn peak_during(f: impl FnOnce()) -> usize {
-    let base = LIVE.load(Ordering::Relaxed);
-    PEAK.store(base, Ordering::Relaxed);
-    f();
-    PEAK.load(Ordering::Relaxed) - base
-}
 
 fn harmonic(steps: usize) -> Scene {
     let mut scene = Scene::load("harmonic").unwrap();
@@ -66,7 +19,6 @@ fn harmonic(steps: usize) -> Scene {
 /// Streamed into a sink: peak memory for 10^4 and 10^6 steps.
 #[test]
 fn streamed_run_memory_is_flat_in_the_number_of_steps() {
-    let _guard = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let mut peaks = Vec::new();
     for steps in [10_000, 1_000_000] {
         let scene = harmonic(steps);
@@ -93,7 +45,6 @@ fn streamed_run_memory_is_flat_in_the_number_of_steps() {
 /// Negative control: the in-memory run holds the whole trajectory.
 #[test]
 fn in_memory_run_memory_grows_with_the_steps() {
-    let _guard = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let mut peaks = Vec::new();
     for steps in [1_000, 10_000] {
         let scene = harmonic(steps);
@@ -126,7 +77,6 @@ impl std::io::Write for CountingSink<'_> {
 /// The streamed table and summary are the in-memory run's, byte for byte and figure for figure.
 #[test]
 fn streamed_and_in_memory_runs_agree() {
-    let _guard = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     for name in ["kepler", "harmonic", "two-body"] {
         let mut scene = Scene::load(name).unwrap();
         scene.method.steps = 20;

@@ -1,0 +1,14 @@
+//! The library's integration tests, as modules of one test binary: one link instead of one
+//! per file, which is most of a fresh `cargo test`'s build time. Run one file's tests with
+//! `cargo test --test integration <module>::` (for example `extension::`).
+
+#[path = "common/counting.rs"]
+mod counting;
+
+mod counts;
+mod dependencies;
+mod expression_proptest;
+mod extension;
+mod paper_objects;
+mod roundoff;
+mod velocity_form;
