@@ -388,7 +388,7 @@ def self_test(runner: Runner) -> list:
     corruptions = [
         ("a digit of the main command's block", "README.md", "max position error at step ends: 4.",
          "max position error at step ends: 5."),
-        ("the README's fitted rate", "README.md", "one-step map error O(0.", "one-step map error O(0.9"),
+        ("the README's fitted rate", "README.md", "map error\n  O(0.", "map error\n  O(0.9"),
         ("the quickstart", "README.md", "spectral(16, 1.0)", "spectral(17, 1.0)"),
         ("a README command", "README.md", "gvi check kepler --n 12", "gvi check kepler --n 12 --nonsense"),
         ("a guide number", "docs/guide/studies.md", "Galerkin curves: error ≈ 1.", "Galerkin curves: error ≈ 2."),

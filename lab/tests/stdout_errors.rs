@@ -128,7 +128,11 @@ fn a_closed_pipe_stops_the_tool_quietly() {
 fn run_prints_a_summary_not_the_table_to_a_terminal() {
     let gvi = env!("CARGO_BIN_EXE_gvi");
     let tty = Command::new("script")
-        .args(["-qec", &format!("'{gvi}' run kepler --steps 50"), "/dev/null"])
+        .args([
+            "-qec",
+            &format!("'{gvi}' run kepler --steps 50"),
+            "/dev/null",
+        ])
         .stdin(Stdio::null())
         .output();
     match tty {
@@ -136,7 +140,10 @@ fn run_prints_a_summary_not_the_table_to_a_terminal() {
             // `script` merges the child's stdout and stderr into its own stdout.
             let text = stdout(&o);
             assert!(text.contains("max position error"), "summary: {text}");
-            assert!(text.contains("table not printed: stdout is a terminal"), "{text}");
+            assert!(
+                text.contains("table not printed: stdout is a terminal"),
+                "{text}"
+            );
             assert!(!text.contains("step,t,"), "no CSV to a terminal: {text}");
             assert!(text.lines().count() < 12, "a short summary: {text}");
         }
