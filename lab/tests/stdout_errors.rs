@@ -136,7 +136,8 @@ fn run_prints_a_summary_not_the_table_to_a_terminal() {
         .stdin(Stdio::null())
         .output();
     match tty {
-        Ok(o) if o.status.success() => {
+        Ok(o) => {
+            assert!(o.status.success(), "gvi under `script`: {}", stdout(&o));
             // `script` merges the child's stdout and stderr into its own stdout.
             let text = stdout(&o);
             assert!(text.contains("max position error"), "summary: {text}");
@@ -147,7 +148,7 @@ fn run_prints_a_summary_not_the_table_to_a_terminal() {
             assert!(!text.contains("step,t,"), "no CSV to a terminal: {text}");
             assert!(text.lines().count() < 12, "a short summary: {text}");
         }
-        other => eprintln!("skipped: `script` cannot give gvi a terminal here ({other:?})"),
+        Err(e) => eprintln!("skipped: no `script` (util-linux) to give gvi a terminal: {e}"),
     }
     let piped = robust::gvi(&["run", "kepler", "--steps", "50"]);
     assert!(piped.status.success(), "{}", stderr(&piped));
