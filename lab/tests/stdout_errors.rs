@@ -120,6 +120,42 @@ fn a_closed_pipe_stops_the_tool_quietly() {
     assert!(stderr(&o).is_empty(), "quiet: {}", stderr(&o));
 }
 
+/// `gvi run` without --output: to a terminal, the summary and a hint, not hundreds of rows
+/// (stdout made a terminal by `script`, util-linux; skipped where it is missing); to a pipe,
+/// the CSV as before (the negative control).
+#[test]
+fn run_prints_a_summary_not_the_table_to_a_terminal() {
+    let gvi = env!("CARGO_BIN_EXE_gvi");
+    let tty = Command::new("script")
+        .args([
+            "-qec",
+            &format!("'{gvi}' run kepler --steps 50"),
+            "/dev/null",
+        ])
+        .stdin(Stdio::null())
+        .output();
+    match tty {
+        Ok(o) => {
+            assert!(o.status.success(), "gvi under `script`: {}", stdout(&o));
+            // `script` merges the child's stdout and stderr into its own stdout.
+            let text = stdout(&o);
+            assert!(text.contains("max position error"), "summary: {text}");
+            assert!(
+                text.contains("table not printed: stdout is a terminal"),
+                "{text}"
+            );
+            assert!(!text.contains("step,t,"), "no CSV to a terminal: {text}");
+            assert!(text.lines().count() < 12, "a short summary: {text}");
+        }
+        Err(e) => eprintln!("skipped: no `script` (util-linux) to give gvi a terminal: {e}"),
+    }
+    let piped = robust::gvi(&["run", "kepler", "--steps", "50"]);
+    assert!(piped.status.success(), "{}", stderr(&piped));
+    assert!(stdout(&piped).starts_with("step,t,"), "CSV to a pipe");
+    assert_eq!(stdout(&piped).lines().count(), 52, "header and 51 rows");
+    assert!(!stderr(&piped).contains("table not printed"));
+}
+
 const FIGURE_EIGHT: &str = include_str!("../../scenes/figure-eight.toml");
 
 #[test]

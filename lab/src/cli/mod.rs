@@ -49,7 +49,8 @@ enum Command {
     /// Every basis × quadrature over a range of n at fixed h: error and kinetic condition
     /// number against n (CSV, JSON, SVG in --out).
     CompareBases(Box<study::CompareBasesArgs>),
-    /// Regenerate the paper's experiments (charts and summary.md in --out).
+    /// Regenerate the paper's experiments (charts and summary.md in --out; about 2 s on 2
+    /// cores).
     Reproduce(study::ReproduceArgs),
     /// Max position error against CPU time for the Galerkin method and classical peers
     /// (Verlet, RK4, Gauss, compositions, DOP853), with the Pareto front (CSV, JSON, SVG).

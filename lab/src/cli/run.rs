@@ -8,6 +8,7 @@ use crate::run::stream::stream_scene;
 use crate::run::{RunOptions, RunSummary, run_scene};
 use crate::scene::{BuiltScene, BuiltSystem, Overrides, Scene};
 use clap::{Args, ValueEnum};
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -83,7 +84,8 @@ pub struct RunArgs {
     /// Output format.
     #[arg(long, value_enum, default_value_t = Format::Csv)]
     pub format: Format,
-    /// Output file (default: stdout).
+    /// Output file (default: stdout when it is a pipe or a file; to a terminal only the
+    /// summary is printed, with a hint).
     #[arg(long, short)]
     pub output: Option<PathBuf>,
     /// Also write an SVG chart of the run (orbit for 2-D systems, q(t) otherwise; N-body: one
@@ -245,6 +247,9 @@ pub fn run(args: RunArgs) -> Result<(), LabError> {
         }
     }
     plan.scene(&args.scene.scene).check()?;
+    // Without --output, a table bound for a terminal (hundreds of rows, up to hundreds of
+    // columns) is not printed: the summary on stderr and a hint take its place.
+    let to_terminal = args.output.is_none() && std::io::stdout().is_terminal();
 
     // Rigid bodies run on SO(3) by their own integrator (galerkin_vi::lie), in memory.
     let on_so3 = matches!(scene.system, BuiltSystem::RigidBody(_));
@@ -263,6 +268,7 @@ pub fn run(args: RunArgs) -> Result<(), LabError> {
                 file.commit()?;
                 outcome
             }
+            None if to_terminal => stream_scene(&scene, samples, &mut std::io::sink())?,
             None => {
                 let mut out = std::io::BufWriter::new(std::io::stdout().lock());
                 stream_scene(&scene, samples, &mut out)?
@@ -271,10 +277,13 @@ pub fn run(args: RunArgs) -> Result<(), LabError> {
         (outcome.summary, outcome.failure)
     } else {
         refuse_if_too_big(&scene, &args)?;
-        run_in_memory(&scene, &args)?
+        run_in_memory(&scene, &args, to_terminal)?
     };
     summary.command_seconds = Some(started.elapsed().as_secs_f64());
     eprintln!("{summary}");
+    if to_terminal {
+        eprintln!("{TERMINAL_HINT}");
+    }
     if let Some(LabError::Interrupted { step, .. }) = failure {
         let kept = match &args.output {
             Some(path) => format!(
@@ -282,6 +291,7 @@ pub fn run(args: RunArgs) -> Result<(), LabError> {
                 step.saturating_sub(1),
                 path.display()
             ),
+            None if to_terminal => "no table was written (stdout is a terminal)".to_string(),
             None => format!(
                 "the rows of steps 0…{} went to stdout",
                 step.saturating_sub(1)
@@ -313,20 +323,27 @@ fn refuse_if_too_big(scene: &BuiltScene, args: &RunArgs) -> Result<(), LabError>
     Ok(())
 }
 
+/// Printed after the summary when the table was not printed because stdout is a terminal.
+pub const TERMINAL_HINT: &str = "table not printed: stdout is a terminal; write it with \
+     --output FILE (.csv, or .json with --format json) or pipe it (gvi run ... | less)";
+
 fn run_in_memory(
     scene: &BuiltScene,
     args: &RunArgs,
+    to_terminal: bool,
 ) -> Result<(RunSummary, Option<LabError>), LabError> {
     let options = RunOptions {
         chart: args.plot.is_some(),
         ..RunOptions::default()
     };
     let result = run_scene(scene, options)?;
-    let text = match args.format {
-        Format::Csv => result.to_csv()?,
-        Format::Json => result.to_json()?,
-    };
-    write_output(args.output.as_deref(), &text)?;
+    if !to_terminal {
+        let text = match args.format {
+            Format::Csv => result.to_csv()?,
+            Format::Json => result.to_json()?,
+        };
+        write_output(args.output.as_deref(), &text)?;
+    }
     let plot = |chart: &crate::plot::Chart, path: &Path, what: &str| {
         chart
             .save_svg(path)

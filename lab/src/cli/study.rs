@@ -80,7 +80,8 @@ pub struct ReproduceArgs {
     /// Output directory (default ./out/reproduce).
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// A reduced version (seconds instead of minutes), for smoke tests.
+    /// A reduced version (fewer values of n and h, about a quarter of the time), for smoke
+    /// tests.
     #[arg(long)]
     pub quick: bool,
 }
