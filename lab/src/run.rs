@@ -35,7 +35,9 @@ pub use monitor::{Encounter, SANITY_THRESHOLD};
 pub struct RunResult {
     /// The scene, with command-line overrides applied.
     pub scene: Scene,
-    /// Column names: `step,t,q0,…,p0,…` then invariants, then `position_error` if known.
+    /// Column names: `step,t`, the coordinates and momenta ([`crate::names::state_columns`]:
+    /// `q0,…,p0,…`, or an expression Lagrangian's own `theta,…,p_theta,…`), then invariants,
+    /// then `position_error` if known.
     pub columns: Vec<String>,
     /// One row per step end.
     pub rows: Vec<Vec<f64>>,
@@ -291,8 +293,7 @@ fn run_system(
 
     let names = system.invariant_names();
     let mut columns = vec!["step".to_string(), "t".to_string()];
-    columns.extend((0..d).map(|i| format!("q{i}")));
-    columns.extend((0..d).map(|i| format!("p{i}")));
+    columns.extend(crate::names::state_columns(system));
     columns.extend(names.iter().map(|s| s.to_string()));
     if exact.is_some() {
         columns.push("position_error".into());
@@ -440,7 +441,12 @@ fn run_system(
         match system.body_names() {
             Some(names) => {
                 let (all, inner) =
-                    crate::nbody_report::orbit_charts(&names, &scene.name, &trajectory)?;
+                    crate::nbody_report::orbit_charts(
+                        &names,
+                        &scene.name,
+                        scene.units(),
+                        &trajectory,
+                    )?;
                 (Some(all), inner)
             }
             None => (
@@ -538,7 +544,7 @@ fn run_chart<S: System>(
     exact: Option<&galerkin_vi::systems::ExactSolution>,
 ) -> Result<Chart> {
     let samples = chart_times(traj, 32);
-    let title = format!("{} — {}", scene.name, scene.description);
+    let title = scene.title();
     let two_d = system.dim() >= 2;
     let point = |q: &[f64], t: f64| if two_d { (q[0], q[1]) } else { (t, q[0]) };
     let mut curve = Vec::with_capacity(samples.len());
@@ -549,10 +555,14 @@ fn run_chart<S: System>(
         .into_iter()
         .map(|k| point(&traj.q[k], traj.time(k)))
         .collect();
+    let axes = crate::names::axis_names(system);
+    let axis = |i: usize| axes.get(i).cloned().unwrap_or_default();
     let mut chart = if two_d {
-        Chart::new(title, "q0", "q1").equal_aspect()
+        Chart::new(title, axis(0), axis(1))
+            .equal_aspect()
+            .legend_clear_of_data()
     } else {
-        Chart::new(title, "t", "q")
+        Chart::new(title, "t", axis(0)).legend_clear_of_data()
     };
     if let Some(ex) = exact {
         let pts: Vec<(f64, f64)> = samples.iter().map(|&t| point(&ex.position(t), t)).collect();
@@ -565,7 +575,8 @@ fn run_chart<S: System>(
 
 impl RunResult {
     /// The table as CSV text (header line, then one row per step end): `step` and `n` as
-    /// integers, the other columns in `{:e}` form, NaN as an empty cell.
+    /// integers, the other columns as [`crate::table::number`] writes them (shortest
+    /// round-trip digits: `0.4`, `200`, `1e-300`; read back bit for bit), NaN as an empty cell.
     pub fn to_csv(&self) -> Result<String> {
         let integer: Vec<bool> = self
             .columns
@@ -573,12 +584,10 @@ impl RunResult {
             .map(|c| matches!(c.as_str(), "step" | "n"))
             .collect();
         let cell = |(x, &integer): (&f64, &bool)| {
-            if x.is_nan() {
-                String::new()
-            } else if integer {
+            if integer && !x.is_nan() {
                 format!("{}", *x as u64)
             } else {
-                format!("{x:e}")
+                crate::table::number(*x)
             }
         };
         crate::table::csv_records(

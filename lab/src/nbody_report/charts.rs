@@ -1,7 +1,9 @@
 //! Orbit charts of N-body runs: one series per body, xy projection of the Galerkin curves.
 
 use crate::error::Result;
+use crate::names::unit_suffix;
 use crate::plot::{Chart, Series};
+use crate::scene::Units;
 use galerkin_vi::trajectory::Trajectory;
 
 /// Samples per step along the Galerkin curves in orbit charts (dense enough to draw Mercury's
@@ -14,10 +16,12 @@ pub const ORBIT_SAMPLES_PER_STEP: usize = 64;
 /// of the largest orbit's extent, a zoomed chart of those inner bodies.
 ///
 /// `names` gives the bodies in the trajectory's (body-major) order; the body dimension is
-/// `traj.dim / names.len()`.
+/// `traj.dim / names.len()`. The axes are labelled `x` and `y` with the scene's length unit
+/// (`x (AU)`), or `(length units)` when the scene gives none.
 pub fn orbit_charts(
     names: &[String],
     title: &str,
+    units: &Units,
     traj: &Trajectory,
 ) -> Result<(Chart, Option<Chart>)> {
     let nb = names.len().max(1);
@@ -41,8 +45,11 @@ pub fn orbit_charts(
                 .collect()
         })
         .collect();
+    let length = unit_suffix(units.length.as_deref(), "length");
     let build = |bodies: &[usize], title: String| {
-        let mut chart = Chart::new(title, "x", "y").equal_aspect().size(900, 900);
+        let mut chart = Chart::new(title, format!("x{length}"), format!("y{length}"))
+            .equal_aspect()
+            .size(900, 900);
         for &b in bodies {
             chart.push(Series::line(names[b].clone(), curves[b].clone()).with_color(b));
             chart.push(Series::markers("", ends[b].clone()).with_color(b));

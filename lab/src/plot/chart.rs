@@ -150,6 +150,10 @@ pub struct Chart {
     pub width: u32,
     /// Image height in pixels (clamped to `240..=16384`).
     pub height: u32,
+    /// Keep the legend off the data: when every corner of the plot holds data, raise the
+    /// top of the y range until the legend fits above the data (orbit charts, whose curves
+    /// reach every corner). Off by default: the legend then goes to the least covered corner.
+    pub keep_legend_clear: bool,
 }
 
 /// Palette index, series, and its valid points in plot space split into
@@ -173,7 +177,13 @@ impl Chart {
             equal_aspect: false,
             width: 800,
             height: 600,
+            keep_legend_clear: false,
         }
+    }
+    /// Keeps the legend off the data ([`Chart::keep_legend_clear`]).
+    pub fn legend_clear_of_data(mut self) -> Self {
+        self.keep_legend_clear = true;
+        self
     }
     /// Uses a base-10 logarithmic y axis.
     pub fn log_y(mut self) -> Self {
@@ -264,7 +274,42 @@ impl Chart {
             x = valid_range(x).ok_or_else(|| bad("equal-aspect x range overflows"))?;
             y = valid_range(y).ok_or_else(|| bad("equal-aspect y range overflows"))?;
         }
+        if self.keep_legend_clear {
+            let (_, box_h) = self.legend_box(data, size);
+            let covered = self.corner_coverage(data, size, x, y);
+            if box_h < 0.5 && covered.iter().all(|c| c.1 > 0) {
+                // The data's top at 1 − box_h − 3 % of the plot height: the band above is free.
+                let top = (yr.1 - y.0) / (1.0 - box_h - 0.03);
+                y = valid_range((y.0, y.0 + top)).ok_or_else(|| bad("y range overflows"))?;
+                if self.equal_aspect {
+                    let (pw, ph) = plot_area_size(size, &self.title);
+                    let (ux, uy) = ((x.1 - x.0) / f64::from(pw), (y.1 - y.0) / f64::from(ph));
+                    if ux < uy {
+                        x = widen(x, uy * f64::from(pw));
+                    } else {
+                        y = widen(y, ux * f64::from(ph));
+                    }
+                    x = valid_range(x).ok_or_else(|| bad("equal-aspect x range overflows"))?;
+                    y = valid_range(y).ok_or_else(|| bad("equal-aspect y range overflows"))?;
+                }
+            }
+        }
         Ok((size, Axis::new(x, xlog, 10), Axis::new(y, ylog, 8)))
+    }
+
+    /// The legend box's width and height as fractions of the plot area, estimated from the
+    /// labels (16 px font).
+    fn legend_box(&self, data: &[Prepared], size: (u32, u32)) -> (f64, f64) {
+        let labels: Vec<&str> = data
+            .iter()
+            .map(|d| d.1.label.as_str())
+            .filter(|l| !l.is_empty())
+            .collect();
+        let (pw, ph) = plot_area_size(size, &self.title);
+        let chars = labels.iter().map(|l| l.chars().count()).max().unwrap_or(0);
+        let box_w = ((chars as f64 * 8.5 + 45.0) / f64::from(pw)).min(1.0);
+        let box_h = ((labels.len() as f64 * 19.0 + 12.0) / f64::from(ph)).min(1.0);
+        (box_w, box_h)
     }
 
     /// The corner of the plot whose legend box would cover the least data: the box's size
@@ -278,15 +323,23 @@ impl Chart {
         x: (f64, f64),
         y: (f64, f64),
     ) -> SeriesLabelPosition {
-        let labels: Vec<&str> = data
-            .iter()
-            .map(|d| d.1.label.as_str())
-            .filter(|l| !l.is_empty())
-            .collect();
-        let (pw, ph) = plot_area_size(size, &self.title);
-        let chars = labels.iter().map(|l| l.chars().count()).max().unwrap_or(0);
-        let box_w = ((chars as f64 * 8.5 + 45.0) / f64::from(pw)).min(1.0);
-        let box_h = ((labels.len() as f64 * 19.0 + 12.0) / f64::from(ph)).min(1.0);
+        // The first of the least covered (min_by_key keeps the first of equal keys).
+        self.corner_coverage(data, size, x, y)
+            .into_iter()
+            .min_by_key(|c| c.1)
+            .map_or(SeriesLabelPosition::UpperRight, |c| c.0)
+    }
+
+    /// How many data samples the legend box would cover in each corner (upper right, upper
+    /// left, lower right, lower left), for plot ranges `x` and `y`.
+    fn corner_coverage(
+        &self,
+        data: &[Prepared],
+        size: (u32, u32),
+        x: (f64, f64),
+        y: (f64, f64),
+    ) -> [(SeriesLabelPosition, usize); 4] {
+        let (box_w, box_h) = self.legend_box(data, size);
         // Data in fractions of the plot area, (0, 0) at the lower left.
         let frac = |(px, py): (f64, f64)| ((px - x.0) / (x.1 - x.0), (py - y.0) / (y.1 - y.0));
         let mut samples = Vec::new();
@@ -312,17 +365,12 @@ impl Chart {
             };
             samples.iter().filter(|p| inside(p)).count()
         };
-        let corners = [
+        [
             (SeriesLabelPosition::UpperRight, covered(false, true)),
             (SeriesLabelPosition::UpperLeft, covered(true, true)),
             (SeriesLabelPosition::LowerRight, covered(false, false)),
             (SeriesLabelPosition::LowerLeft, covered(true, false)),
-        ];
-        // The first of the least covered (min_by_key keeps the first of equal keys).
-        corners
-            .into_iter()
-            .min_by_key(|c| c.1)
-            .map_or(SeriesLabelPosition::UpperRight, |c| c.0)
+        ]
     }
 
     /// Draws into `out`; returns the plotting-area size used by plotters.
@@ -443,6 +491,58 @@ mod tests {
         let lower_left: Vec<(f64, f64)> = (0..=50).map(|i| (f64::from(i) / 100.0, 0.0)).collect();
         let svg = chart(lower_left);
         assert!(text_x(&svg, "anchor") > 400.0, "{}", text_x(&svg, "anchor"));
+    }
+
+    /// Drawn data points (polyline vertices and circle centres) inside the legend box (the
+    /// rectangle with the legend's translucent background), right of the legend's samples.
+    fn data_under_legend(svg: &str) -> usize {
+        let attr = |tag: &str, name: &str| -> f64 {
+            let at = tag.find(&format!(" {name}=\"")).unwrap() + name.len() + 3;
+            tag[at..at + tag[at..].find('"').unwrap()].parse().unwrap()
+        };
+        let rect = svg
+            .split("<rect")
+            .find(|t| t.contains("opacity=\"0.85\""))
+            .unwrap();
+        let (x0, y0) = (attr(rect, "x"), attr(rect, "y"));
+        let (x1, y1) = (x0 + attr(rect, "width"), y0 + attr(rect, "height"));
+        let mut points = Vec::new();
+        for line in svg.split("<polyline").skip(1) {
+            let at = line.find("points=\"").unwrap() + 8;
+            let text = &line[at..at + line[at..].find('"').unwrap()];
+            for p in text.split_whitespace() {
+                let (a, b) = p.split_once(',').unwrap();
+                points.push((a.parse::<f64>().unwrap(), b.parse::<f64>().unwrap()));
+            }
+        }
+        for c in svg.split("<circle").skip(1) {
+            points.push((attr(c, "cx"), attr(c, "cy")));
+        }
+        // The legend's own samples (lines, dashes, markers) are in its left 36 px.
+        points
+            .iter()
+            .filter(|(px, py)| (x0 + 36.0..=x1).contains(px) && (y0..=y1).contains(py))
+            .count()
+    }
+
+    /// An orbit that fills the equal-aspect plot reaches every corner, so the least covered
+    /// corner still hides part of it; `legend_clear_of_data` raises the y range until the
+    /// legend sits above the orbit. Negative control: the same chart without it.
+    #[test]
+    fn legend_clear_of_data_leaves_the_orbit_visible() {
+        let orbit: Vec<(f64, f64)> = (0..=400)
+            .map(|i| f64::from(i) * std::f64::consts::TAU / 400.0)
+            .map(|t| (t.cos() - 0.6, 0.8 * t.sin()))
+            .collect();
+        let chart = Chart::new("kepler — an orbit", "x", "y")
+            .equal_aspect()
+            .with_series(Series::dashed("exact solution", orbit.clone()))
+            .with_series(Series::line("Galerkin curves", orbit.clone()))
+            .with_series(Series::markers("step ends (q_k)", orbit[..40].to_vec()));
+        let covered = data_under_legend(&chart.to_svg_string().unwrap());
+        assert!(covered > 0, "negative control: the legend covers the orbit");
+        let clear = chart.legend_clear_of_data().to_svg_string().unwrap();
+        assert_eq!(data_under_legend(&clear), 0);
     }
 
     #[test]
