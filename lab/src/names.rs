@@ -21,7 +21,7 @@
 //! ```
 
 use galerkin_vi::Lagrangian;
-use galerkin_vi::systems::{AnySystem, System};
+use galerkin_vi::systems::AnySystem;
 
 /// The coordinate names of a system: an expression Lagrangian's own, `q0, q1, …` otherwise.
 pub fn coordinate_names(system: &AnySystem) -> Vec<String> {

@@ -276,7 +276,6 @@ fn run_system(
     let init = &scene.initial;
     // The method's own parameter errors (h) come before the time span's, which depends on h.
     m.validate()?;
-    let d = system.dim();
     let exact = system.exact_solution(init.t0, &init.q, &init.p)?;
     let start = Instant::now();
     monitor::check_time_span(init.t0, m.h, m.steps)?;
@@ -537,8 +536,8 @@ pub fn chart_indices(states: usize) -> Vec<usize> {
 
 /// Orbit (2-D) or q(t) (1-D) chart: Galerkin curves, step ends and, if known, the exact
 /// solution.
-fn run_chart<S: System>(
-    system: &S,
+fn run_chart(
+    system: &AnySystem,
     scene: &BuiltScene,
     traj: &Trajectory,
     exact: Option<&galerkin_vi::systems::ExactSolution>,

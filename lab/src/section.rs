@@ -5,7 +5,6 @@
 use crate::error::{LabError, Result};
 use crate::plot::{Chart, Series};
 use crate::scene::BuiltScene;
-use galerkin_vi::Lagrangian;
 use galerkin_vi::events::{
     Direction, Event, EventFunction, EventOptions, ExpressionEvent, integrate_with_events,
 };

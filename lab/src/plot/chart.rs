@@ -493,21 +493,22 @@ mod tests {
         assert!(text_x(&svg, "anchor") > 400.0, "{}", text_x(&svg, "anchor"));
     }
 
-    /// Drawn data points (polyline vertices and circle centres) inside the legend box (the
-    /// rectangle with the legend's translucent background), right of the legend's samples.
+    /// Drawn data points (polyline vertices and circle centres, drawn before the legend)
+    /// inside the legend box (the rectangle with the legend's translucent background).
     fn data_under_legend(svg: &str) -> usize {
         let attr = |tag: &str, name: &str| -> f64 {
             let at = tag.find(&format!(" {name}=\"")).unwrap() + name.len() + 3;
             tag[at..at + tag[at..].find('"').unwrap()].parse().unwrap()
         };
-        let rect = svg
-            .split("<rect")
-            .find(|t| t.contains("opacity=\"0.85\""))
-            .unwrap();
+        let legend = svg.find("opacity=\"0.85\"").unwrap();
+        let start = svg[..legend].rfind("<rect").unwrap();
+        let rect = &svg[start..legend];
         let (x0, y0) = (attr(rect, "x"), attr(rect, "y"));
         let (x1, y1) = (x0 + attr(rect, "width"), y0 + attr(rect, "height"));
+        // The data are drawn before the legend box, the legend's own samples after it.
+        let data = &svg[..start];
         let mut points = Vec::new();
-        for line in svg.split("<polyline").skip(1) {
+        for line in data.split("<polyline").skip(1) {
             let at = line.find("points=\"").unwrap() + 8;
             let text = &line[at..at + line[at..].find('"').unwrap()];
             for p in text.split_whitespace() {
@@ -515,34 +516,36 @@ mod tests {
                 points.push((a.parse::<f64>().unwrap(), b.parse::<f64>().unwrap()));
             }
         }
-        for c in svg.split("<circle").skip(1) {
+        for c in data.split("<circle").skip(1) {
             points.push((attr(c, "cx"), attr(c, "cy")));
         }
-        // The legend's own samples (lines, dashes, markers) are in its left 36 px.
         points
             .iter()
-            .filter(|(px, py)| (x0 + 36.0..=x1).contains(px) && (y0..=y1).contains(py))
+            .filter(|(px, py)| (x0..=x1).contains(px) && (y0..=y1).contains(py))
             .count()
     }
 
-    /// An orbit that fills the equal-aspect plot reaches every corner, so the least covered
-    /// corner still hides part of it; `legend_clear_of_data` raises the y range until the
+    /// The Kepler orbit of `gvi run kepler --plot` fills the equal-aspect plot and reaches
+    /// every corner, so the least covered corner still hid part of it (the README figure);
+    /// `legend_clear_of_data`, which the run's chart sets, raises the y range until the
     /// legend sits above the orbit. Negative control: the same chart without it.
     #[test]
     fn legend_clear_of_data_leaves_the_orbit_visible() {
-        let orbit: Vec<(f64, f64)> = (0..=400)
-            .map(|i| f64::from(i) * std::f64::consts::TAU / 400.0)
-            .map(|t| (t.cos() - 0.6, 0.8 * t.sin()))
-            .collect();
-        let chart = Chart::new("kepler — an orbit", "x", "y")
-            .equal_aspect()
-            .with_series(Series::dashed("exact solution", orbit.clone()))
-            .with_series(Series::line("Galerkin curves", orbit.clone()))
-            .with_series(Series::markers("step ends (q_k)", orbit[..40].to_vec()));
-        let covered = data_under_legend(&chart.to_svg_string().unwrap());
-        assert!(covered > 0, "negative control: the legend covers the orbit");
-        let clear = chart.legend_clear_of_data().to_svg_string().unwrap();
+        let scene = crate::scene::Scene::load("kepler").unwrap().build().unwrap();
+        let options = crate::run::RunOptions {
+            chart: true,
+            ..Default::default()
+        };
+        let mut chart = crate::run::run_scene(&scene, options)
+            .unwrap()
+            .chart
+            .unwrap();
+        assert!(chart.keep_legend_clear);
+        let clear = chart.to_svg_string().unwrap();
         assert_eq!(data_under_legend(&clear), 0);
+        chart.keep_legend_clear = false;
+        let covered = data_under_legend(&chart.to_svg_string().unwrap());
+        assert!(covered > 10, "negative control: the legend covers the orbit ({covered})");
     }
 
     #[test]
