@@ -439,13 +439,12 @@ fn run_system(
     let (chart, inner_chart) = if options.chart && steps > 0 {
         match system.body_names() {
             Some(names) => {
-                let (all, inner) =
-                    crate::nbody_report::orbit_charts(
-                        &names,
-                        &scene.name,
-                        scene.units(),
-                        &trajectory,
-                    )?;
+                let (all, inner) = crate::nbody_report::orbit_charts(
+                    &names,
+                    &scene.name,
+                    scene.units(),
+                    &trajectory,
+                )?;
                 (Some(all), inner)
             }
             None => (

@@ -128,12 +128,22 @@ fn ensemble_columns_use_the_scenes_names() {
     let e = run_ensemble(&scene("kepler", 12, 0.5, 4), &options(2, 1e-3, 5), None).unwrap();
     let header = e.to_csv().lines().next().unwrap().to_string();
     assert!(header.contains(",q0,q1,p0,p1,"), "{header}");
-    let e = run_ensemble(&scene("henon-heiles", 8, 0.5, 4), &options(2, 1e-3, 5), None)
-        .unwrap();
+    let e = run_ensemble(
+        &scene("henon-heiles", 8, 0.5, 4),
+        &options(2, 1e-3, 5),
+        None,
+    )
+    .unwrap();
     let csv = e.to_csv();
     let header = csv.lines().next().unwrap();
     assert!(header.contains(",x,y,p_x,p_y,"), "{header}");
-    let row: Vec<f64> = csv.lines().nth(1).unwrap().split(',').map(|c| c.parse().unwrap()).collect();
+    let row: Vec<f64> = csv
+        .lines()
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .map(|c| c.parse().unwrap())
+        .collect();
     let m = &e.members[0];
     assert_eq!(row[4].to_bits(), m.q[0].to_bits());
     assert_eq!(row[7].to_bits(), m.p[1].to_bits());

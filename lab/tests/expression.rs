@@ -573,7 +573,10 @@ fn a_bad_exact_or_force_formula_names_its_key() {
     );
     assert_clean_failure(
         &["run", &force],
-        &["`force` entry 2 of 2 (the force on `y`)", "unknown symbol `x_dott`"],
+        &[
+            "`force` entry 2 of 2 (the force on `y`)",
+            "unknown symbol `x_dott`",
+        ],
     );
     // Negative control: an error in the Lagrangian itself still says so.
     let lagrangian = scene_file(
@@ -583,7 +586,10 @@ fn a_bad_exact_or_force_formula_names_its_key() {
         "[1.0]",
         "[0.0]",
     );
-    assert_clean_failure(&["run", &lagrangian], &["expression Lagrangian: syntax error"]);
+    assert_clean_failure(
+        &["run", &lagrangian],
+        &["expression Lagrangian: syntax error"],
+    );
     // The real formula runs and is used: errors against it are reported.
     let real = scene_file(
         &dir,
@@ -669,7 +675,14 @@ fn the_users_coordinate_names_label_every_output() {
     let kepler_svg = dir.join("kepler.svg");
     let kepler_svg_s = kepler_svg.to_string_lossy().into_owned();
     let (code, _, err) = gvi(&[
-        "run", "kepler", "--steps", "3", "--output", "/dev/null", "--plot", &kepler_svg_s,
+        "run",
+        "kepler",
+        "--steps",
+        "3",
+        "--output",
+        "/dev/null",
+        "--plot",
+        &kepler_svg_s,
     ]);
     assert_eq!(code, 0, "{err}");
     let chart = std::fs::read_to_string(&kepler_svg).unwrap();

@@ -174,6 +174,9 @@ mod tests {
             .collect();
         assert_eq!(names, crate::scene::Scene::builtin_names());
         assert!(listing.contains("planetesimal-ring    nbody"), "{listing}");
-        assert!(listing.contains("henon-heiles         lagrangian"), "{listing}");
+        assert!(
+            listing.contains("henon-heiles         lagrangian"),
+            "{listing}"
+        );
     }
 }

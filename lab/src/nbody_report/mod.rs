@@ -30,8 +30,8 @@
 mod charts;
 mod elements;
 
-pub use charts::{ORBIT_SAMPLES_PER_STEP, orbit_charts};
 use crate::names::unit_suffix;
+pub use charts::{ORBIT_SAMPLES_PER_STEP, orbit_charts};
 pub use elements::{longitude_of_perihelion, wrap};
 
 use crate::error::LabError;

@@ -531,7 +531,10 @@ mod tests {
     /// legend sits above the orbit. Negative control: the same chart without it.
     #[test]
     fn legend_clear_of_data_leaves_the_orbit_visible() {
-        let scene = crate::scene::Scene::load("kepler").unwrap().build().unwrap();
+        let scene = crate::scene::Scene::load("kepler")
+            .unwrap()
+            .build()
+            .unwrap();
         let options = crate::run::RunOptions {
             chart: true,
             ..Default::default()
@@ -545,7 +548,10 @@ mod tests {
         assert_eq!(data_under_legend(&clear), 0);
         chart.keep_legend_clear = false;
         let covered = data_under_legend(&chart.to_svg_string().unwrap());
-        assert!(covered > 10, "negative control: the legend covers the orbit ({covered})");
+        assert!(
+            covered > 10,
+            "negative control: the legend covers the orbit ({covered})"
+        );
     }
 
     #[test]

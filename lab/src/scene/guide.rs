@@ -74,21 +74,31 @@ fn scenes_guide_examples_load() {
             "docs/guide/scenes.md has no example of type = \"{t}\""
         );
     }
-    for key in ["exact = [", "force = [", "[periodic]", "[units]", "tol = ", "gm = "] {
+    for key in [
+        "exact = [",
+        "force = [",
+        "[periodic]",
+        "[units]",
+        "tol = ",
+        "gm = ",
+    ] {
         assert!(SCENES_GUIDE.contains(key), "no example with {key}");
     }
-    let n = check_guide(
-        "docs/guide/expression-lagrangians.md",
-        EXPRESSIONS_GUIDE,
+    let n = check_guide("docs/guide/expression-lagrangians.md", EXPRESSIONS_GUIDE);
+    assert!(
+        n >= 2,
+        "only {n} toml blocks in docs/guide/expression-lagrangians.md"
     );
-    assert!(n >= 2, "only {n} toml blocks in docs/guide/expression-lagrangians.md");
 }
 
 /// Negative control of the block check: a broken block is refused, with the block's line.
 #[test]
 fn a_broken_guide_block_is_caught() {
     let page = "text\n```toml\n[system]\ntype = \"kepler\"\n```\n";
-    assert_eq!(toml_blocks(page), [(2, "[system]\ntype = \"kepler\"\n".to_string())]);
+    assert_eq!(
+        toml_blocks(page),
+        [(2, "[system]\ntype = \"kepler\"\n".to_string())]
+    );
     let caught = std::panic::catch_unwind(|| check_guide("page", page));
     assert!(caught.is_err());
 }
