@@ -63,3 +63,34 @@ pub fn orbit_charts(
     let inner_chart = (inner.len() >= 3).then(|| build(&inner, format!("{title} — inner bodies")));
     Ok((chart, inner_chart))
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::run::{RunOptions, run_scene};
+    use crate::scene::Scene;
+
+    /// The orbit charts' axes carry the scene's length unit: AU for the solar system (its
+    /// `[units]`), "length units" for a scene without units (two-body, G = 1).
+    #[test]
+    fn orbit_axes_carry_the_scenes_length_unit() {
+        let chart = |name: &str| {
+            let mut scene = Scene::load(name).unwrap();
+            scene.method.steps = 2;
+            scene.method.n = 12;
+            let options = RunOptions {
+                chart: true,
+                curve_samples_per_step: 0,
+            };
+            let run = run_scene(&scene.build().unwrap(), options).unwrap();
+            run.chart.unwrap()
+        };
+        let solar = chart("solar-system");
+        assert_eq!(
+            (solar.x_label.as_str(), solar.y_label.as_str()),
+            ("x (AU)", "y (AU)")
+        );
+        let two = chart("two-body");
+        assert_eq!(two.x_label, "x (length units)");
+        assert_eq!(two.y_label, "y (length units)");
+    }
+}
