@@ -400,7 +400,7 @@ impl Ensemble {
 
     /// One row per member (final q and p at full precision, as [`crate::table::number`]
     /// writes them: the file is reproducible byte for byte from the seed, and reads back bit
-    /// for bit).
+    /// for bit; the NaN errors of a failed member are written `NaN`).
     pub fn to_csv(&self) -> String {
         let mut out = self.columns().join(",");
         out.push('\n');
@@ -420,7 +420,13 @@ impl Ensemble {
                     .chain(&m.momentum_errors)
                     .chain(std::iter::once(&m.lyapunov))
             {
-                let _ = write!(out, ",{}", crate::table::number(*x));
+                // A failed member's errors are a visible NaN, not an empty cell.
+                match x.is_nan() {
+                    true => out.push_str(",NaN"),
+                    false => {
+                        let _ = write!(out, ",{}", crate::table::number(*x));
+                    }
+                }
             }
             out.push('\n');
         }
