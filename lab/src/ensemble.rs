@@ -373,6 +373,10 @@ pub struct Ensemble {
     pub h: f64,
     /// Configuration dimension D.
     pub dim: usize,
+    /// Names of the 2D state components, coordinates then momenta
+    /// ([`crate::names::state_columns`]: `q0, …, p0, …`, or an expression Lagrangian's own
+    /// `theta, …, p_theta, …`).
+    pub state_names: Vec<String>,
     /// Names of the momentum maps, in the order of [`MemberResult::momentum_errors`].
     pub momentum_names: Vec<String>,
     /// The members' results.
@@ -387,24 +391,27 @@ impl Ensemble {
             .iter()
             .map(|s| s.to_string())
             .collect();
-        c.extend((0..self.dim).map(|i| format!("q{i}")));
-        c.extend((0..self.dim).map(|i| format!("p{i}")));
+        c.extend(self.state_names.iter().cloned());
         c.push("max_rel_energy_error".into());
         c.extend(self.momentum_names.iter().map(|n| format!("max_{n}_error")));
         c.push("lyapunov".into());
         c
     }
 
-    /// One row per member (final q and p at full precision: the file is reproducible byte
-    /// for byte from the seed).
+    /// One row per member (final q and p at full precision, as [`crate::table::number`]
+    /// writes them: the file is reproducible byte for byte from the seed, and reads back bit
+    /// for bit; the NaN errors of a failed member are written `NaN`).
     pub fn to_csv(&self) -> String {
         let mut out = self.columns().join(",");
         out.push('\n');
         for m in &self.members {
             let _ = write!(
                 out,
-                "{},{},{:e},{}",
-                m.member, m.seed, m.perturbation_norm, m.steps_completed
+                "{},{},{},{}",
+                m.member,
+                m.seed,
+                crate::table::number(m.perturbation_norm),
+                m.steps_completed
             );
             for x in
                 m.q.iter()
@@ -413,7 +420,13 @@ impl Ensemble {
                     .chain(&m.momentum_errors)
                     .chain(std::iter::once(&m.lyapunov))
             {
-                let _ = write!(out, ",{x:e}");
+                // A failed member's errors are a visible NaN, not an empty cell.
+                match x.is_nan() {
+                    true => out.push_str(",NaN"),
+                    false => {
+                        let _ = write!(out, ",{}", crate::table::number(*x));
+                    }
+                }
             }
             out.push('\n');
         }
@@ -483,6 +496,7 @@ impl std::fmt::Display for Ensemble {
                 s.quantity, s.mean, s.std, s.min, s.max
             )?;
         }
+        writeln!(f, "  {}", lyapunov_note(self.steps as f64 * self.h))?;
         if let Some(m) = self.members.iter().find(|m| m.failure.is_some()) {
             write!(
                 f,
@@ -493,6 +507,23 @@ impl std::fmt::Display for Ensemble {
         }
         Ok(())
     }
+}
+
+/// How to read a finite-time Lyapunov estimate over the time span `t`, one line: printed
+/// beside the estimates (`gvi ensemble`).
+///
+/// ```
+/// let note = galerkin_vi_lab::ensemble::lyapunov_note(100.0);
+/// assert!(note.contains("ln(T)/T = 4.605e-2"), "{note}");
+/// ```
+pub fn lyapunov_note(t: f64) -> String {
+    format!(
+        "lyapunov is a finite-time estimate ln(growth of the tangent map)/T at T = {}: for a \
+         regular orbit it decays like ln(T)/T = {:.3e}; a positive value means chaos only if it \
+         stays constant as T grows (rerun with more --steps)",
+        crate::error::fmt_number(t),
+        t.ln() / t
+    )
 }
 
 /// Run every member of an ensemble of `scene` in parallel on the current rayon pool (call it
@@ -540,6 +571,7 @@ pub fn run_members(
         steps: m.steps,
         h: m.h,
         dim: system.dim(),
+        state_names: crate::names::state_columns(system),
         momentum_names: symmetries.iter().map(|s| s.name.clone()).collect(),
         members: results,
     })

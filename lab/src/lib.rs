@@ -34,6 +34,7 @@ pub mod error;
 pub mod fit;
 pub mod interrupt;
 pub mod memory;
+pub mod names;
 pub mod nbody_report;
 pub mod nbody_scene;
 pub mod output;

@@ -16,14 +16,16 @@ use crate::error::Result;
 use crate::plot::{Chart, Series};
 use crate::scene::{BuiltScene, BuiltSystem, Scene};
 use galerkin_vi::GviError;
-use galerkin_vi::Lagrangian;
 use galerkin_vi::solve::{AdaptiveReport, Solution, solve_until};
 use galerkin_vi::systems::{AnySystem, System};
 use galerkin_vi::trajectory::Trajectory;
 use serde::Serialize;
 use std::time::Instant;
 
+mod chart;
 mod monitor;
+use chart::run_chart;
+pub use chart::{chart_indices, chart_times};
 pub mod rigid_body;
 pub mod stream;
 use monitor::Monitor;
@@ -35,7 +37,9 @@ pub use monitor::{Encounter, SANITY_THRESHOLD};
 pub struct RunResult {
     /// The scene, with command-line overrides applied.
     pub scene: Scene,
-    /// Column names: `step,t,q0,…,p0,…` then invariants, then `position_error` if known.
+    /// Column names: `step,t`, the coordinates and momenta ([`crate::names::state_columns`]:
+    /// `q0,…,p0,…`, or an expression Lagrangian's own `theta,…,p_theta,…`), then invariants,
+    /// then `position_error` if known.
     pub columns: Vec<String>,
     /// One row per step end.
     pub rows: Vec<Vec<f64>>,
@@ -274,7 +278,6 @@ fn run_system(
     let init = &scene.initial;
     // The method's own parameter errors (h) come before the time span's, which depends on h.
     m.validate()?;
-    let d = system.dim();
     let exact = system.exact_solution(init.t0, &init.q, &init.p)?;
     let start = Instant::now();
     monitor::check_time_span(init.t0, m.h, m.steps)?;
@@ -291,8 +294,7 @@ fn run_system(
 
     let names = system.invariant_names();
     let mut columns = vec!["step".to_string(), "t".to_string()];
-    columns.extend((0..d).map(|i| format!("q{i}")));
-    columns.extend((0..d).map(|i| format!("p{i}")));
+    columns.extend(crate::names::state_columns(system));
     columns.extend(names.iter().map(|s| s.to_string()));
     if exact.is_some() {
         columns.push("position_error".into());
@@ -439,8 +441,12 @@ fn run_system(
     let (chart, inner_chart) = if options.chart && steps > 0 {
         match system.body_names() {
             Some(names) => {
-                let (all, inner) =
-                    crate::nbody_report::orbit_charts(&names, &scene.name, &trajectory)?;
+                let (all, inner) = crate::nbody_report::orbit_charts(
+                    &names,
+                    &scene.name,
+                    scene.units(),
+                    &trajectory,
+                )?;
                 (Some(all), inner)
             }
             None => (
@@ -507,65 +513,10 @@ fn truncate(traj: &mut Trajectory, states: usize) {
     traj.step_n.truncate(steps);
 }
 
-/// Times at which a chart samples a trajectory's Galerkin curves: `per_step` per step while
-/// that gives at most [`crate::plot::MAX_POINTS_PER_SERIES`] points, otherwise that many
-/// evenly spaced over the run (a chart cannot show more; the run's table has every step).
-pub fn chart_times(traj: &Trajectory, per_step: usize) -> Vec<f64> {
-    let max = crate::plot::MAX_POINTS_PER_SERIES;
-    if traj.steps().saturating_mul(per_step.max(1)) < max {
-        return traj.sample_times(per_step);
-    }
-    let (t0, t1) = (traj.time(0), traj.end_time());
-    let m = (max - 1) as f64;
-    (0..max).map(|i| t0 + (t1 - t0) * i as f64 / m).collect()
-}
-
-/// Indices of the step ends a chart marks: all of them, or evenly strided to at most
-/// [`crate::plot::MAX_POINTS_PER_SERIES`] (the last kept).
-pub fn chart_indices(states: usize) -> Vec<usize> {
-    crate::plot::thin(
-        &(0..states).collect::<Vec<_>>(),
-        crate::plot::MAX_POINTS_PER_SERIES,
-    )
-}
-
-/// Orbit (2-D) or q(t) (1-D) chart: Galerkin curves, step ends and, if known, the exact
-/// solution.
-fn run_chart<S: System>(
-    system: &S,
-    scene: &BuiltScene,
-    traj: &Trajectory,
-    exact: Option<&galerkin_vi::systems::ExactSolution>,
-) -> Result<Chart> {
-    let samples = chart_times(traj, 32);
-    let title = format!("{} — {}", scene.name, scene.description);
-    let two_d = system.dim() >= 2;
-    let point = |q: &[f64], t: f64| if two_d { (q[0], q[1]) } else { (t, q[0]) };
-    let mut curve = Vec::with_capacity(samples.len());
-    for &t in &samples {
-        curve.push(point(&traj.position_at(t)?, t));
-    }
-    let ends: Vec<(f64, f64)> = chart_indices(traj.q.len())
-        .into_iter()
-        .map(|k| point(&traj.q[k], traj.time(k)))
-        .collect();
-    let mut chart = if two_d {
-        Chart::new(title, "q0", "q1").equal_aspect()
-    } else {
-        Chart::new(title, "t", "q")
-    };
-    if let Some(ex) = exact {
-        let pts: Vec<(f64, f64)> = samples.iter().map(|&t| point(&ex.position(t), t)).collect();
-        chart.push(Series::dashed("exact solution", pts));
-    }
-    chart.push(Series::line("Galerkin curves", curve));
-    chart.push(Series::markers("step ends (q_k)", ends));
-    Ok(chart)
-}
-
 impl RunResult {
     /// The table as CSV text (header line, then one row per step end): `step` and `n` as
-    /// integers, the other columns in `{:e}` form, NaN as an empty cell.
+    /// integers, the other columns as [`crate::table::number`] writes them (shortest
+    /// round-trip digits: `0.4`, `200`, `1e-300`; read back bit for bit), NaN as an empty cell.
     pub fn to_csv(&self) -> Result<String> {
         let integer: Vec<bool> = self
             .columns
@@ -573,12 +524,10 @@ impl RunResult {
             .map(|c| matches!(c.as_str(), "step" | "n"))
             .collect();
         let cell = |(x, &integer): (&f64, &bool)| {
-            if x.is_nan() {
-                String::new()
-            } else if integer {
+            if integer && !x.is_nan() {
                 format!("{}", *x as u64)
             } else {
-                format!("{x:e}")
+                crate::table::number(*x)
             }
         };
         crate::table::csv_records(

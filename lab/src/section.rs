@@ -5,7 +5,6 @@
 use crate::error::{LabError, Result};
 use crate::plot::{Chart, Series};
 use crate::scene::BuiltScene;
-use galerkin_vi::Lagrangian;
 use galerkin_vi::events::{
     Direction, Event, EventFunction, EventOptions, ExpressionEvent, integrate_with_events,
 };
@@ -63,22 +62,17 @@ pub struct Section {
     pub failed: bool,
 }
 
-/// Coordinate names of a scene's system (its own for expression scenes, q0, q1, … otherwise)
-/// and its parameters.
+/// Coordinate names of a scene's system (its own for expression scenes, q0, q1, … otherwise:
+/// [`crate::names::coordinate_names`]) and its parameters.
 pub fn names_of(system: &AnySystem) -> (Vec<String>, Vec<(String, f64)>) {
-    match system.as_expression() {
-        Some(e) => (e.coordinates().to_vec(), e.parameters().to_vec()),
-        None => ((0..system.dim()).map(|i| format!("q{i}")).collect(), vec![]),
-    }
+    let params = system
+        .as_expression()
+        .map(|e| e.parameters().to_vec())
+        .unwrap_or_default();
+    (crate::names::coordinate_names(system), params)
 }
 
-/// The momentum name of coordinate `c`: `p_x` for `x`; `p0` for `q0`.
-fn momentum_name(c: &str) -> String {
-    match c.strip_prefix('q') {
-        Some(i) if !i.is_empty() && i.chars().all(|ch| ch.is_ascii_digit()) => format!("p{i}"),
-        _ => format!("p_{c}"),
-    }
-}
+use crate::names::momentum_name;
 
 /// Index into (q, p) of a component name: (is momentum, index).
 fn component(names: &[String], name: &str) -> Result<(bool, usize)> {
@@ -353,8 +347,8 @@ impl Section {
         let mut header = vec!["orbit".to_string(), "t".to_string()];
         header.extend(self.names.iter().cloned());
         let rows = self.points.iter().map(|pt| {
-            let mut row = vec![pt.orbit.to_string(), format!("{:e}", pt.t)];
-            row.extend(pt.q.iter().chain(&pt.p).map(|x| format!("{x:e}")));
+            let mut row = vec![pt.orbit.to_string(), crate::table::number(pt.t)];
+            row.extend(pt.q.iter().chain(&pt.p).map(|x| crate::table::number(*x)));
             row
         });
         crate::table::csv_records(&header, rows)

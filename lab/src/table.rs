@@ -57,6 +57,32 @@ where
     finish(w)
 }
 
+/// A number of a data table (`gvi run`, `gvi ensemble`, `gvi section`): Rust's shortest
+/// round-trip digits, written plainly where that reads well (0, and 1e-4 ≤ |x| < 1e15:
+/// `0.4`, `200`, `-0`, `0.3333333333333333`) and in exponent form otherwise (`1e-300`,
+/// `6.02214076e23`). Either form reads back bit for bit (Rust's `parse::<f64>`, Python's
+/// `float`, numpy). NaN is an empty cell; infinities are `inf` and `-inf`.
+///
+/// ```
+/// use galerkin_vi_lab::table::number;
+/// assert_eq!(number(0.4), "0.4");
+/// assert_eq!(number(198.0), "198");
+/// assert_eq!(number(1e-300), "1e-300");
+/// assert_eq!(number(f64::NAN), "");
+/// let third = 1.0 / 3.0;
+/// assert_eq!(number(third).parse::<f64>().unwrap().to_bits(), third.to_bits());
+/// ```
+pub fn number(x: f64) -> String {
+    let a = x.abs();
+    if x.is_nan() {
+        String::new()
+    } else if x == 0.0 || !x.is_finite() || (1e-4..1e15).contains(&a) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
 /// `{:e}`: Rust's shortest round-trip digits in exponent form (`1.5e-3`, `2e0`).
 pub fn sci<S: Serializer>(x: &f64, s: S) -> std::result::Result<S::Ok, S::Error> {
     s.collect_str(&format_args!("{x:e}"))
@@ -174,6 +200,48 @@ mod tests {
         let header = ["t".to_string(), "q0".to_string()];
         let text = csv_records(&header, [["1e0", "2e0"], ["3e0", ""]]).unwrap();
         assert_eq!(text, "t,q0\n1e0,2e0\n3e0,\n");
+    }
+
+    /// Every value of a data table reads back bit for bit, in both forms (plain and exponent),
+    /// at the edges of the plain range and beyond it.
+    #[test]
+    fn numbers_read_back_bit_for_bit() {
+        let values = [
+            0.4,
+            200.0,
+            198.0,
+            1.0 / 3.0,
+            -2.0 / 3.0,
+            0.0,
+            -0.0,
+            1e-300,
+            -1e-300,
+            5e-324,
+            f64::MIN_POSITIVE,
+            f64::MAX,
+            f64::MIN,
+            1e15,
+            1e15 - 1.0,
+            9.999999999999999e14,
+            1e-4,
+            9.999999999999999e-5,
+            6.02214076e23,
+            std::f64::consts::PI * 1e7,
+            0.1 + 0.2,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        ];
+        for x in values {
+            let text = number(x);
+            let back: f64 = text.parse().unwrap();
+            assert_eq!(back.to_bits(), x.to_bits(), "{x:e} written as {text}");
+            assert!(text.len() <= 24, "{text} is too long");
+        }
+        assert_eq!(number(-0.0), "-0");
+        assert_eq!(number(0.4), "0.4");
+        assert_eq!(number(1e15), "1e15");
+        assert_eq!(number(123456.5), "123456.5");
+        assert_eq!(number(f64::NAN), "");
     }
 
     #[test]

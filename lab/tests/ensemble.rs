@@ -121,6 +121,34 @@ fn zero_perturbation_gives_identical_members() {
     assert_ne!(e.members[0].q, e.members[1].q);
 }
 
+/// The CSV names the final state as the runs do: Kepler `q0, q1, p0, p1`, an expression
+/// Lagrangian its own coordinates and `p_<name>`; the numbers read back bit for bit.
+#[test]
+fn ensemble_columns_use_the_scenes_names() {
+    let e = run_ensemble(&scene("kepler", 12, 0.5, 4), &options(2, 1e-3, 5), None).unwrap();
+    let header = e.to_csv().lines().next().unwrap().to_string();
+    assert!(header.contains(",q0,q1,p0,p1,"), "{header}");
+    let e = run_ensemble(
+        &scene("henon-heiles", 8, 0.5, 4),
+        &options(2, 1e-3, 5),
+        None,
+    )
+    .unwrap();
+    let csv = e.to_csv();
+    let header = csv.lines().next().unwrap();
+    assert!(header.contains(",x,y,p_x,p_y,"), "{header}");
+    let row: Vec<f64> = csv
+        .lines()
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .map(|c| c.parse().unwrap())
+        .collect();
+    let m = &e.members[0];
+    assert_eq!(row[4].to_bits(), m.q[0].to_bits());
+    assert_eq!(row[7].to_bits(), m.p[1].to_bits());
+}
+
 #[test]
 fn invariants_are_conserved_in_every_member() {
     // Kepler, n = 12, h = 0.5, 40 steps: the angular momentum (discrete Noether) to round-off,
@@ -226,6 +254,12 @@ fn the_command_writes_csv_and_summary_and_reports_throughput() {
     assert!(out.status.success(), "{stderr}");
     assert!(stderr.contains("speed-up"), "{stderr}");
     assert!(stderr.contains("one-thread results identical"), "{stderr}");
+    // How to read the Lyapunov estimate of an integrable system, at this run's T = 5.
+    assert!(
+        stderr.contains("lyapunov is a finite-time estimate")
+            && stderr.contains("ln(T)/T = 3.219e-1"),
+        "{stderr}"
+    );
     let text = std::fs::read_to_string(&csv).unwrap();
     assert_eq!(text.lines().count(), 5);
     let summary = std::fs::read_to_string(dir.join("kepler-summary.csv")).unwrap();

@@ -529,3 +529,162 @@ fn forced_scenes_run_and_refuse_the_tools_that_assume_conservation() {
     assert_ne!(code, 0);
     assert!(err.contains("is forced"), "{err}");
 }
+
+/// A bad `exact` (or `force`) formula is an error naming that key and entry, not one blamed on
+/// line 1 of the Lagrangian. The docs once showed `exact = ["...", "..."]` as a placeholder;
+/// copied, it failed with `expression Lagrangian: syntax error at line 1`.
+#[test]
+fn a_bad_exact_or_force_formula_names_its_key() {
+    let dir = std::env::temp_dir().join(format!("gvi-expression-exact-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let oscillator = "coordinates = [\"x\", \"y\"]\n\
+                      lagrangian = \"(x_dot^2 + y_dot^2)/2 - (x^2 + y^2)/2\"";
+    let placeholder = scene_file(
+        &dir,
+        "placeholder",
+        &format!("{oscillator}\nexact = [\"...\", \"...\"]"),
+        "[1.0, 0.0]",
+        "[0.0, 0.5]",
+    );
+    assert_clean_failure(
+        &["run", &placeholder],
+        &["`exact` entry 1 of 2 (q(t) of `x`)", "syntax error"],
+    );
+    let (_, _, err) = gvi(&["run", &placeholder]);
+    assert!(!err.contains("expression Lagrangian"), "{err}");
+    let unknown = scene_file(
+        &dir,
+        "unknown",
+        &format!("{oscillator}\nexact = [\"cos(t)\", \"s*sin(t)\"]"),
+        "[1.0, 0.0]",
+        "[0.0, 0.5]",
+    );
+    assert_clean_failure(
+        &["run", &unknown],
+        &["`exact` entry 2 of 2 (q(t) of `y`)", "unknown symbol `s`"],
+    );
+    let force = scene_file(
+        &dir,
+        "force",
+        &format!("{oscillator}\nforce = [\"0\", \"-x_dott\"]"),
+        "[1.0, 0.0]",
+        "[0.0, 0.5]",
+    );
+    assert_clean_failure(
+        &["run", &force],
+        &[
+            "`force` entry 2 of 2 (the force on `y`)",
+            "unknown symbol `x_dott`",
+        ],
+    );
+    // Negative control: an error in the Lagrangian itself still says so.
+    let lagrangian = scene_file(
+        &dir,
+        "lagrangian",
+        "coordinates = [\"x\"]\nlagrangian = \"x_dot^2/2 - (x^2\"",
+        "[1.0]",
+        "[0.0]",
+    );
+    assert_clean_failure(
+        &["run", &lagrangian],
+        &["expression Lagrangian: syntax error"],
+    );
+    // The real formula runs and is used: errors against it are reported.
+    let real = scene_file(
+        &dir,
+        "real",
+        &format!("{oscillator}\nexact = [\"cos(t)\", \"0.5*sin(t)\"]"),
+        "[1.0, 0.0]",
+        "[0.0, 0.5]",
+    );
+    let (code, _, err) = gvi(&["run", &real, "--output", "/dev/null"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("max position error at step ends"), "{err}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The user's coordinate names label the CSV header, the JSON columns and the chart axes
+/// (`theta`, `p_theta`); a scene without `name` and `description` gets a chart title without
+/// a dangling dash.
+#[test]
+fn the_users_coordinate_names_label_every_output() {
+    let dir = std::env::temp_dir().join(format!("gvi-expression-names-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let f = scene_file(
+        &dir,
+        "swing",
+        "coordinates = [\"theta\"]\nlagrangian = \"theta_dot^2/2 + cos(theta)\"",
+        "[1.0]",
+        "[0.0]",
+    );
+    let csv = dir.join("swing.csv");
+    let svg = dir.join("swing.svg");
+    let json = dir.join("swing.json");
+    let csv_s = csv.to_string_lossy().into_owned();
+    let svg_s = svg.to_string_lossy().into_owned();
+    let json_s = json.to_string_lossy().into_owned();
+    // Streamed (no chart), in memory with a chart, and JSON.
+    for args in [
+        vec!["run", &f, "--output", &csv_s],
+        vec!["run", &f, "--output", &csv_s, "--plot", &svg_s],
+    ] {
+        let (code, _, err) = gvi(&args);
+        assert_eq!(code, 0, "{err}");
+        let text = std::fs::read_to_string(&csv).unwrap();
+        let header = text.lines().next().unwrap();
+        assert_eq!(header, "step,t,theta,p_theta,energy", "{args:?}");
+    }
+    let (code, _, err) = gvi(&["run", &f, "--format", "json", "--output", &json_s]);
+    assert_eq!(code, 0, "{err}");
+    let value: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(
+        value["columns"],
+        serde_json::json!(["step", "t", "theta", "p_theta", "energy"])
+    );
+    let chart = std::fs::read_to_string(&svg).unwrap();
+    assert!(chart.contains(">\ntheta\n</text>"), "no theta axis label");
+    assert!(!chart.contains(">\nq\n</text>"), "a q axis label is left");
+    // The title is the scene's origin alone, no "—".
+    assert!(!chart.contains(" —"), "dangling dash in the title");
+    // Negative control: with a description the title is `name — description`.
+    let described = dir.join("described.toml");
+    let text = std::fs::read_to_string(&f).unwrap();
+    std::fs::write(
+        &described,
+        format!("name = \"swing\"\ndescription = \"a pendulum\"\n{text}"),
+    )
+    .unwrap();
+    let (code, _, err) = gvi(&[
+        "run",
+        &described.to_string_lossy(),
+        "--output",
+        &csv_s,
+        "--plot",
+        &svg_s,
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let chart = std::fs::read_to_string(&svg).unwrap();
+    assert!(chart.contains("swing — a pendulum"), "title");
+    // Built-in scenes keep their documented numbered columns (scripts and the Python tests
+    // read q0, p1 of kepler.csv); the Kepler chart's axes are x and y.
+    let (code, out, err) = gvi(&["run", "kepler", "--steps", "3"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.starts_with("step,t,q0,q1,p0,p1,"), "{out}");
+    let kepler_svg = dir.join("kepler.svg");
+    let kepler_svg_s = kepler_svg.to_string_lossy().into_owned();
+    let (code, _, err) = gvi(&[
+        "run",
+        "kepler",
+        "--steps",
+        "3",
+        "--output",
+        "/dev/null",
+        "--plot",
+        &kepler_svg_s,
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let chart = std::fs::read_to_string(&kepler_svg).unwrap();
+    assert!(chart.contains(">\nx\n</text>") && chart.contains(">\ny\n</text>"));
+    std::fs::remove_dir_all(&dir).ok();
+}

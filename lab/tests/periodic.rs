@@ -206,6 +206,47 @@ fn pendulum_period_matches_the_elliptic_integral() {
     assert!(r.closing.unwrap().position_distance < 1e-9);
 }
 
+/// The same pendulum written as an expression Lagrangian: the same period, and its own
+/// coordinate names in the CSV header and the phase-portrait axes; the built-in keeps q0, p0.
+#[test]
+fn an_expression_pendulum_reports_its_own_names() {
+    let text = "[system]\ntype = \"lagrangian\"\ncoordinates = [\"theta\"]\n\
+                lagrangian = \"theta_dot^2/2 + cos(theta)\"\n\
+                [initial]\nq = [2.5]\np = [0.0]\n[method]\nn = 16\nh = 0.5\nsteps = 40\n\
+                [periodic]\nkind = \"orbit\"\nmodes = 48\ncondition = \"energy\"\n\
+                period = 9.0\nsteps = 64\n[[periodic.guess]]\nk = 1\na = [2.0]\nb = [0.0]\n";
+    let request = PeriodicRequest {
+        periods: 0,
+        floquet: false,
+        ..Default::default()
+    };
+    let scene = Scene::from_toml_str("theta.toml", text).unwrap();
+    let r = periodic::analyse_scene(&scene.build().unwrap(), &request).unwrap();
+    let builtin = Scene::load("pendulum").unwrap();
+    let b = periodic::analyse_scene(&builtin.build().unwrap(), &request).unwrap();
+    assert!(
+        (r.period - b.period).abs() < 1e-10,
+        "{} vs {}",
+        r.period,
+        b.period
+    );
+    let header = |csv: &str| {
+        csv.lines()
+            .find(|l| !l.starts_with('#'))
+            .unwrap()
+            .to_string()
+    };
+    assert_eq!(header(&r.to_csv().unwrap()), "t,theta,p_theta");
+    assert_eq!(header(&b.to_csv().unwrap()), "t,q0,p0");
+    let chart = r.orbit_chart();
+    assert_eq!(
+        (chart.x_label.as_str(), chart.y_label.as_str()),
+        ("theta", "p_theta")
+    );
+    let chart = b.orbit_chart();
+    assert_eq!((chart.x_label.as_str(), chart.y_label.as_str()), ("q", "p"));
+}
+
 #[test]
 fn refinement_in_k_converges_exponentially() {
     let scene = Scene::load("figure-eight").unwrap();

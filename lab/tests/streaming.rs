@@ -77,7 +77,7 @@ impl std::io::Write for CountingSink<'_> {
 /// The streamed table and summary are the in-memory run's, byte for byte and figure for figure.
 #[test]
 fn streamed_and_in_memory_runs_agree() {
-    for name in ["kepler", "harmonic", "two-body"] {
+    for name in ["kepler", "harmonic", "two-body", "double-pendulum"] {
         let mut scene = Scene::load(name).unwrap();
         scene.method.steps = 20;
         let mut out = Vec::new();
@@ -98,6 +98,71 @@ fn streamed_and_in_memory_runs_agree() {
                 assert!((x - y).abs() <= 1e-12 * y.max(1e-300), "{name}: {x} {y}")
             }
             (x, y) => assert_eq!(x, y, "{name}"),
+        }
+    }
+}
+
+/// The cells of a run's CSV (step as an integer, NaN as an empty cell).
+fn read_back(csv: &str) -> Vec<Vec<f64>> {
+    csv.lines()
+        .skip(1)
+        .map(|line| {
+            line.split(',')
+                .map(|cell| match cell {
+                    "" => f64::NAN,
+                    c => c.parse::<f64>().unwrap_or_else(|_| panic!("cell {c:?}")),
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// A run's CSV reads back bit for bit, streamed and in memory, with awkward values in it
+/// (1/3, −0, 1e-300, 1e150 and their products), and numbers read plainly where that reads
+/// well (`0.4`, not `4e-1`).
+#[test]
+fn the_csv_reads_back_bit_for_bit() {
+    let _guard = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let mut cases = Vec::new();
+    for (q, p) in [
+        (1.0 / 3.0, -0.0),
+        (1e150, 1e-300),
+        (-2.0 / 3.0 * 1e-200, 7.0e15 + 0.5),
+    ] {
+        let mut scene = harmonic(12);
+        scene.method.n = 8;
+        scene.method.h = 0.7;
+        scene.initial.q = vec![q];
+        scene.initial.p = vec![p];
+        cases.push(scene);
+    }
+    let mut kepler = Scene::load("kepler").unwrap();
+    kepler.method.steps = 10;
+    cases.push(kepler);
+    for scene in cases {
+        let built = scene.build().unwrap();
+        let memory = run_scene(&built, RunOptions::default()).unwrap();
+        let csv = memory.to_csv().unwrap();
+        let mut out = Vec::new();
+        stream_scene(&built, 16, &mut out).unwrap();
+        assert_eq!(String::from_utf8(out).unwrap(), csv);
+        let cells = read_back(&csv);
+        assert_eq!(cells.len(), memory.rows.len());
+        for (row, back) in memory.rows.iter().zip(&cells) {
+            assert_eq!(row.len(), back.len());
+            for (x, y) in row.iter().zip(back) {
+                assert!(
+                    x.to_bits() == y.to_bits() || (x.is_nan() && y.is_nan()),
+                    "{x:e} read back as {y:e}\n{csv}"
+                );
+            }
+        }
+        // The initial state's cells are as written in the scene, −0 included.
+        let first: Vec<&str> = csv.lines().nth(1).unwrap().split(',').collect();
+        assert_eq!(first[0], "0");
+        assert_eq!(first[1], "0");
+        if built.name == "kepler" {
+            assert_eq!(&first[2..6], ["0.4", "0", "0", "2"]);
         }
     }
 }

@@ -34,6 +34,16 @@ impl Position {
     }
 }
 
+impl ExpressionError {
+    /// This error, as an error in the expression `what` ([`ExpressionError::In`]).
+    pub fn within(self, what: impl Into<String>) -> ExpressionError {
+        ExpressionError::In {
+            what: what.into(),
+            source: Box::new(self),
+        }
+    }
+}
+
 /// The source line and a caret under the column (tabs kept so that the caret lines up).
 impl fmt::Display for Position {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -49,6 +59,17 @@ impl fmt::Display for Position {
 }
 
 /// Why an expression Lagrangian was rejected.
+///
+/// An error in one of the expressions given with it (the exact solution, the force) is
+/// [`ExpressionError::In`], which names the expression:
+///
+/// ```
+/// use galerkin_vi::systems::ExpressionLagrangian;
+/// let l = ExpressionLagrangian::parse("x_dot^2/2 - x^2/2", &["x"], &[])?;
+/// let e = l.with_exact_solution(&["..."]).unwrap_err().to_string();
+/// assert!(e.starts_with("`exact` entry 1 of 1 (q(t) of `x`): syntax error"), "{e}");
+/// # Ok::<(), galerkin_vi::GviError>(())
+/// ```
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ExpressionError {
     /// The text does not parse.
@@ -127,6 +148,16 @@ pub enum ExpressionError {
         v: Vec<f64>,
         /// Reciprocal condition number min|λ|/max|λ| of ∂²L/∂v∂v (0 if not finite).
         rcond: f64,
+    },
+    /// An error in an expression that goes with the Lagrangian (an entry of the exact
+    /// solution `exact` or of the force `force`), naming that expression rather than the
+    /// Lagrangian: `` `exact` entry 1 of 2 (q(t) of `x`): syntax error at line 1, … ``.
+    #[error("{what}: {source}")]
+    In {
+        /// Which expression (`` `exact` entry 1 of 2 (q(t) of `x`) ``).
+        what: String,
+        /// The error in it.
+        source: Box<ExpressionError>,
     },
     /// Newton's method for the inverse Legendre transform p = ∂L/∂v(q, v) did not converge.
     #[error(

@@ -199,8 +199,17 @@ pub enum GviError {
     /// An expression Lagrangian (`type = "lagrangian"`) was rejected: a syntax error, an
     /// unknown symbol, a degenerate or non-regular Lagrangian (see
     /// [`ExpressionError`]).
-    #[error("expression Lagrangian: {0}")]
+    #[error("{}", expression_message(.0))]
     Expression(#[from] ExpressionError),
+}
+
+/// `expression Lagrangian: …`, or for an error in another expression of the system (`exact`,
+/// `force`) the message naming that expression.
+fn expression_message(e: &ExpressionError) -> String {
+    match e {
+        ExpressionError::In { .. } => e.to_string(),
+        e => format!("expression Lagrangian: {e}"),
+    }
 }
 
 /// A number for messages: plain when it reads well (1e-4 ≤ |x| < 1e6, or 0), scientific

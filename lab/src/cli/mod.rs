@@ -103,15 +103,20 @@ pub fn main_with(cli: Cli) -> Result<(), LabError> {
         Command::Periodic(args) => periodic::run_periodic(*args),
         Command::Ensemble(args) => ensemble::run_ensemble_command(*args),
         Command::Section(args) => section::run_section_command(*args),
-        Command::Scenes => {
-            let mut text = String::new();
-            for name in crate::scene::Scene::builtin_names() {
-                let scene = crate::scene::Scene::load(name)?;
-                text.push_str(&format!("{name:<20} {}\n", scene.description));
-            }
-            crate::output::print(&text)
-        }
+        Command::Scenes => crate::output::print(&scenes_listing()?),
     }
+}
+
+/// What `gvi scenes` prints: one line per built-in scene, its name, its system type and its
+/// description.
+pub fn scenes_listing() -> Result<String, LabError> {
+    let mut text = String::new();
+    for name in crate::scene::Scene::builtin_names() {
+        let scene = crate::scene::Scene::load(name)?;
+        let kind = crate::scene::system_type(&scene.system);
+        text.push_str(&format!("{name:<20} {kind:<12} {}\n", scene.description));
+    }
+    Ok(text)
 }
 
 /// Refuse the method flags (`--n`, `--h`, `--basis`, `--quadrature`, `--quad-points`,
@@ -157,3 +162,22 @@ pub fn with_flag(e: LabError, setting: &str, flag: &str) -> LabError {
 }
 
 pub use crate::output::write_output;
+
+#[cfg(test)]
+mod tests {
+    /// Every built-in scene has its line in `gvi scenes`, `planetesimal-ring` included.
+    #[test]
+    fn gvi_scenes_lists_every_builtin_scene() {
+        let listing = super::scenes_listing().unwrap();
+        let names: Vec<&str> = listing
+            .lines()
+            .filter_map(|l| l.split_whitespace().next())
+            .collect();
+        assert_eq!(names, crate::scene::Scene::builtin_names());
+        assert!(listing.contains("planetesimal-ring    nbody"), "{listing}");
+        assert!(
+            listing.contains("henon-heiles         lagrangian"),
+            "{listing}"
+        );
+    }
+}

@@ -9,7 +9,8 @@ use std::path::PathBuf;
 
 #[derive(Debug, Args)]
 pub struct NBodyReportArgs {
-    /// N-body scene: solar-system, outer-solar-system, two-body, figure-eight, or a TOML path.
+    /// N-body scene: solar-system, outer-solar-system, two-body, figure-eight,
+    /// lagrange-triangle, planetesimal-ring, or a TOML path.
     pub scene: String,
     /// Output directory for SCENE-errors.csv/.svg, SCENE-orbits.svg and SCENE-summary.txt.
     #[arg(long, default_value = "out")]

@@ -1,7 +1,9 @@
 //! Orbit charts of N-body runs: one series per body, xy projection of the Galerkin curves.
 
 use crate::error::Result;
+use crate::names::unit_suffix;
 use crate::plot::{Chart, Series};
+use crate::scene::Units;
 use galerkin_vi::trajectory::Trajectory;
 
 /// Samples per step along the Galerkin curves in orbit charts (dense enough to draw Mercury's
@@ -14,10 +16,12 @@ pub const ORBIT_SAMPLES_PER_STEP: usize = 64;
 /// of the largest orbit's extent, a zoomed chart of those inner bodies.
 ///
 /// `names` gives the bodies in the trajectory's (body-major) order; the body dimension is
-/// `traj.dim / names.len()`.
+/// `traj.dim / names.len()`. The axes are labelled `x` and `y` with the scene's length unit
+/// (`x (AU)`), or `(length units)` when the scene gives none.
 pub fn orbit_charts(
     names: &[String],
     title: &str,
+    units: &Units,
     traj: &Trajectory,
 ) -> Result<(Chart, Option<Chart>)> {
     let nb = names.len().max(1);
@@ -41,8 +45,11 @@ pub fn orbit_charts(
                 .collect()
         })
         .collect();
+    let length = unit_suffix(units.length.as_deref(), "length");
     let build = |bodies: &[usize], title: String| {
-        let mut chart = Chart::new(title, "x", "y").equal_aspect().size(900, 900);
+        let mut chart = Chart::new(title, format!("x{length}"), format!("y{length}"))
+            .equal_aspect()
+            .size(900, 900);
         for &b in bodies {
             chart.push(Series::line(names[b].clone(), curves[b].clone()).with_color(b));
             chart.push(Series::markers("", ends[b].clone()).with_color(b));
@@ -55,4 +62,35 @@ pub fn orbit_charts(
     let inner: Vec<usize> = (0..nb).filter(|&b| extent[b] < 0.1 * largest).collect();
     let inner_chart = (inner.len() >= 3).then(|| build(&inner, format!("{title} — inner bodies")));
     Ok((chart, inner_chart))
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::run::{RunOptions, run_scene};
+    use crate::scene::Scene;
+
+    /// The orbit charts' axes carry the scene's length unit: AU for the solar system (its
+    /// `[units]`), "length units" for a scene without units (two-body, G = 1).
+    #[test]
+    fn orbit_axes_carry_the_scenes_length_unit() {
+        let chart = |name: &str| {
+            let mut scene = Scene::load(name).unwrap();
+            scene.method.steps = 2;
+            scene.method.n = 12;
+            let options = RunOptions {
+                chart: true,
+                curve_samples_per_step: 0,
+            };
+            let run = run_scene(&scene.build().unwrap(), options).unwrap();
+            run.chart.unwrap()
+        };
+        let solar = chart("solar-system");
+        assert_eq!(
+            (solar.x_label.as_str(), solar.y_label.as_str()),
+            ("x (AU)", "y (AU)")
+        );
+        let two = chart("two-body");
+        assert_eq!(two.x_label, "x (length units)");
+        assert_eq!(two.y_label, "y (length units)");
+    }
 }

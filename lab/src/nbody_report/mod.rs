@@ -30,6 +30,7 @@
 mod charts;
 mod elements;
 
+use crate::names::unit_suffix;
 pub use charts::{ORBIT_SAMPLES_PER_STEP, orbit_charts};
 pub use elements::{longitude_of_perihelion, wrap};
 
@@ -232,7 +233,7 @@ pub fn nbody_report(scene: &BuiltScene, options: ReportOptions) -> Result<NBodyR
         })
         .collect();
     let mercury = perihelion_drift(system, &traj.q, &traj.p, &rq, &rp);
-    let orbit_charts = orbit_charts(&names, &scene.name, &traj)?;
+    let orbit_charts = orbit_charts(&names, &scene.name, scene.units(), &traj)?;
     Ok(NBodyReport {
         scene: scene.scene(),
         body_names: names,
@@ -384,10 +385,14 @@ impl NBodyReport {
 
     /// Chart of each body's position error against time (log scale; t = 0 is omitted).
     pub fn error_chart(&self) -> Chart {
+        let units = &self.scene.units;
         let mut chart = Chart::new(
             format!("{}: position error against the reference", self.scene.name),
-            "t",
-            "|q_galerkin − q_reference|",
+            format!("t{}", unit_suffix(units.time.as_deref(), "time")),
+            format!(
+                "|q_galerkin − q_reference|{}",
+                unit_suffix(units.length.as_deref(), "length")
+            ),
         )
         .log_y();
         for (b, name) in self.body_names.iter().enumerate() {

@@ -150,6 +150,11 @@ pub struct PeriodicReport {
     /// Body dimension for plotting (2 or 3 for N bodies, None otherwise).
     #[serde(skip)]
     pub body_dim: Option<usize>,
+    /// Names of the state components for the CSV header and the chart: coordinates, then
+    /// momenta ([`crate::names::state_columns`]; `theta, p_theta` for an expression
+    /// Lagrangian).
+    #[serde(skip)]
+    pub state_names: Vec<String>,
 }
 
 /// Solve a built scene's periodic problem and analyse the orbit found.
@@ -435,6 +440,7 @@ fn analyse<S: System>(
         CurveKind::Choreography => "choreography",
     };
     Ok(PeriodicReport {
+        state_names: crate::names::state_columns(scene.euclidean()?),
         scene: scene.name.clone(),
         kind: kind.into(),
         modes: kmax,

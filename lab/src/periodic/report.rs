@@ -128,8 +128,12 @@ impl PeriodicReport {
         let _ = writeln!(s, "# multipliers = {}", mults.join(" "));
         let d = self.q0.len();
         let mut head = vec!["t".to_string()];
-        head.extend((0..d).map(|i| format!("q{i}")));
-        head.extend((0..d).map(|i| format!("p{i}")));
+        if self.state_names.len() == 2 * d {
+            head.extend(self.state_names.iter().cloned());
+        } else {
+            head.extend((0..d).map(|i| format!("q{i}")));
+            head.extend((0..d).map(|i| format!("p{i}")));
+        }
         let rows = self.t.iter().enumerate().map(|(k, t)| {
             std::iter::once(t)
                 .chain(&self.q[k])
@@ -169,7 +173,16 @@ impl PeriodicReport {
                 }
                 chart
             }
-            None => Chart::new(title, "q", "p").with_series(Series::line(
+            None => {
+                let d = self.q0.len();
+                let (q, p) = match (self.state_names.first(), self.state_names.get(d)) {
+                    // An expression Lagrangian's names (the first coordinate's phase plane).
+                    (Some(q), Some(p)) if q != "q0" => (q.clone(), p.clone()),
+                    _ => ("q".to_string(), "p".to_string()),
+                };
+                Chart::new(title, q, p)
+            }
+            .with_series(Series::line(
                 "orbit",
                 self.q.iter().zip(&self.p).map(|(q, p)| (q[0], p[0])),
             )),

@@ -150,6 +150,10 @@ pub struct Chart {
     pub width: u32,
     /// Image height in pixels (clamped to `240..=16384`).
     pub height: u32,
+    /// Keep the legend off the data: when every corner of the plot holds data, raise the
+    /// top of the y range until the legend fits above the data (orbit charts, whose curves
+    /// reach every corner). Off by default: the legend then goes to the least covered corner.
+    pub keep_legend_clear: bool,
 }
 
 /// Palette index, series, and its valid points in plot space split into
@@ -173,7 +177,13 @@ impl Chart {
             equal_aspect: false,
             width: 800,
             height: 600,
+            keep_legend_clear: false,
         }
+    }
+    /// Keeps the legend off the data ([`Chart::keep_legend_clear`]).
+    pub fn legend_clear_of_data(mut self) -> Self {
+        self.keep_legend_clear = true;
+        self
     }
     /// Uses a base-10 logarithmic y axis.
     pub fn log_y(mut self) -> Self {
@@ -264,7 +274,42 @@ impl Chart {
             x = valid_range(x).ok_or_else(|| bad("equal-aspect x range overflows"))?;
             y = valid_range(y).ok_or_else(|| bad("equal-aspect y range overflows"))?;
         }
+        if self.keep_legend_clear {
+            let (_, box_h) = self.legend_box(data, size);
+            let covered = self.corner_coverage(data, size, x, y);
+            if box_h < 0.5 && covered.iter().all(|c| c.1 > 0) {
+                // The data's top at 1 − box_h − 3 % of the plot height: the band above is free.
+                let top = (yr.1 - y.0) / (1.0 - box_h - 0.03);
+                y = valid_range((y.0, y.0 + top)).ok_or_else(|| bad("y range overflows"))?;
+                if self.equal_aspect {
+                    let (pw, ph) = plot_area_size(size, &self.title);
+                    let (ux, uy) = ((x.1 - x.0) / f64::from(pw), (y.1 - y.0) / f64::from(ph));
+                    if ux < uy {
+                        x = widen(x, uy * f64::from(pw));
+                    } else {
+                        y = widen(y, ux * f64::from(ph));
+                    }
+                    x = valid_range(x).ok_or_else(|| bad("equal-aspect x range overflows"))?;
+                    y = valid_range(y).ok_or_else(|| bad("equal-aspect y range overflows"))?;
+                }
+            }
+        }
         Ok((size, Axis::new(x, xlog, 10), Axis::new(y, ylog, 8)))
+    }
+
+    /// The legend box's width and height as fractions of the plot area, estimated from the
+    /// labels (16 px font).
+    fn legend_box(&self, data: &[Prepared], size: (u32, u32)) -> (f64, f64) {
+        let labels: Vec<&str> = data
+            .iter()
+            .map(|d| d.1.label.as_str())
+            .filter(|l| !l.is_empty())
+            .collect();
+        let (pw, ph) = plot_area_size(size, &self.title);
+        let chars = labels.iter().map(|l| l.chars().count()).max().unwrap_or(0);
+        let box_w = ((chars as f64 * 8.5 + 45.0) / f64::from(pw)).min(1.0);
+        let box_h = ((labels.len() as f64 * 19.0 + 12.0) / f64::from(ph)).min(1.0);
+        (box_w, box_h)
     }
 
     /// The corner of the plot whose legend box would cover the least data: the box's size
@@ -278,15 +323,23 @@ impl Chart {
         x: (f64, f64),
         y: (f64, f64),
     ) -> SeriesLabelPosition {
-        let labels: Vec<&str> = data
-            .iter()
-            .map(|d| d.1.label.as_str())
-            .filter(|l| !l.is_empty())
-            .collect();
-        let (pw, ph) = plot_area_size(size, &self.title);
-        let chars = labels.iter().map(|l| l.chars().count()).max().unwrap_or(0);
-        let box_w = ((chars as f64 * 8.5 + 45.0) / f64::from(pw)).min(1.0);
-        let box_h = ((labels.len() as f64 * 19.0 + 12.0) / f64::from(ph)).min(1.0);
+        // The first of the least covered (min_by_key keeps the first of equal keys).
+        self.corner_coverage(data, size, x, y)
+            .into_iter()
+            .min_by_key(|c| c.1)
+            .map_or(SeriesLabelPosition::UpperRight, |c| c.0)
+    }
+
+    /// How many data samples the legend box would cover in each corner (upper right, upper
+    /// left, lower right, lower left), for plot ranges `x` and `y`.
+    fn corner_coverage(
+        &self,
+        data: &[Prepared],
+        size: (u32, u32),
+        x: (f64, f64),
+        y: (f64, f64),
+    ) -> [(SeriesLabelPosition, usize); 4] {
+        let (box_w, box_h) = self.legend_box(data, size);
         // Data in fractions of the plot area, (0, 0) at the lower left.
         let frac = |(px, py): (f64, f64)| ((px - x.0) / (x.1 - x.0), (py - y.0) / (y.1 - y.0));
         let mut samples = Vec::new();
@@ -312,17 +365,12 @@ impl Chart {
             };
             samples.iter().filter(|p| inside(p)).count()
         };
-        let corners = [
+        [
             (SeriesLabelPosition::UpperRight, covered(false, true)),
             (SeriesLabelPosition::UpperLeft, covered(true, true)),
             (SeriesLabelPosition::LowerRight, covered(false, false)),
             (SeriesLabelPosition::LowerLeft, covered(true, false)),
-        ];
-        // The first of the least covered (min_by_key keeps the first of equal keys).
-        corners
-            .into_iter()
-            .min_by_key(|c| c.1)
-            .map_or(SeriesLabelPosition::UpperRight, |c| c.0)
+        ]
     }
 
     /// Draws into `out`; returns the plotting-area size used by plotters.
@@ -402,149 +450,5 @@ impl Chart {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::plot::tests::{assert_contains, decay, energy_chart};
-
-    fn ellipse() -> Vec<(f64, f64)> {
-        let th = (0..=200).map(|i| f64::from(i) * std::f64::consts::TAU / 200.0);
-        th.map(|t| (2.0 * t.cos() - 1.0, t.sin())).collect()
-    }
-
-    /// The x coordinate of the `<text>` element that shows `label`.
-    fn text_x(svg: &str, label: &str) -> f64 {
-        let end = svg.find(&format!(">\n{label}\n</text>")).unwrap();
-        let start = svg[..end].rfind("<text").unwrap();
-        let tag = &svg[start..end];
-        let x = tag.find(" x=\"").unwrap() + 4;
-        tag[x..x + tag[x..].find('"').unwrap()].parse().unwrap()
-    }
-
-    /// The legend goes to the corner with the least data: upper right when that is free (the
-    /// default), elsewhere when a curve runs through it. Negative control: the same chart
-    /// with the curve in the lower left keeps it upper right.
-    #[test]
-    fn legend_avoids_the_data() {
-        let chart = |pts: Vec<(f64, f64)>| {
-            Chart::new("legend", "x", "y")
-                .with_series(Series::line("a rather long series label", pts))
-                .with_series(Series::markers(
-                    "anchor",
-                    [(0.0, 0.0), (1.0, 0.0), (0.5, 1.0)],
-                ))
-                .to_svg_string()
-                .unwrap()
-        };
-        let through_upper_right: Vec<(f64, f64)> = (0..=50)
-            .map(|i| (0.6 + f64::from(i) / 125.0, 1.0))
-            .collect();
-        let svg = chart(through_upper_right);
-        assert!(text_x(&svg, "anchor") < 400.0, "{}", text_x(&svg, "anchor"));
-        let lower_left: Vec<(f64, f64)> = (0..=50).map(|i| (f64::from(i) / 100.0, 0.0)).collect();
-        let svg = chart(lower_left);
-        assert!(text_x(&svg, "anchor") > 400.0, "{}", text_x(&svg, "anchor"));
-    }
-
-    #[test]
-    fn svg_contains_title_labels_ticks_and_legend() {
-        let svg = energy_chart().to_svg_string().unwrap();
-        assert_contains(&svg, &["Energy &lt;error&gt;", "time t", "|H(t) - H(0)|"]);
-        assert_contains(&svg, &["cG(2)", "Störmer-Verlet", "spectral", "order 4"]);
-        assert_contains(
-            &svg,
-            &["1e-12", "1e-2", "1e0", ">\n0\n</text>", ">\n40\n</text>"],
-        );
-        assert!(
-            svg.matches("<polyline").count() > 50,
-            "dashes are separate polylines"
-        );
-    }
-
-    #[test]
-    fn log_axes_drop_bad_points() {
-        let bad = [
-            (2.0, -1.0),
-            (3.0, 0.0),
-            (4.0, f64::NAN),
-            (f64::INFINITY, 1.0),
-        ];
-        let pts = [&[(1.0, 1e-3)], &bad[..], &[(5.0, 0.1)]].concat();
-        let chart = Chart::new("t", "x", "y")
-            .log_y()
-            .with_series(Series::markers("m", pts));
-        // Two surviving points plus the legend marker.
-        assert_eq!(chart.to_svg_string().unwrap().matches("<circle").count(), 3);
-        let chart = chart.log_x();
-        let runs = &chart.prepared()[0].2;
-        assert_eq!(runs, &[vec![(0.0, -3.0)], vec![(5f64.log10(), -1.0)]]);
-    }
-
-    #[test]
-    fn no_data_errors() {
-        let empty = Chart::new("nothing", "x", "y");
-        let err = empty.to_svg_string();
-        assert!(matches!(err, Err(PlotError::NoData { title }) if title == "nothing"));
-        let bad = Series::line("b", [(1.0, -2.0), (f64::NAN, 1.0)]);
-        let chart = empty
-            .log_y()
-            .with_series(Series::line("a", vec![]))
-            .with_series(bad);
-        assert!(matches!(
-            chart.to_svg_string(),
-            Err(PlotError::NoData { .. })
-        ));
-        // An empty series next to a good one is skipped, legend entry included.
-        let mut chart = Chart::new("ok", "x", "y").with_series(Series::line("empty", vec![]));
-        chart.push(Series::line("good", decay(1.0)));
-        let svg = chart.to_svg_string().unwrap();
-        assert!(svg.contains("good") && !svg.contains("empty"));
-    }
-
-    #[test]
-    fn extreme_inputs_do_not_panic() {
-        let huge = Series::dashed("d", [(f64::MAX, 1.0), (-f64::MAX, -1.0)]);
-        let huge = Chart::new("big", "x", "y")
-            .with_series(huge)
-            .to_svg_string();
-        assert!(matches!(huge, Err(PlotError::InvalidData { .. })));
-        let single = Chart::new("", "", "").with_series(Series::line_markers("", [(1.0, 1.0)]));
-        assert!(single.clone().size(0, 0).to_svg_string().is_ok());
-        assert!(
-            single
-                .log_x()
-                .log_y()
-                .equal_aspect()
-                .to_svg_string()
-                .is_ok()
-        );
-        let odd = [
-            (5e-324, 1e-320),
-            (1.0, 1.0 + 1e-15),
-            (f64::MAX, f64::MIN_POSITIVE),
-        ];
-        let odd = Series::line_markers("p", odd).with_color(99);
-        let chart = Chart::new("a", "x", "y").with_series(odd);
-        assert!(chart.to_svg_string().is_ok());
-        assert!(chart.log_x().log_y().equal_aspect().to_svg_string().is_ok());
-        let flat = Series::line("f", [(0.0, 0.0), (0.0, 0.0)]);
-        let flat = Chart::new("flat", "x", "y")
-            .with_series(flat)
-            .size(20_000, 1);
-        assert!(flat.equal_aspect().to_svg_string().is_ok());
-    }
-
-    #[test]
-    fn equal_aspect_orbit() {
-        for title in ["Kepler orbit", ""] {
-            let chart = Chart::new(title, "q1", "q2").with_series(Series::line("orbit", ellipse()));
-            let chart = chart.equal_aspect();
-            let (size, x, y) = chart.layout(&chart.prepared()).unwrap();
-            let (pw, ph) = plot_area_size(size, title);
-            // The layout arithmetic must match plotters' actual plotting area.
-            assert_eq!(chart.render(&mut String::new()).unwrap(), (pw, ph));
-            let (ux, uy) = ((x.hi - x.lo) / f64::from(pw), (y.hi - y.lo) / f64::from(ph));
-            assert!((ux - uy).abs() < 1e-12 * ux, "{ux} vs {uy}");
-            assert!(x.lo < -3.0 && x.hi > 1.0 && y.lo < -1.0 && y.hi > 1.0);
-        }
-    }
-}
+#[path = "chart_tests.rs"]
+mod tests;

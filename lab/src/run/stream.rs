@@ -60,7 +60,7 @@ fn write_row(out: &mut dyn Write, row: &[f64]) -> std::io::Result<()> {
         if i == 0 {
             write!(out, "{}", *x as u64)?;
         } else {
-            write!(out, "{x:e}")?;
+            out.write_all(crate::table::number(*x).as_bytes())?;
         }
     }
     out.write_all(b"\n")
@@ -88,8 +88,7 @@ fn stream_system(
 
     let names = system.invariant_names();
     let mut header = vec!["step".to_string(), "t".to_string()];
-    header.extend((0..d).map(|i| format!("q{i}")));
-    header.extend((0..d).map(|i| format!("p{i}")));
+    header.extend(crate::names::state_columns(system));
     header.extend(names.iter().map(|s| s.to_string()));
     if exact.is_some() {
         header.push("position_error".into());

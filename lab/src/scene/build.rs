@@ -76,6 +76,20 @@ impl BuiltScene {
         }
     }
 
+    /// The chart title of the scene: `name — description`, or the name alone when the scene
+    /// has no description.
+    pub fn title(&self) -> String {
+        match self.description.trim() {
+            "" => self.name.clone(),
+            d => format!("{} — {d}", self.name),
+        }
+    }
+
+    /// The scene's `[units]` (empty when it gives none).
+    pub fn units(&self) -> &super::Units {
+        &self.scene.units
+    }
+
     /// The scene's `[periodic]` table, if any.
     pub fn periodic(&self) -> Option<&galerkin_vi::periodic::PeriodicSpec> {
         self.scene.periodic.as_ref()

@@ -34,6 +34,8 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 mod build;
+#[cfg(test)]
+mod guide;
 mod overrides;
 pub use build::{AnyRigidBody, BuiltScene, BuiltSystem};
 pub use overrides::Overrides;
@@ -102,6 +104,10 @@ pub struct Scene {
     /// Where the data come from.
     #[serde(default)]
     pub source: String,
+    /// The units of the scene's numbers, for labels (`[units]`: `length`, `time`, `mass`;
+    /// all optional). Charts of N-body runs label their axes with them.
+    #[serde(default, skip_serializing_if = "Units::is_empty")]
+    pub units: Units,
     /// The mechanical system.
     pub system: SystemSpec,
     /// Initial state. May be omitted for N-body scenes, whose state comes from the bodies
@@ -115,6 +121,36 @@ pub struct Scene {
     /// the analysis and [`galerkin_vi::periodic`] for the solver).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub periodic: Option<galerkin_vi::periodic::PeriodicSpec>,
+}
+
+/// The `[units]` table of a scene: names of the units its numbers are in, used in labels
+/// only (nothing is converted).
+///
+/// ```toml
+/// [units]
+/// length = "AU"
+/// time = "days"
+/// mass = "solar masses"
+/// ```
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Units {
+    /// Unit of positions (e.g. `AU`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub length: Option<String>,
+    /// Unit of time (e.g. `days`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub time: Option<String>,
+    /// Unit of mass (e.g. `solar masses`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mass: Option<String>,
+}
+
+impl Units {
+    /// Whether no unit is given.
+    pub fn is_empty(&self) -> bool {
+        self.length.is_none() && self.time.is_none() && self.mass.is_none()
+    }
 }
 
 /// A built-in system and its parameters.
@@ -208,6 +244,20 @@ pub enum SystemSpec {
 
 fn one() -> f64 {
     1.0
+}
+
+/// The `type` of a `[system]` table, as written in scene files (`kepler`, `nbody`,
+/// `lagrangian`, …).
+pub fn system_type(system: &SystemSpec) -> &'static str {
+    match system {
+        SystemSpec::Harmonic { .. } => "harmonic",
+        SystemSpec::Kepler { .. } => "kepler",
+        SystemSpec::NBody { .. } => "nbody",
+        SystemSpec::Lagrangian(_) => "lagrangian",
+        SystemSpec::Pendulum { .. } => "pendulum",
+        SystemSpec::RigidBody { .. } => "rigid-body",
+        SystemSpec::HeavyTop { .. } => "heavy-top",
+    }
 }
 
 /// The `[system]` table is an internally tagged enum, which serde parses from a buffer without

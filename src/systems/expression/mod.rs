@@ -205,8 +205,17 @@ impl ExpressionLagrangian {
         }
         symbols.push(("pi".to_string(), Symbol::Value(std::f64::consts::PI)));
         let mut q = Vec::with_capacity(q_of_t.len());
-        for text in q_of_t {
-            q.push(Tape::compile(&parse(text)?, text, &symbols)?);
+        for (i, text) in q_of_t.iter().enumerate() {
+            let what = || {
+                format!(
+                    "`exact` entry {} of {} (q(t) of `{}`)",
+                    i + 1,
+                    q_of_t.len(),
+                    self.coordinates[i]
+                )
+            };
+            let tape = parse(text).and_then(|e| Tape::compile(&e, text, &symbols));
+            q.push(tape.map_err(|e| e.within(what()))?);
         }
         self.exact = Some(Arc::new(ExactTapes {
             q,

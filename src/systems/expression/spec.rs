@@ -14,7 +14,9 @@ use std::collections::BTreeMap;
 /// parameters = { lambda = 1.0 }
 /// lagrangian = "(x_dot^2 + y_dot^2)/2 - (x^2 + y^2)/2 - lambda*(x^2*y - y^3/3)"
 /// invariants = { energy = true }           # optional (default: energy reported)
-/// exact = ["...", "..."]                   # optional: q(t), one expression in t per coordinate
+/// # optional: q(t) through the initial state, one expression in t per coordinate, e.g.
+/// # exact = ["cos(t)", "0.5*sin(t)"] for L = (x_dot^2 + y_dot^2)/2 - (x^2 + y^2)/2 from
+/// # q = (1, 0), p = (0, 0.5)
 /// force = ["-0.1*x_dot", "0"]              # optional: f(t, q, q̇), one per coordinate
 /// ```
 ///

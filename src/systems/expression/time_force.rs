@@ -95,8 +95,17 @@ impl ExpressionLagrangian {
         )?;
         let symbols = Self::symbols_with_time(&self.coordinates, &self.parameters);
         let mut tapes = Vec::with_capacity(force.len());
-        for text in force {
-            tapes.push(Tape::compile(&parse(text)?, text, &symbols)?);
+        for (i, text) in force.iter().enumerate() {
+            let what = || {
+                format!(
+                    "`force` entry {} of {} (the force on `{}`)",
+                    i + 1,
+                    force.len(),
+                    self.coordinates[i]
+                )
+            };
+            let tape = parse(text).and_then(|e| Tape::compile(&e, text, &symbols));
+            tapes.push(tape.map_err(|e| e.within(what()))?);
         }
         self.force = Some(std::sync::Arc::new(ForceTapes {
             texts: force.iter().map(|s| s.to_string()).collect(),
