@@ -59,22 +59,22 @@ pub(super) fn embedded_step<L: Lagrangian>(
     let first = lo;
     let budget = budget.max(NOISE_MARGIN * ladder.noise);
     let mut start = ladder.first_start();
-    if let Some(c) = last.filter(|c| c.rung == lo && k < c.step + opts.check_every) {
-        if ladder.solve(lag, lo, start, false, q, p) {
-            let ind = ladder.rungs[lo].ind;
-            let predicted = c.est * ind / c.ind;
-            if ind <= GROWTH * c.ind && predicted <= budget {
-                ladder.passed = Some((lo, k));
-                ladder.note_rung(lo);
-                let next = ladder.next_rung(lo, predicted, budget, k);
-                let next = ladder.swing_start(lo, next);
-                return Some(Accepted {
-                    keep: lo,
-                    next,
-                    estimate: None,
-                    missed: None,
-                });
-            }
+    if let Some(c) = last.filter(|c| c.rung == lo && k < c.step + opts.check_every)
+        && ladder.solve(lag, lo, start, false, q, p)
+    {
+        let ind = ladder.rungs[lo].ind;
+        let predicted = c.est * ind / c.ind;
+        if ind <= GROWTH * c.ind && predicted <= budget {
+            ladder.passed = Some((lo, k));
+            ladder.note_rung(lo);
+            let next = ladder.next_rung(lo, predicted, budget, k);
+            let next = ladder.swing_start(lo, next);
+            return Some(Accepted {
+                keep: lo,
+                next,
+                estimate: None,
+                missed: None,
+            });
         }
     }
     // Round-off level of an estimate at this state: a climb that no longer lowers an
@@ -104,15 +104,16 @@ pub(super) fn embedded_step<L: Lagrangian>(
             // A step down that failed.
             ladder.failed = Some((lo, k));
         }
-        if let Some((b, best_est)) = best {
-            if est >= STALL * best_est && best_est <= floor {
-                // Best effort at the round-off floor: keep the pair with the smallest
-                // estimate instead of climbing to rungs whose own round-off is larger, and
-                // take that estimate as the floor of later steps' budgets.
-                ladder.noise = ladder.noise.max(best_est);
-                lo = b;
-                break (best_est, best_est);
-            }
+        if let Some((b, best_est)) = best
+            && est >= STALL * best_est
+            && best_est <= floor
+        {
+            // Best effort at the round-off floor: keep the pair with the smallest
+            // estimate instead of climbing to rungs whose own round-off is larger, and
+            // take that estimate as the floor of later steps' budgets.
+            ladder.noise = ladder.noise.max(best_est);
+            lo = b;
+            break (best_est, best_est);
         }
         if best.is_none_or(|(_, b)| est < b) {
             best = Some((lo, est));
@@ -123,10 +124,12 @@ pub(super) fn embedded_step<L: Lagrangian>(
         // Not past a rung that met the budget within the last `horizon` steps (measured:
         // the decay model fitted on an unresolved curve overshoots, e.g. the oscillator at
         // h = 20 jumped from n = 20 to 32 where 24 had just passed).
-        if let Some((r, s)) = ladder.passed {
-            if r > from && r < lo && k < s + ladder.horizon {
-                lo = r;
-            }
+        if let Some((r, s)) = ladder.passed
+            && r > from
+            && r < lo
+            && k < s + ladder.horizon
+        {
+            lo = r;
         }
     };
     let keep = match (opts.extrapolate, ladder.ok(lo), ladder.ok(lo + 1)) {

@@ -279,13 +279,13 @@ impl Ladder {
                 .iter()
                 .fold(0.0f64, |m, x| m.max(x.abs()))
                 .max(f64::MIN_POSITIVE);
-            if let Ok(stats) = &result {
-                if stats.residual.is_nan() || stats.residual > WARM_RESIDUAL * pscale {
-                    self.evaluations += stats.gradient_evaluations;
-                    r.ws.reset();
-                    r.ws.stage.set_step_start(self.t, 0.0, &[]);
-                    result = gvi.step(lag, &mut r.ws, q, p, &mut r.q, &mut r.p);
-                }
+            if let Ok(stats) = &result
+                && (stats.residual.is_nan() || stats.residual > WARM_RESIDUAL * pscale)
+            {
+                self.evaluations += stats.gradient_evaluations;
+                r.ws.reset();
+                r.ws.stage.set_step_start(self.t, 0.0, &[]);
+                result = gvi.step(lag, &mut r.ws, q, p, &mut r.q, &mut r.p);
             }
         }
         let ok = match result {
@@ -401,10 +401,11 @@ impl Ladder {
         // Not below the middle between a rung that missed the budget within the last
         // `horizon` steps and lo: bisection where the decay model cannot tell (measured: the
         // oscillator at h = 20 stepped from n = 28 down to 14 where 24 was needed).
-        if let Some((f, s)) = self.failed {
-            if f < lo && k < s + self.horizon {
-                j = j.max((f + 1 + lo).div_ceil(2));
-            }
+        if let Some((f, s)) = self.failed
+            && f < lo
+            && k < s + self.horizon
+        {
+            j = j.max((f + 1 + lo).div_ceil(2));
         }
         if j >= lo {
             return lo;

@@ -81,7 +81,7 @@ impl ChebyshevLagrange {
     fn eval_outside(&self, tau: f64, values: &mut [f64], derivatives: &mut [f64]) {
         let n = self.nodes.len();
         let big_n = (n - 1) as f64;
-        let sign = if (n - 1) % 2 == 0 { 1.0 } else { -1.0 };
+        let sign = if (n - 1).is_multiple_of(2) { 1.0 } else { -1.0 };
         // (−1)^N 4^N/(2N) Π_j (τ − τ_j) = (−1)^N Π_j 4(τ − τ_j) / (8N).
         let mut scale = sign / (8.0 * big_n);
         for &x in &self.nodes {

@@ -213,7 +213,7 @@ impl KroneckerWork {
     ) -> Option<Self> {
         // Block mode needs b | D and a block-diagonal M (then L⁻¹ is block diagonal too).
         let block = match blocks {
-            Some(b) if b > 0 && b < d && d % b == 0 => {
+            Some(b) if b > 0 && b < d && d.is_multiple_of(b) => {
                 let diagonal_blocks =
                     (0..d).all(|r| (0..d).all(|s| r / b == s / b || mass[r * d + s] == 0.0));
                 if diagonal_blocks { b } else { d }

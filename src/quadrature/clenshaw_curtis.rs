@@ -67,7 +67,7 @@ impl Quadrature for ClenshawCurtis {
                 .collect();
             let mut weights = vec![0.0; m];
             // Weights on [−1, 1] (clencurt), halved at the end for [0, 1].
-            let end = if big_n % 2 == 0 {
+            let end = if big_n.is_multiple_of(2) {
                 1.0 / (nf * nf - 1.0)
             } else {
                 1.0 / (nf * nf)
@@ -81,7 +81,7 @@ impl Quadrature for ClenshawCurtis {
                     let kf = k as f64;
                     v -= 2.0 * (2.0 * kf * theta).cos() / (4.0 * kf * kf - 1.0);
                 }
-                if big_n % 2 == 0 {
+                if big_n.is_multiple_of(2) {
                     v -= (nf * theta).cos() / (nf * nf - 1.0);
                 }
                 *w = v / nf; // 2v/N on [−1, 1], halved

@@ -41,10 +41,10 @@ pub fn thin<T: Copy>(points: &[T], max: usize) -> Vec<T> {
     }
     let stride = (points.len() - 1).div_ceil(max - 1);
     let mut out: Vec<T> = points.iter().step_by(stride).copied().collect();
-    if (points.len() - 1) % stride != 0 {
-        if let Some(&last) = points.last() {
-            out.push(last);
-        }
+    if !(points.len() - 1).is_multiple_of(stride)
+        && let Some(&last) = points.last()
+    {
+        out.push(last);
     }
     out
 }

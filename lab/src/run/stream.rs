@@ -144,11 +144,11 @@ fn stream_system(
         iterations += stats.iterations;
         evaluations += stats.gradient_evaluations;
         done += 1;
-        if let Some(m) = meter.as_mut() {
-            if let Err(e) = m.step(system, curve, s.basis, (s.q, s.p)) {
-                balance_warning = Some(format!("no energy balance: {e}"));
-                meter = None;
-            }
+        if let Some(m) = meter.as_mut()
+            && let Err(e) = m.step(system, curve, s.basis, (s.q, s.p))
+        {
+            balance_warning = Some(format!("no energy balance: {e}"));
+            meter = None;
         }
         if let Some(nbody) = system.as_nbody() {
             let t_a = init.t0 + (s.step - 1) as f64 * curve.h();

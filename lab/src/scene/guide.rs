@@ -38,16 +38,16 @@ fn check_guide(name: &str, markdown: &str) -> usize {
         let built = scene
             .build()
             .unwrap_or_else(|e| panic!("{origin} does not build: {e}"));
-        if let SystemSpec::Lagrangian(spec) = &scene.system {
-            if spec.exact.is_some() {
-                let system = built.euclidean().unwrap();
-                let init = &built.initial;
-                let exact = system.exact_solution(init.t0, &init.q, &init.p).unwrap();
-                assert!(
-                    exact.is_some(),
-                    "{origin}: `exact` does not pass through the initial state"
-                );
-            }
+        if let SystemSpec::Lagrangian(spec) = &scene.system
+            && spec.exact.is_some()
+        {
+            let system = built.euclidean().unwrap();
+            let init = &built.initial;
+            let exact = system.exact_solution(init.t0, &init.q, &init.p).unwrap();
+            assert!(
+                exact.is_some(),
+                "{origin}: `exact` does not pass through the initial state"
+            );
         }
     }
     blocks.len()
