@@ -27,6 +27,7 @@
 
 pub mod cli;
 mod distance;
+mod energy;
 #[cfg(feature = "dop853")]
 pub mod dop853;
 pub mod ensemble;

@@ -23,9 +23,11 @@ impl Series {
         self.values.iter().map(|v| (v - v0).abs()).collect()
     }
 
-    /// Largest |value − first value| (0 for an empty series).
+    /// Largest |value − first value| (0 for an empty series); NaN if any value is NaN, so
+    /// that a run that blew up is never reported as conserving the quantity (`f64::max`
+    /// would drop the NaN: [`crate::reduce`]).
     pub fn max_deviation(&self) -> f64 {
-        self.deviations().into_iter().fold(0.0, f64::max)
+        crate::reduce::max_error(self.deviations())
     }
 
     /// Mean |value − first value| (0 for an empty series).

@@ -2,7 +2,10 @@
 //! method, numbers of basis functions).
 //!
 //! Every Galerkin cell (h, n) runs a fixed number of steps (default 100, so the horizon grows
-//! with h) and is classified by the relative energy error |E_k − E₀|/|E₀| over the run:
+//! with h) and is classified by the relative energy error max_k |E_k − E₀| / (T₀ + |V₀|) over
+//! the run (the scale of `gvi run`, [`crate::energy`]: kinetic plus absolute potential energy
+//! at the start, which does not vanish with E₀; |E₀| for a system without a constant mass
+//! matrix):
 //! - `accurate`: ≤ 10⁻⁶, and (when an exact solution is known) the max-norm position error
 //!   at the step ends is ≤ 10⁻⁴·max(1, |q₀|);
 //! - `bounded`: ≤ 1 and not growing (the max over the second half of the run is at most ten
@@ -136,7 +139,8 @@ pub struct Cell {
     pub n: usize,
     /// Class.
     pub class: Class,
-    /// Max relative energy error over the completed steps.
+    /// Max relative energy error over the completed steps, over
+    /// [`StabilityStudy::energy_scale`].
     pub energy_error: f64,
     /// Max position error at the step ends, if an exact solution is known.
     pub position_error: Option<f64>,
@@ -166,6 +170,10 @@ pub struct StabilityStudy {
     pub cells: Vec<Cell>,
     /// The baselines' limits.
     pub baselines: Vec<BaselineLimit>,
+    /// The scale of the cells' relative energy errors: how it was taken (`T₀ + |V₀|` or
+    /// `|E₀|`, [`crate::energy`]) and its value at the scene's initial state; `None` without
+    /// an energy invariant.
+    pub energy_scale: Option<(String, f64)>,
 }
 
 /// Run the stability study.
@@ -240,29 +248,51 @@ fn study_system<S: System + Sync + 'static>(
         })
         .collect();
     pb.finish_and_clear();
+    let init = &scene.initial;
     Ok(StabilityStudy {
         scene: scene.name.clone(),
         config: config.clone(),
         cells,
         baselines: limits,
+        energy_scale: energy_reference(system, &init.q, &init.p)
+            .map(|(_, label, scale)| (label.to_string(), scale)),
     })
 }
 
-/// Max relative energy error over the states, and whether it grows (second half > 10 × first
-/// half and above 10⁻³).
+/// The position of the `energy` invariant, E₀ and the scale of relative energy errors at
+/// (q0, p0) ([`crate::energy::energy_scale`]); `None` without an energy invariant.
+fn energy_reference<S: System>(
+    system: &S,
+    q0: &[f64],
+    p0: &[f64],
+) -> Option<(usize, &'static str, f64)> {
+    let index = system.invariant_names().iter().position(|n| *n == "energy")?;
+    let mut inv = vec![0.0; system.invariant_names().len()];
+    system.invariants(q0, p0, &mut inv);
+    let (label, scale) = crate::energy::energy_scale(system, q0, p0, inv[index]);
+    Some((index, label, scale))
+}
+
+/// Max relative energy error over the states (over T₀ + |V₀| at the first state:
+/// [`crate::energy`]), and whether it grows (second half > 10 × first half and above 10⁻³).
 fn energy_profile<S: System>(system: &S, q: &[Vec<f64>], p: &[Vec<f64>]) -> (f64, bool) {
-    if system.invariant_names().is_empty() || q.is_empty() {
+    if q.is_empty() {
         return (f64::NAN, false);
     }
+    let Some((index, _, scale)) = energy_reference(system, &q[0], &p[0]) else {
+        return (f64::NAN, false);
+    };
     let mut inv = vec![0.0; system.invariant_names().len()];
     system.invariants(&q[0], &p[0], &mut inv);
-    let e0 = inv[0];
-    let scale = e0.abs().max(1e-300);
+    let e0 = inv[index];
+    // A zero scale (no motion and no potential) leaves the absolute error: still 0 for a
+    // run that stays put, and a blow-up still shows.
+    let scale = scale.max(1e-300);
     let half = q.len() / 2;
     let (mut first, mut second) = (0.0f64, 0.0f64);
     for k in 0..q.len() {
         system.invariants(&q[k], &p[k], &mut inv);
-        let e = (inv[0] - e0).abs() / scale;
+        let e = (inv[index] - e0).abs() / scale;
         let e = if e.is_finite() { e } else { f64::INFINITY };
         if k <= half {
             first = first.max(e);
@@ -323,7 +353,7 @@ fn galerkin_cell<S: System>(
     if let Ok(Some(exact)) = system.exact_solution(init.t0, &init.q, &init.p) {
         let err = (0..traj.q.len())
             .map(|k| super::max_norm_diff(&traj.q[k], &exact.position(traj.time(k))))
-            .fold(0.0, f64::max);
+            .fold(0.0, super::nan_max);
         cell.position_error = Some(if err.is_finite() { err } else { f64::INFINITY });
     }
     let scale = init.q.iter().fold(1.0f64, |a, x| a.max(x.abs()));
