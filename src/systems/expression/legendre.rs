@@ -100,6 +100,12 @@ impl ExpressionLagrangian {
             let m = DMatrix::from_row_slice(d, d, &lvv);
             let rcond = reciprocal_condition(&m);
             if rcond.is_nan() || rcond <= MIN_RCOND {
+                if iterations > 0 {
+                    // Singular at an iterate, not at the start: the iteration ran off where
+                    // L_vv vanishes (p outside the range of ∂L/∂v, e.g. |p| ≥ 1 for
+                    // L = √(1 + ẋ²)). Report the residual, not the iterate's Hessian.
+                    break;
+                }
                 return Err(ExpressionError::SingularHessian {
                     what: "the initial state".into(),
                     q: q.to_vec(),
