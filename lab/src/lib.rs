@@ -27,9 +27,9 @@
 
 pub mod cli;
 mod distance;
-mod energy;
 #[cfg(feature = "dop853")]
 pub mod dop853;
+mod energy;
 pub mod ensemble;
 pub mod error;
 pub mod fit;

@@ -95,13 +95,26 @@ fn ensemble_stability_and_nbody_report_use_the_runs_energy_scale() {
     let mut args = vec!["ensemble", "kepler"];
     args.extend(PARABOLIC);
     args.extend([
-        "--n", "16", "--h", "0.5", "--steps", "40", "--count", "1", "--perturb", "0",
-        "--output", s(&csv),
+        "--n",
+        "16",
+        "--h",
+        "0.5",
+        "--steps",
+        "40",
+        "--count",
+        "1",
+        "--perturb",
+        "0",
+        "--output",
+        s(&csv),
     ]);
     let o = gvi(&args);
     let err = stderr(&o);
     assert!(o.status.success(), "{err}");
-    assert!(err.contains("/ (T₀ + |V₀| at each member's start)"), "{err}");
+    assert!(
+        err.contains("/ (T₀ + |V₀| at each member's start)"),
+        "{err}"
+    );
     let text = std::fs::read_to_string(&csv).unwrap();
     let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
     let column = header
@@ -178,7 +191,10 @@ fn ensemble_stability_and_nbody_report_use_the_runs_energy_scale() {
     // Two bodies × ½ m v², minus G m₁ m₂ / r.
     let e0 = (2.0 * 0.5 * 0.5 * 0.7071067811865476f64.powi(2) - 0.25).abs();
     // |E₀| is round-off (or exactly 0, where the old ratio was ∞ or NaN).
-    assert!(e0 < 1e-15 && (relative * 0.5 / e0 > 1e-2 || relative == 0.0), "{e0:e}");
+    assert!(
+        e0 < 1e-15 && (relative * 0.5 / e0 > 1e-2 || relative == 0.0),
+        "{e0:e}"
+    );
 }
 
 #[test]

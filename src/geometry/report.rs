@@ -6,9 +6,9 @@ use super::{
 };
 use crate::basis::Basis;
 use crate::error::Result;
-use crate::reduce::{max_error, nan_max};
 use crate::integrator::GalerkinIntegrator;
 use crate::quadrature::Quadrature;
+use crate::reduce::{max_error, nan_max};
 use crate::systems::System;
 use std::fmt;
 

@@ -67,7 +67,9 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             return f64::NAN;
         }
         // NaN coefficients give a NaN indicator (never a small, converged-looking one).
-        crate::reduce::max_error((n.saturating_sub(2)..n).map(|j| self.chebyshev_mode_size(coeffs, dim, j)))
+        crate::reduce::max_error(
+            (n.saturating_sub(2)..n).map(|j| self.chebyshev_mode_size(coeffs, dim, j)),
+        )
     }
 
     /// max_r |a_{j,r}|: the size of Chebyshev mode j of a step's Galerkin curve (basis

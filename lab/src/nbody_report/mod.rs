@@ -11,7 +11,8 @@
 //! reference s = 6, h/220 ≈ 0.45 days, half-step cross-check 4.2e-13 AU): the largest position
 //! error is Mercury's, 2.7e-4 AU (its 88-day orbit is shorter than the step), then Venus
 //! 8.2e-9, Earth–Moon 9.8e-10, Mars 8.6e-11, the Sun 4.5e-11 AU, and 3e-13 … 3e-12 AU for
-//! Jupiter … Pluto; relative energy error 5.2e-10; linear and angular momenta conserved to
+//! Jupiter … Pluto; relative energy error 1.6e-10 (over T₀ + |V₀|, [`crate::energy`]); linear
+//! and angular momenta conserved to
 //! round-off (|ΔJ| ≤ 4 ε √k × scale). Mercury's perihelion longitude drifts from the
 //! reference's by up to 1.0e-3 rad (206″) over the run, while the reference (physical,
 //! Newtonian planetary perturbations) advances 7.3e-4 rad: the spurious precession is of the
@@ -23,7 +24,7 @@
 //!
 //! `outer-solar-system` (HLW data, n = 25, h = 1825 days, 100 steps = 500 years): Jupiter
 //! 5.1e-9 AU, Saturn 9.1e-10, Uranus 7.9e-11, Neptune 2.7e-11, Pluto 3.4e-11; relative energy
-//! error 4.3e-12. Linear momentum is conserved to 2e-15 of Σ|pᵢ| (pairwise forces cancel
+//! error 4.5e-15. Linear momentum is conserved to 2e-15 of Σ|pᵢ| (pairwise forces cancel
 //! exactly), angular momentum to 1.5e-12 of Σ|qᵢ||pᵢ|: with h = 1825 the stage equations'
 //! round-off floor (residual ≈ 1e-18, ε times the Sun's kinetic terms) sets the drift.
 

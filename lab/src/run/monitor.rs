@@ -5,9 +5,9 @@
 //! The same monitor serves the in-memory table ([`super::run_scene`]) and the streamed one
 //! ([`super::stream`]), so both report the same figures.
 
+use crate::energy::energy_scale;
 use crate::error::LabError;
 use crate::error::{GviError, Result};
-use crate::energy::energy_scale;
 use galerkin_vi::systems::{ExactSolution, NBody, System};
 
 /// Relative error above which a run's result is called untrustworthy: a warning on stderr,

@@ -118,7 +118,10 @@ fn tabulate<S: RigidBody>(
         // The free body conserves all of L; gravity's torque is horizontal, so a heavy top
         // conserves only lz.
         let axes = if body.has_potential() { 2..3 } else { 0..3 };
-        dl = nan_max(dl, axes.fold(0.0f64, |a, i| nan_max(a, (l[i] - l0[i]).abs())));
+        dl = nan_max(
+            dl,
+            axes.fold(0.0f64, |a, i| nan_max(a, (l[i] - l0[i]).abs())),
+        );
         orth = nan_max(orth, o);
         if let (Some(refs), Some(ex)) = (&reference, exact) {
             let oe = so3::distance(&s.r, &refs[k]);

@@ -8,10 +8,13 @@
 //! matrix):
 //! - `accurate`: ≤ 10⁻⁶, and (when an exact solution is known) the max-norm position error
 //!   at the step ends is ≤ 10⁻⁴·max(1, |q₀|);
-//! - `bounded`: ≤ 1 and not growing (the max over the second half of the run is at most ten
-//!   times the max over the first half, or below 10⁻³);
+//! - `bounded`: at most |E₀| / (T₀ + |V₀|) (the energy did not move by more than itself: a
+//!   bound orbit whose energy reaches 0 can escape, and an escaped orbit's error is constant;
+//!   1 when E₀ is below 10⁻³ of T₀ + |V₀|, a parabolic orbit) and not growing (the max over
+//!   the second half of the run is at most ten times the max over the first half, or below
+//!   10⁻³);
 //! - `solver failure`: the Newton solve failed (the typed error's message is kept);
-//! - `blow-up`: a non-finite state, an energy error > 1, or a growing one.
+//! - `blow-up`: a non-finite state, an energy error above that limit, or a growing one.
 //!
 //! For the baselines (Störmer–Verlet, RK4, Gauss s = 2, Yoshida-6, Kahan–Li-8) the largest
 //! stable h is found by bisection with "bounded" over `baseline_steps` steps as the criterion
@@ -266,21 +269,44 @@ fn energy_reference<S: System>(
     q0: &[f64],
     p0: &[f64],
 ) -> Option<(usize, &'static str, f64)> {
-    let index = system.invariant_names().iter().position(|n| *n == "energy")?;
+    let index = system
+        .invariant_names()
+        .iter()
+        .position(|n| *n == "energy")?;
     let mut inv = vec![0.0; system.invariant_names().len()];
     system.invariants(q0, p0, &mut inv);
     let (label, scale) = crate::energy::energy_scale(system, q0, p0, inv[index]);
     Some((index, label, scale))
 }
 
-/// Max relative energy error over the states (over T₀ + |V₀| at the first state:
-/// [`crate::energy`]), and whether it grows (second half > 10 × first half and above 10⁻³).
-fn energy_profile<S: System>(system: &S, q: &[Vec<f64>], p: &[Vec<f64>]) -> (f64, bool) {
+/// What [`classify`] reads off a run's energy.
+#[derive(Debug, Clone, Copy)]
+struct EnergyProfile {
+    /// Max relative energy error over the states (over T₀ + |V₀| at the first state:
+    /// [`crate::energy`]).
+    worst: f64,
+    /// Whether it grows (second half > 10 × first half and above 10⁻³).
+    growing: bool,
+    /// The largest relative error a bounded run may have: |E₀| / (T₀ + |V₀|), an energy that
+    /// moved by more than itself (for a bound orbit, E reached 0: it can escape, and an
+    /// escaped orbit keeps a constant, "bounded" error); 1 where E₀ is negligible against
+    /// its terms (below 10⁻³ of T₀ + |V₀|: a parabolic orbit, which has no such limit).
+    /// With T₀ + |V₀| = |E₀| (V ≥ 0, the oscillator) it is 1 either way.
+    limit: f64,
+}
+
+/// The [`EnergyProfile`] of a run's states.
+fn energy_profile<S: System>(system: &S, q: &[Vec<f64>], p: &[Vec<f64>]) -> EnergyProfile {
+    let none = EnergyProfile {
+        worst: f64::NAN,
+        growing: false,
+        limit: 1.0,
+    };
     if q.is_empty() {
-        return (f64::NAN, false);
+        return none;
     }
     let Some((index, _, scale)) = energy_reference(system, &q[0], &p[0]) else {
-        return (f64::NAN, false);
+        return none;
     };
     let mut inv = vec![0.0; system.invariant_names().len()];
     system.invariants(&q[0], &p[0], &mut inv);
@@ -301,11 +327,21 @@ fn energy_profile<S: System>(system: &S, q: &[Vec<f64>], p: &[Vec<f64>]) -> (f64
         }
     }
     let worst = first.max(second);
-    (worst, second > 1e-3 && second > 10.0 * first)
+    let own = e0.abs() / scale;
+    EnergyProfile {
+        worst,
+        growing: second > 1e-3 && second > 10.0 * first,
+        limit: if own >= 1e-3 { own.min(1.0) } else { 1.0 },
+    }
 }
 
-fn classify(energy: f64, growing: bool, position_ok: bool) -> Class {
-    if !energy.is_finite() || energy > 1.0 || growing {
+fn classify(profile: EnergyProfile, position_ok: bool) -> Class {
+    let EnergyProfile {
+        worst: energy,
+        growing,
+        limit,
+    } = profile;
+    if !energy.is_finite() || energy > limit || growing {
         Class::BlowUp
     } else if energy <= 1e-6 && position_ok {
         Class::Accurate
@@ -343,13 +379,13 @@ fn galerkin_cell<S: System>(
         Err(f) => {
             cell.message = Some(f.error.to_string());
             if let Some(p) = f.partial {
-                cell.energy_error = energy_profile(system, &p.q, &p.p).0;
+                cell.energy_error = energy_profile(system, &p.q, &p.p).worst;
             }
             return cell;
         }
     };
-    let (energy, growing) = energy_profile(system, &traj.q, &traj.p);
-    cell.energy_error = energy;
+    let profile = energy_profile(system, &traj.q, &traj.p);
+    cell.energy_error = profile.worst;
     if let Ok(Some(exact)) = system.exact_solution(init.t0, &init.q, &init.p) {
         let err = (0..traj.q.len())
             .map(|k| super::max_norm_diff(&traj.q[k], &exact.position(traj.time(k))))
@@ -358,7 +394,7 @@ fn galerkin_cell<S: System>(
     }
     let scale = init.q.iter().fold(1.0f64, |a, x| a.max(x.abs()));
     let position_ok = cell.position_error.is_none_or(|e| e <= 1e-4 * scale);
-    cell.class = classify(energy, growing, position_ok);
+    cell.class = classify(profile, position_ok);
     cell
 }
 
@@ -372,8 +408,8 @@ pub fn bounded_at<S: System + 'static>(
 ) -> bool {
     match run_peer(system, &scene.initial, peer, h, 1, steps) {
         Ok(run) if run.failure.is_none() => {
-            let (e, growing) = energy_profile(system, &run.q, &run.p);
-            matches!(classify(e, growing, true), Class::Accurate | Class::Bounded)
+            let profile = energy_profile(system, &run.q, &run.p);
+            matches!(classify(profile, true), Class::Accurate | Class::Bounded)
         }
         _ => false,
     }

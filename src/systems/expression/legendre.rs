@@ -75,7 +75,11 @@ impl ExpressionLagrangian {
         let d = self.dim();
         ensure_len("q (number of coordinates)", d, q.len())?;
         ensure_len("p (number of coordinates)", d, p.len())?;
-        ensure_len("the starting velocity (number of coordinates)", d, start.len())?;
+        ensure_len(
+            "the starting velocity (number of coordinates)",
+            d,
+            start.len(),
+        )?;
         ensure_finite("q", q)?;
         ensure_finite("p", p)?;
         ensure_finite("the starting velocity", start)?;

@@ -222,7 +222,10 @@ fn inverse_legendre_of_cosh_recovers_asinh_p_for_large_momenta() {
     for p in [48.0, 50.0, 1e3, 1e6, -1e6] {
         let v = l.velocity(&[0.2], &[p]).unwrap()[0];
         let exact = f64::asinh(p);
-        assert!((v - exact).abs() <= 1e-14 * exact.abs(), "p = {p}: {v} vs {exact}");
+        assert!(
+            (v - exact).abs() <= 1e-14 * exact.abs(),
+            "p = {p}: {v} vs {exact}"
+        );
     }
     // A warm start from a nearby velocity gives the same v.
     let v = l.velocity_near(0.0, &[0.2], &[1e3], &[7.5]).unwrap()[0];
@@ -239,7 +242,11 @@ fn inverse_legendre_of_cosh_recovers_asinh_p_for_large_momenta() {
         }
         None
     };
-    assert!(undamped(48.0).is_some_and(|k| k >= 45), "{:?}", undamped(48.0));
+    assert!(
+        undamped(48.0).is_some_and(|k| k >= 45),
+        "{:?}",
+        undamped(48.0)
+    );
     assert_eq!(undamped(50.0), None);
     assert_eq!(undamped(1e3), None);
     // A momentum no velocity has (L = √(1 + ẋ²) has |p| = |ẋ|/√(1 + ẋ²) < 1) is a typed
