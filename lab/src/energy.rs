@@ -19,7 +19,7 @@ pub const INITIAL_ENERGY: &str = "|E₀|";
 /// The scale of a relative energy error from the start's kinetic energy T₀ and potential V₀
 /// (E₀ = T₀ + V₀): (label, T₀ + |V₀|), or (`|E₀|`, |e0|) if T₀ + |V₀| is not a positive
 /// finite number.
-pub(crate) fn energy_scale_of_parts(kinetic: f64, potential: f64, e0: f64) -> (&'static str, f64) {
+pub fn energy_scale_of_parts(kinetic: f64, potential: f64, e0: f64) -> (&'static str, f64) {
     let scale = kinetic.abs() + potential.abs();
     if scale.is_finite() && scale > 0.0 {
         (KINETIC_PLUS_POTENTIAL, scale)
@@ -32,7 +32,7 @@ pub(crate) fn energy_scale_of_parts(kinetic: f64, potential: f64, e0: f64) -> (&
 /// T₀ + |V₀| ([`energy_scale_of_parts`]) with T₀ = ½ p₀ᵀ M⁻¹ p₀ and V₀ = T₀ − L(q₀, v₀),
 /// v₀ = M⁻¹p₀, for a system with a constant mass matrix M; |E₀| otherwise (the kinetic and
 /// potential parts of a general Lagrangian are not defined). Returns the label and value.
-pub(crate) fn energy_scale<S: System>(
+pub fn energy_scale<S: System>(
     system: &S,
     q0: &[f64],
     p0: &[f64],
@@ -52,7 +52,7 @@ pub(crate) fn energy_scale<S: System>(
 }
 
 /// |ΔE| over `scale`, NaN where the scale is 0 (no relative error can be given).
-pub(crate) fn relative_energy_error(absolute: f64, scale: f64) -> f64 {
+pub fn relative_energy_error(absolute: f64, scale: f64) -> f64 {
     if scale > 0.0 {
         absolute / scale
     } else {

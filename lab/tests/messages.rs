@@ -81,7 +81,7 @@ const PARABOLIC: [&str; 4] = ["--q0", "1,0", "--p0", "0,1.4142135623730951"];
 
 /// |E₀| of that start, the old scale (2.2e-16).
 fn parabolic_e0() -> f64 {
-    (0.5 * 1.4142135623730951f64.powi(2) - 1.0).abs()
+    (0.5 * std::f64::consts::SQRT_2.powi(2) - 1.0).abs()
 }
 
 /// `gvi ensemble`, `gvi stability` and `gvi nbody-report` measure the relative energy error
@@ -189,7 +189,7 @@ fn ensemble_stability_and_nbody_report_use_the_runs_energy_scale() {
     let relative: f64 = line.split_whitespace().nth(1).unwrap().parse().unwrap();
     assert!(relative < 1e-12, "{out}");
     // Two bodies × ½ m v², minus G m₁ m₂ / r.
-    let e0 = (2.0 * 0.5 * 0.5 * 0.7071067811865476f64.powi(2) - 0.25).abs();
+    let e0 = (2.0 * 0.5 * 0.5 * std::f64::consts::FRAC_1_SQRT_2.powi(2) - 0.25).abs();
     // |E₀| is round-off (or exactly 0, where the old ratio was ∞ or NaN).
     assert!(
         e0 < 1e-15 && (relative * 0.5 / e0 > 1e-2 || relative == 0.0),
