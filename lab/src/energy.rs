@@ -32,12 +32,7 @@ pub fn energy_scale_of_parts(kinetic: f64, potential: f64, e0: f64) -> (&'static
 /// T₀ + |V₀| ([`energy_scale_of_parts`]) with T₀ = ½ p₀ᵀ M⁻¹ p₀ and V₀ = T₀ − L(q₀, v₀),
 /// v₀ = M⁻¹p₀, for a system with a constant mass matrix M; |E₀| otherwise (the kinetic and
 /// potential parts of a general Lagrangian are not defined). Returns the label and value.
-pub fn energy_scale<S: System>(
-    system: &S,
-    q0: &[f64],
-    p0: &[f64],
-    e0: f64,
-) -> (&'static str, f64) {
+pub fn energy_scale<S: System>(system: &S, q0: &[f64], p0: &[f64], e0: f64) -> (&'static str, f64) {
     let fallback = (INITIAL_ENERGY, e0.abs());
     let Some(mass) = system.mass_matrix() else {
         return fallback;
