@@ -7,7 +7,9 @@
 //! bit for bit whatever the number of threads. Each member is integrated step by step with the
 //! exact step Jacobian ([`GalerkinIntegrator::step_jacobian_in`]), which gives at once
 //!
-//! - the final state, the maximum relative energy error max_k |E_k − E_0| / |E_0| and the
+//! - the final state, the maximum relative energy error max_k |E_k − E_0| / (T₀ + |V₀|) (the
+//!   scale of `gvi run`, [`crate::energy`], at the member's own start; |E₀| for a system
+//!   without a constant mass matrix) and the
 //!   maximum error max_k |J_k − J_0| of every momentum map of the system's symmetries
 //!   (discrete Noether: conserved to round-off at step ends), and
 //! - a largest-Lyapunov-exponent estimate from the tangent map Φ_k = J_{k−1} ⋯ J_0: with
@@ -203,8 +205,12 @@ pub struct MemberResult {
     pub q: Vec<f64>,
     /// Final momentum.
     pub p: Vec<f64>,
-    /// max_k |E_k − E_0| / |E_0| (NaN when the system has no energy invariant or E_0 = 0).
+    /// max_k |E_k − E_0| over [`energy_scale`](Self::energy_scale) (NaN when the system has
+    /// no energy invariant or the scale is 0).
     pub max_relative_energy_error: f64,
+    /// The scale of the relative energy error and how it was taken (T₀ + |V₀| at the member's
+    /// start, or |E₀|: [`crate::energy`]); `None` without an energy invariant.
+    pub energy_scale: Option<(&'static str, f64)>,
     /// max_k |J_k − J_0| for each momentum map of the system's symmetries.
     pub momentum_errors: Vec<f64>,
     /// Largest-Lyapunov-exponent estimate ln(‖Φ_N‖_F / ‖I‖_F) / T.
@@ -237,6 +243,7 @@ pub fn run_member<S: System, B: Basis, Q: Quadrature>(
     let (mut q, mut p) = (member.q0.clone(), member.p0.clone());
     system.invariants(&q, &p, &mut inv);
     let e0 = energy_index.map(|i| inv[i]);
+    let energy_scale = e0.map(|e0| crate::energy::energy_scale(system, &q, &p, e0));
     let j0: Vec<f64> = symmetries
         .iter()
         .map(|s| momentum(s, &q, &p, &mut xi))
@@ -288,7 +295,7 @@ pub fn run_member<S: System, B: Basis, Q: Quadrature>(
         }
         system.invariants(&q, &p, &mut inv);
         if let (Some(i), Some(e0)) = (energy_index, e0) {
-            energy_error = nan_max(energy_error, ((inv[i] - e0) / e0).abs());
+            energy_error = nan_max(energy_error, (inv[i] - e0).abs());
         }
         for ((err, s), j0) in momentum_errors.iter_mut().zip(symmetries).zip(&j0) {
             *err = nan_max(*err, (momentum(s, &q, &p, &mut xi) - j0).abs());
@@ -300,9 +307,9 @@ pub fn run_member<S: System, B: Basis, Q: Quadrature>(
     } else {
         (log_growth + tangent.norm().ln()) / time
     };
-    let max_relative_energy_error = match e0 {
-        Some(e0) if e0 != 0.0 => energy_error,
-        _ => f64::NAN,
+    let max_relative_energy_error = match energy_scale {
+        Some((_, scale)) => crate::energy::relative_energy_error(energy_error, scale),
+        None => f64::NAN,
     };
     Ok(MemberResult {
         member: member.member,
@@ -312,6 +319,7 @@ pub fn run_member<S: System, B: Basis, Q: Quadrature>(
         q,
         p,
         max_relative_energy_error,
+        energy_scale,
         momentum_errors,
         lyapunov,
         failure,
@@ -494,6 +502,14 @@ impl std::fmt::Display for Ensemble {
                 f,
                 "  {:<28} {:>10.3e} {:>10.3e} {:>10.3e} {:>10.3e}",
                 s.quantity, s.mean, s.std, s.min, s.max
+            )?;
+        }
+        // Say what the relative energy error is relative to (all members share the label
+        // unless a member's T₀ + |V₀| is not a positive number).
+        if let Some((label, _)) = self.members.iter().find_map(|m| m.energy_scale) {
+            writeln!(
+                f,
+                "  max_rel_energy_error = max_k |E_k − E_0| / ({label} at each member's start)"
             )?;
         }
         writeln!(f, "  {}", lyapunov_note(self.steps as f64 * self.h))?;

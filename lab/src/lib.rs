@@ -14,6 +14,7 @@
 //! - [`nbody_report`], [`periodic`], [`run::rigid_body`]: N-body accuracy reports, periodic orbits of
 //!   scenes, rigid-body runs.
 //! - [`ensemble`]: perturbed members of a scene in parallel (`gvi ensemble`).
+//! - [`energy`]: the one scale (T₀ + |V₀|) of every relative energy error the commands report.
 //! - [`fit`], [`plot`], [`output`], [`progress`], [`memory`]: rate fits, SVG charts, atomic
 //!   file output (every path checked by one [`output::Plan`]), progress bars and the memory
 //!   estimates every command makes before its work.
@@ -29,6 +30,7 @@ pub mod cli;
 mod distance;
 #[cfg(feature = "dop853")]
 pub mod dop853;
+pub mod energy;
 pub mod ensemble;
 pub mod error;
 pub mod fit;

@@ -6,7 +6,7 @@
 
 use crate::common::robust;
 
-use robust::{fails_with, gvi, s, scratch, stderr};
+use robust::{TWO_BODY, fails_with, gvi, s, scratch, stderr, stdout};
 use std::path::Path;
 use std::process::Output;
 
@@ -72,6 +72,128 @@ fn a_parabolic_orbit_passes_strict_its_relative_energy_error_over_t0_plus_v0() {
     ]);
     fails_with(&o, "not trustworthy");
     fails_with(&o, "over T₀ + |V₀| = 4.500e0");
+}
+
+/// The parabolic Kepler start of `a_parabolic_orbit_passes_strict…`: E₀ = |p|²/2 − 1/|q| = 0
+/// to round-off, T₀ + |V₀| = 2.
+const PARABOLIC: [&str; 4] = ["--q0", "1,0", "--p0", "0,1.4142135623730951"];
+
+/// |E₀| of that start, the old scale (2.2e-16).
+fn parabolic_e0() -> f64 {
+    (0.5 * std::f64::consts::SQRT_2.powi(2) - 1.0).abs()
+}
+
+/// `gvi ensemble`, `gvi stability` and `gvi nbody-report` measure the relative energy error
+/// over `gvi run`'s T₀ + |V₀| and say so: on a parabolic orbit a good run is small, where the
+/// same absolute error over |E₀| (the negative control, the old scale) would be large.
+#[test]
+fn ensemble_stability_and_nbody_report_use_the_runs_energy_scale() {
+    let dir = scratch("energy-scale");
+    // Ensemble: one unperturbed member.
+    let csv = dir.join("e.csv");
+    let mut args = vec!["ensemble", "kepler"];
+    args.extend(PARABOLIC);
+    args.extend([
+        "--n",
+        "16",
+        "--h",
+        "0.5",
+        "--steps",
+        "40",
+        "--count",
+        "1",
+        "--perturb",
+        "0",
+        "--output",
+        s(&csv),
+    ]);
+    let o = gvi(&args);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("/ (T₀ + |V₀| at each member's start)"),
+        "{err}"
+    );
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let column = header
+        .iter()
+        .position(|c| *c == "max_rel_energy_error")
+        .unwrap();
+    let row: Vec<&str> = text.lines().nth(1).unwrap().split(',').collect();
+    let relative: f64 = row[column].parse().unwrap();
+    assert!(relative < 1e-12, "{text}");
+    let absolute = relative * 2.0;
+    assert!(
+        absolute / parabolic_e0() > 1e-2,
+        "control: over |E₀| the same run reads {:e}",
+        absolute / parabolic_e0()
+    );
+
+    // Stability: the accurate cells of the quick grid.
+    let out = dir.join("stability");
+    let mut args = vec!["stability", "kepler"];
+    args.extend(PARABOLIC);
+    args.extend(["--quick", "--cell-steps", "20", "--out", s(&out)]);
+    let o = gvi(&args);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("classified by the max energy error relative to T₀ + |V₀| = 2.000e0"),
+        "{err}"
+    );
+    let text = std::fs::read_to_string(out.join("stability.csv")).unwrap();
+    let best = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect::<Vec<_>>())
+        .find(|c| c[0].parse::<f64>() == Ok(1.0) && c[1] == "40")
+        .unwrap_or_else(|| panic!("no cell h = 1, n = 40 in {text}"));
+    let relative: f64 = best[3].parse().unwrap();
+    assert!(relative < 1e-12 && best[2] == "accurate", "{text}");
+    assert!(relative * 2.0 / parabolic_e0() > 1e-2, "control: {text}");
+
+    // N-body report: a parabolic two-body encounter (masses 1/2, G = 1, separation 1,
+    // relative speed √2: T₀ = 1/4, V₀ = −1/4).
+    let scene = dir.join("parabolic.toml");
+    let toml = TWO_BODY
+        .replace("name = \"two-body\"", "name = \"parabolic\"")
+        .replace("q = [-0.2, 0.0]", "q = [-0.5, 0.0]")
+        .replace("q = [0.2, 0.0]", "q = [0.5, 0.0]")
+        .replace("v = [0.0, -1.0]", "v = [0.0, -0.7071067811865476]")
+        .replace("v = [0.0, 1.0]", "v = [0.0, 0.7071067811865476]");
+    assert!(toml.contains("0.7071067811865476") && toml.contains("-0.5"));
+    std::fs::write(&scene, toml).unwrap();
+    let o = gvi(&[
+        "nbody-report",
+        s(&scene),
+        "--n",
+        "16",
+        "--h",
+        "0.5",
+        "--steps",
+        "20",
+        "--no-cross-check",
+        "--out",
+        s(&dir),
+    ]);
+    let (out, err) = (stdout(&o), stderr(&o));
+    assert!(o.status.success(), "{err}");
+    assert!(out.contains("energy relative to T₀ + |V₀|"), "{out}");
+    let line = out
+        .lines()
+        .find(|l| l.trim_start().starts_with("energy "))
+        .unwrap_or_else(|| panic!("no energy line in {out}"));
+    assert!(line.contains("(T₀ + |V₀| = 5.000e-1)"), "{line}");
+    let relative: f64 = line.split_whitespace().nth(1).unwrap().parse().unwrap();
+    assert!(relative < 1e-12, "{out}");
+    // Two bodies × ½ m v², minus G m₁ m₂ / r.
+    let e0 = (2.0 * 0.5 * 0.5 * std::f64::consts::FRAC_1_SQRT_2.powi(2) - 0.25).abs();
+    // |E₀| is round-off (or exactly 0, where the old ratio was ∞ or NaN).
+    assert!(
+        e0 < 1e-15 && (relative * 0.5 / e0 > 1e-2 || relative == 0.0),
+        "{e0:e}"
+    );
 }
 
 #[test]

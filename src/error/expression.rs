@@ -161,8 +161,9 @@ pub enum ExpressionError {
     },
     /// Newton's method for the inverse Legendre transform p = ∂L/∂v(q, v) did not converge.
     #[error(
-        "no velocity found for the momentum p = {p:?} at q = {q:?}: Newton's method on \
-         p = ∂L/∂v did not converge (residual {residual:.2e})"
+        "no velocity found for the momentum p = {p:?} at q = {q:?}: damped Newton iteration on \
+         p = ∂L/∂v did not converge (residual max|p − ∂L/∂v| = {residual:.2e} after \
+         {iterations} iterations)"
     )]
     Legendre {
         /// Configuration.
@@ -171,5 +172,7 @@ pub enum ExpressionError {
         p: Vec<f64>,
         /// Max-norm of p − ∂L/∂v at the last iterate.
         residual: f64,
+        /// Newton iterations taken.
+        iterations: usize,
     },
 }

@@ -23,9 +23,11 @@ impl Series {
         self.values.iter().map(|v| (v - v0).abs()).collect()
     }
 
-    /// Largest |value − first value| (0 for an empty series).
+    /// Largest |value − first value| (0 for an empty series); NaN if any value is NaN, so
+    /// that a run that blew up is never reported as conserving the quantity (`f64::max`
+    /// would drop the NaN: [`crate::reduce`]).
     pub fn max_deviation(&self) -> f64 {
-        self.deviations().into_iter().fold(0.0, f64::max)
+        crate::reduce::max_error(self.deviations())
     }
 
     /// Mean |value − first value| (0 for an empty series).
@@ -188,5 +190,25 @@ mod tests {
         let tr = linear_trend(&t, &alt);
         assert!(tr.drift() < 0.1 * tr.spread);
         assert_eq!(linear_trend(&[1.0], &[2.0]), Trend::default());
+    }
+
+    /// A blown-up run (a NaN energy at one step) is never reported as conserving the energy:
+    /// the max deviation is NaN. Negative control: the fold with `f64::max` it replaces gives
+    /// the finite 0.5 for the same series.
+    #[test]
+    fn max_deviation_of_a_series_with_a_nan_is_nan() {
+        let series = Series {
+            t: vec![0.0, 1.0, 2.0, 3.0],
+            values: vec![1.0, 1.5, f64::NAN, 1.25],
+        };
+        assert!(series.max_deviation().is_nan());
+        let old = series.deviations().into_iter().fold(0.0, f64::max);
+        assert_eq!(old, 0.5);
+        let clean = Series {
+            t: vec![0.0, 1.0],
+            values: vec![1.0, 1.5],
+        };
+        assert_eq!(clean.max_deviation(), 0.5);
+        assert_eq!(Series::default().max_deviation(), 0.0);
     }
 }

@@ -8,6 +8,7 @@ use crate::basis::Basis;
 use crate::error::Result;
 use crate::integrator::GalerkinIntegrator;
 use crate::quadrature::Quadrature;
+use crate::reduce::{max_error, nan_max};
 use crate::systems::System;
 use std::fmt;
 
@@ -120,15 +121,15 @@ pub fn check_report_with<S: System, B: Basis, Q: Quadrature>(
     let (mut defect, mut relative) = (0.0f64, 0.0f64);
     for c in &traj.coefficients {
         let j = integrator.step_jacobian_from_coefficients(system, c)?;
-        defect = defect.max(symplecticity_defect(&j));
-        relative = relative.max(relative_symplecticity_defect(&j));
+        defect = nan_max(defect, symplecticity_defect(&j));
+        relative = nan_max(relative, relative_symplecticity_defect(&j));
     }
     let (e0, emax, emean, cmax, cmean) = match energy_at_step_ends(system, &traj) {
         Ok(ends) => {
             let e0 = ends.values.first().copied().unwrap_or(f64::NAN);
             let curves = energy_along_curves(system, &traj, CURVE_SAMPLES_PER_STEP)?;
             let dev: Vec<f64> = curves.values.iter().map(|v| (v - e0).abs()).collect();
-            let cmax = dev.iter().copied().fold(0.0, f64::max);
+            let cmax = max_error(dev.iter().copied());
             let cmean = dev.iter().sum::<f64>() / dev.len().max(1) as f64;
             (
                 Some(e0),
@@ -145,11 +146,7 @@ pub fn check_report_with<S: System, B: Basis, Q: Quadrature>(
         let ends = momentum_at_step_ends(&*sym.map, &traj);
         let j0 = ends.values.first().copied().unwrap_or(f64::NAN);
         let curves = momentum_along_curves(system, &*sym.map, &traj, CURVE_SAMPLES_PER_STEP)?;
-        let along = curves
-            .values
-            .iter()
-            .map(|v| (v - j0).abs())
-            .fold(0.0, f64::max);
+        let along = max_error(curves.values.iter().map(|v| (v - j0).abs()));
         momenta.push(MomentumDrift {
             name: sym.name.clone(),
             initial: j0,

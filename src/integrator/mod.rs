@@ -362,6 +362,24 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         p0: &[f64],
         steps: usize,
     ) -> std::result::Result<Trajectory, IntegrationFailure> {
+        self.integrate_until(lagrangian, t0, q0, p0, steps, &|| false)
+    }
+
+    /// [`integrate`](Self::integrate), asking `stop` before every step whether to stop
+    /// there: a `true` ends the run with [`GviError::Interrupted`] and the steps before it as
+    /// the partial trajectory. This is the one fixed-n step loop: `integrate` is this with a
+    /// `stop` that never says yes, and [`crate::solve::solve_until`] runs it with the
+    /// caller's, so the two cannot drift apart (an interruptible copy of the loop once
+    /// skipped `integrate`'s check of t0).
+    pub(crate) fn integrate_until<L: Lagrangian>(
+        &self,
+        lagrangian: &L,
+        t0: f64,
+        q0: &[f64],
+        p0: &[f64],
+        steps: usize,
+        stop: &dyn Fn() -> bool,
+    ) -> std::result::Result<Trajectory, IntegrationFailure> {
         let fail = |error| IntegrationFailure {
             error,
             partial: None,
@@ -381,7 +399,16 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let mut stepper = self.stepper(lagrangian, t0, q0, p0).map_err(fail)?;
         let mut traj = self.empty_trajectory(t0, lagrangian.dim(), steps);
         traj.push_state(q0, p0);
-        for _ in 0..steps {
+        for k in 0..steps {
+            if stop() {
+                return Err(IntegrationFailure {
+                    error: GviError::Interrupted {
+                        step: k,
+                        t: stepper.time(),
+                    },
+                    partial: Some(Box::new(traj)),
+                });
+            }
             match stepper.step() {
                 Ok(stats) => traj.push_step(
                     stepper.curve(),

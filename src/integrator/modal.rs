@@ -66,9 +66,10 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         if dim == 0 || coeffs.len() != n * dim {
             return f64::NAN;
         }
-        (n.saturating_sub(2)..n)
-            .map(|j| self.chebyshev_mode_size(coeffs, dim, j))
-            .fold(0.0f64, f64::max)
+        // NaN coefficients give a NaN indicator (never a small, converged-looking one).
+        crate::reduce::max_error(
+            (n.saturating_sub(2)..n).map(|j| self.chebyshev_mode_size(coeffs, dim, j)),
+        )
     }
 
     /// max_r |a_{j,r}|: the size of Chebyshev mode j of a step's Galerkin curve (basis
@@ -106,6 +107,6 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                     .fold(0.0f64, |s, (c, q)| s + c * q[r])
                     .abs()
             })
-            .fold(0.0f64, f64::max)
+            .fold(0.0f64, crate::reduce::nan_max)
     }
 }

@@ -83,7 +83,7 @@ pub fn monodromy<L: Lagrangian>(
     let max_modulus_defect = multipliers
         .iter()
         .map(|z| (z[0].hypot(z[1]) - 1.0).abs())
-        .fold(0.0, f64::max);
+        .fold(0.0, crate::reduce::nan_max);
     Ok(Floquet {
         symplecticity_defect: crate::geometry::symplecticity_defect(&m),
         monodromy: m,

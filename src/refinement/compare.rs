@@ -114,7 +114,8 @@ pub fn compare_trajectories(trajectories: &[&Trajectory], times: &[f64]) -> Resu
             velocity[a][b] = velocity[b][a];
         }
     }
-    let largest = |x: &Vec<Vec<f64>>| x.iter().flatten().copied().fold(0.0, f64::max);
+    // A NaN difference (a run that blew up) must not vanish from the largest one.
+    let largest = |x: &Vec<Vec<f64>>| crate::reduce::max_error(x.iter().flatten().copied());
     Ok(Comparison {
         labels: trajectories
             .iter()

@@ -131,7 +131,7 @@ pub fn fitted_rate_above(
     let max_residual = xy
         .iter()
         .map(|p| (p.1 - (intercept + slope * p.0)).abs())
-        .fold(0.0, f64::max);
+        .fold(0.0, crate::reduce::nan_max);
     let rate = match by {
         RefineBy::H => slope,
         RefineBy::N => slope.exp(),

@@ -281,8 +281,8 @@ pub fn solve_until<S: System>(
     solve_with(system, initial, method, Some(stop))
 }
 
-/// [`solve`] and [`solve_until`]: the fixed-n run is [`GalerkinIntegrator::integrate`]'s
-/// without `stop`, its stopping twin ([`until::integrate_until`]) with it.
+/// [`solve`] and [`solve_until`]: the fixed-n run is [`GalerkinIntegrator::integrate`]'s step
+/// loop (which asks `stop`, or a `stop` that never says yes, before every step).
 ///
 /// [`GalerkinIntegrator::integrate`]: crate::integrator::GalerkinIntegrator::integrate
 fn solve_with<S: System>(
@@ -295,10 +295,8 @@ fn solve_with<S: System>(
     let (t0, q0, p0) = (initial.t0, &initial.q[..], &initial.p[..]);
     let Some(mut opts) = method.adaptive_options() else {
         let gvi = method.integrator()?;
-        let run = match stop {
-            None => gvi.integrate(system, t0, q0, p0, method.steps),
-            Some(stop) => until::integrate_until(&gvi, system, t0, q0, p0, method.steps, stop),
-        };
+        let never = || false;
+        let run = gvi.integrate_until(system, t0, q0, p0, method.steps, stop.unwrap_or(&never));
         return run
             .map(Solution::fixed)
             .map_err(|f: IntegrationFailure| SolveFailure {
@@ -558,4 +556,3 @@ pub fn solve_rigid_body<R: RigidBody>(
 
 #[cfg(test)]
 mod tests;
-mod until;

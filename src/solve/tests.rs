@@ -342,3 +342,35 @@ fn solve_until_stops_before_the_asked_step_and_otherwise_is_solve() {
         assert_ne!(partial.q.len(), whole.trajectory.q.len());
     }
 }
+
+/// The fixed-n run has one step loop: `integrate`, `solve` and `solve_until` with a `stop`
+/// that never fires give the same trajectory bit for bit, and `solve_until` refuses what
+/// `integrate` refuses (a non-finite t0, which its former copy of the loop let through;
+/// negative control: the same call with a finite t0 succeeds).
+#[test]
+fn integrate_solve_and_solve_until_share_one_step_loop() {
+    let (kepler, initial) = kepler();
+    let method = MethodSpec::spectral(12, 0.5, 15);
+    let gvi = method.integrator().unwrap();
+    let direct = gvi
+        .integrate(&kepler, initial.t0, &initial.q, &initial.p, method.steps)
+        .unwrap();
+    let solved = solve(&kepler, &initial, &method).unwrap();
+    let never = solve_until(&kepler, &initial, &method, &|| false).unwrap();
+    assert_same(&direct, &solved.trajectory);
+    assert_same(&direct, &never.trajectory);
+    for t0 in [f64::NAN, f64::INFINITY] {
+        let bad = InitialState {
+            t0,
+            ..initial.clone()
+        };
+        let failure = solve_until(&kepler, &bad, &method, &|| false).unwrap_err();
+        assert!(
+            matches!(failure.error, GviError::NonFinite { .. }),
+            "{}",
+            failure.error
+        );
+        assert!(failure.partial.is_none());
+    }
+    assert!(solve_until(&kepler, &initial, &method, &|| false).is_ok());
+}

@@ -262,6 +262,9 @@ pub fn run_stability(args: StabilityArgs) -> Result<(), LabError> {
         study.cells.len(),
         config.steps
     );
+    if let Some((label, scale)) = &study.energy_scale {
+        eprintln!("  (classified by the max energy error relative to {label} = {scale:.3e})");
+    }
     for (k, c) in Class::ALL.iter().zip(counts) {
         eprintln!("  {:<15} {c}", k.as_str());
     }

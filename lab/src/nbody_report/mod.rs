@@ -11,7 +11,8 @@
 //! reference s = 6, h/220 ≈ 0.45 days, half-step cross-check 4.2e-13 AU): the largest position
 //! error is Mercury's, 2.7e-4 AU (its 88-day orbit is shorter than the step), then Venus
 //! 8.2e-9, Earth–Moon 9.8e-10, Mars 8.6e-11, the Sun 4.5e-11 AU, and 3e-13 … 3e-12 AU for
-//! Jupiter … Pluto; relative energy error 5.2e-10; linear and angular momenta conserved to
+//! Jupiter … Pluto; relative energy error 1.6e-10 (over T₀ + |V₀|, [`crate::energy`]); linear
+//! and angular momenta conserved to
 //! round-off (|ΔJ| ≤ 4 ε √k × scale). Mercury's perihelion longitude drifts from the
 //! reference's by up to 1.0e-3 rad (206″) over the run, while the reference (physical,
 //! Newtonian planetary perturbations) advances 7.3e-4 rad: the spurious precession is of the
@@ -23,7 +24,7 @@
 //!
 //! `outer-solar-system` (HLW data, n = 25, h = 1825 days, 100 steps = 500 years): Jupiter
 //! 5.1e-9 AU, Saturn 9.1e-10, Uranus 7.9e-11, Neptune 2.7e-11, Pluto 3.4e-11; relative energy
-//! error 4.3e-12. Linear momentum is conserved to 2e-15 of Σ|pᵢ| (pairwise forces cancel
+//! error 4.5e-15. Linear momentum is conserved to 2e-15 of Σ|pᵢ| (pairwise forces cancel
 //! exactly), angular momentum to 1.5e-12 of Σ|qᵢ||pᵢ|: with h = 1825 the stage equations'
 //! round-off floor (residual ≈ 1e-18, ε times the Sun's kinetic terms) sets the drift.
 
@@ -95,11 +96,15 @@ pub struct NBodyReport {
     /// Names of the invariants (`energy`, linear and angular momentum components).
     pub invariant_names: Vec<String>,
     /// Errors of the invariants at each step end, `[k][i]`: relative energy error
-    /// |E_k − E_0|/|E_0| for `energy`, absolute |J_k − J_0| for the momenta.
+    /// |E_k − E_0| / (T₀ + |V₀|) for `energy` (the scale of `gvi run`, [`crate::energy`]),
+    /// absolute |J_k − J_0| for the momenta.
     pub invariant_errors: Vec<Vec<f64>>,
-    /// Scale of each invariant for relative statements: |E_0| for the energy, Σᵢ |pᵢ| for the
-    /// linear and Σᵢ |qᵢ| |pᵢ| for the angular momentum components.
+    /// Scale of each invariant for relative statements: T₀ + |V₀| for the energy
+    /// ([`NBodyReport::energy_scale_label`] says how it was taken), Σᵢ |pᵢ| for the linear
+    /// and Σᵢ |qᵢ| |pᵢ| for the angular momentum components.
     pub invariant_scales: Vec<f64>,
+    /// How the energy's scale was taken (`T₀ + |V₀|`, or `|E₀|` if that is not positive).
+    pub energy_scale_label: String,
     /// Max over step ends of the position difference between the reference and the half-step
     /// reference (`None` without the cross-check).
     pub reference_uncertainty: Option<f64>,
@@ -219,7 +224,11 @@ pub fn nbody_report(scene: &BuiltScene, options: ReportOptions) -> Result<NBodyR
     let ni = inv_names.len();
     let mut inv0 = vec![0.0; ni];
     system.invariants(&init.q, &init.p, &mut inv0);
-    let invariant_scales = momentum_scales(system, &init.q, &init.p);
+    let mut invariant_scales = momentum_scales(system, &init.q, &init.p);
+    // The energy's scale is every run's T₀ + |V₀| (|E₀| vanishes for a parabolic encounter).
+    let (energy_scale_label, energy_scale) =
+        crate::energy::energy_scale(system, &init.q, &init.p, inv0[0]);
+    invariant_scales[0] = energy_scale;
     let mut inv = vec![0.0; ni];
     let invariant_errors = (0..traj.q.len())
         .map(|s| {
@@ -227,7 +236,11 @@ pub fn nbody_report(scene: &BuiltScene, options: ReportOptions) -> Result<NBodyR
             (0..ni)
                 .map(|i| {
                     let e = (inv[i] - inv0[i]).abs();
-                    if i == 0 { e / inv0[0].abs() } else { e }
+                    if i == 0 {
+                        crate::energy::relative_energy_error(e, energy_scale)
+                    } else {
+                        e
+                    }
                 })
                 .collect()
         })
@@ -242,6 +255,7 @@ pub fn nbody_report(scene: &BuiltScene, options: ReportOptions) -> Result<NBodyR
         invariant_names: inv_names,
         invariant_errors,
         invariant_scales,
+        energy_scale_label: energy_scale_label.to_string(),
         reference_uncertainty,
         reference: gauss.name(),
         mercury,
@@ -260,7 +274,8 @@ fn auto_substeps(system: &NBody, q: &[f64], p: &[f64], h: f64) -> usize {
     }
 }
 
-/// Scales for the invariants: |E_0| for the energy, Σᵢ |pᵢ| for every linear-momentum
+/// Scales for the invariants: |E_0| for the energy (replaced by T₀ + |V₀| in
+/// [`nbody_report`]), Σᵢ |pᵢ| for every linear-momentum
 /// component and Σᵢ |qᵢ| |pᵢ| for every angular-momentum component (the size of the terms
 /// whose round-off the components accumulate).
 fn momentum_scales(system: &NBody, q: &[f64], p: &[f64]) -> Vec<f64> {
@@ -464,11 +479,16 @@ impl std::fmt::Display for NBodyReport {
         }
         writeln!(
             f,
-            "max invariant errors (energy relative; momenta absolute / scale):"
+            "max invariant errors (energy relative to {}; momenta absolute / scale):",
+            self.energy_scale_label
         )?;
         for (i, (name, e)) in self.max_invariant_errors().into_iter().enumerate() {
             if i == 0 {
-                writeln!(f, "  {name:<18} {e:.3e}")?;
+                writeln!(
+                    f,
+                    "  {name:<18} {e:.3e} ({} = {:.3e})",
+                    self.energy_scale_label, self.invariant_scales[0]
+                )?;
             } else {
                 writeln!(
                     f,

@@ -499,7 +499,7 @@ fn closing_run<L: Lagrangian>(
         a.iter()
             .zip(b)
             .map(|(x, y)| (x - y).abs())
-            .fold(0.0, f64::max)
+            .fold(0.0, crate::distance::nan_max)
     };
     let last = traj.q.len() - 1;
     Ok(Closing {

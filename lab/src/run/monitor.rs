@@ -5,6 +5,7 @@
 //! The same monitor serves the in-memory table ([`super::run_scene`]) and the streamed one
 //! ([`super::stream`]), so both report the same figures.
 
+use crate::energy::energy_scale;
 use crate::error::LabError;
 use crate::error::{GviError, Result};
 use galerkin_vi::systems::{ExactSolution, NBody, System};
@@ -50,7 +51,8 @@ pub(crate) struct Monitor {
     pub encounter: Option<Encounter>,
     /// Initial separation of each pair (a, b > a), row-major over a.
     initial_separation: Vec<f64>,
-    /// The scale of the relative energy error and how it was taken ([`energy_scale`]).
+    /// The scale of the relative energy error and how it was taken
+    /// ([`crate::energy::energy_scale`]).
     pub energy_scale: Option<(&'static str, f64)>,
     /// The first close encounter the step cannot resolve: a pair within a tenth of its
     /// initial separation that moved more than its separation relative to each other in the
@@ -161,7 +163,7 @@ impl Monitor {
                 .iter()
                 .zip(&qe)
                 .map(|(x, y)| (x - y).abs())
-                .fold(0.0, f64::max);
+                .fold(0.0, crate::distance::nan_max);
             if !e.is_finite() {
                 return Err(nonfinite("position error".into(), e));
             }
@@ -309,7 +311,8 @@ impl Monitor {
         }
     }
 
-    /// Relative invariant errors of the energy, max|E − E₀| over its [`energy_scale`] (which
+    /// Relative invariant errors of the energy, max|E − E₀| over its
+    /// [`crate::energy::energy_scale`] (which
     /// does not vanish for a parabolic orbit, as E₀ does); NaN for the other invariants
     /// (momenta are often zero up to round-off in the barycentric frame, where a relative
     /// error is meaningless) and where the scale is 0.
@@ -394,36 +397,6 @@ fn golden_minimum(f: &dyn Fn(f64) -> f64, mut lo: f64, mut hi: f64) -> (f64, f64
         }
     }
     if f1 < f2 { (x1, f1) } else { (x2, f2) }
-}
-
-/// The scale of a run's relative energy error: T₀ + |V₀| at the start, the kinetic energy
-/// plus the magnitude of the potential (V₀ = T₀ − L(q₀, v₀), v₀ = M⁻¹p₀), for a system with a
-/// constant mass matrix M; |E₀| otherwise (and if T₀ + |V₀| is not a positive finite number).
-/// T₀ + |V₀| ≥ |E₀| always, and it does not vanish where E₀ does (a parabolic orbit, E₀ ≈ 0,
-/// whose relative error over |E₀| is round-off over round-off). Returns the scale's label and
-/// value.
-pub(crate) fn energy_scale<S: System>(
-    system: &S,
-    q0: &[f64],
-    p0: &[f64],
-    e0: f64,
-) -> (&'static str, f64) {
-    let fallback = ("|E₀|", e0.abs());
-    let Some(mass) = system.mass_matrix() else {
-        return fallback;
-    };
-    let p = nalgebra::DVector::from_column_slice(p0);
-    let Some(v) = mass.lu().solve(&p) else {
-        return fallback;
-    };
-    let kinetic = 0.5 * p.dot(&v);
-    let potential = kinetic - system.value(q0, v.as_slice());
-    let scale = kinetic.abs() + potential.abs();
-    if scale.is_finite() && scale > 0.0 {
-        ("T₀ + |V₀|", scale)
-    } else {
-        fallback
-    }
 }
 
 /// Reject a time span whose times cannot be told apart at the step's resolution: every

@@ -7,6 +7,7 @@
 //! Scene conventions: `[initial] q` is the rotation vector of R₀ = exp(q̂) and `p` the body
 //! momentum μ₀; `[method] retraction` is `exp` (default) or `cayley`.
 
+use crate::distance::nan_max;
 use crate::error::{GviError, Result};
 use crate::run::{RunResult, RunSummary};
 use crate::scene::BuiltScene;
@@ -94,6 +95,11 @@ fn tabulate<S: RigidBody>(
     };
     let s0 = traj.states[0];
     let (e0, l0) = (body.energy(&s0.r, &s0.mu), s0.spatial_momentum());
+    // The relative energy error's scale, as for every run: T₀ + |V₀| (the heavy top's E₀
+    // vanishes where its kinetic energy cancels its potential).
+    let kinetic0 = body.energy(&s0.r, &s0.mu) - body.potential(&s0.r);
+    let (scale_label, scale) =
+        crate::energy::energy_scale_of_parts(kinetic0, body.potential(&s0.r), e0);
     let (mut de, mut dl, mut orth, mut err): (f64, f64, f64, f64) = (0.0, 0.0, 0.0, 0.0);
     let mut rows = Vec::with_capacity(traj.states.len());
     for (k, s) in traj.states.iter().enumerate() {
@@ -107,17 +113,21 @@ fn tabulate<S: RigidBody>(
         row.push(e);
         let o = so3::orthogonality_defect(&s.r);
         row.push(o);
-        de = de.max((e - e0).abs());
+        // nan_max: a NaN must not vanish from the maxima (f64::max drops it).
+        de = nan_max(de, (e - e0).abs());
         // The free body conserves all of L; gravity's torque is horizontal, so a heavy top
         // conserves only lz.
         let axes = if body.has_potential() { 2..3 } else { 0..3 };
-        dl = dl.max(axes.fold(0.0f64, |a, i| a.max((l[i] - l0[i]).abs())));
-        orth = orth.max(o);
+        dl = nan_max(
+            dl,
+            axes.fold(0.0f64, |a, i| nan_max(a, (l[i] - l0[i]).abs())),
+        );
+        orth = nan_max(orth, o);
         if let (Some(refs), Some(ex)) = (&reference, exact) {
             let oe = so3::distance(&s.r, &refs[k]);
             let mu = ex.body_momentum(times[k]);
-            let me = (0..3).fold(0.0f64, |a, i| a.max((mu[i] - s.mu[i]).abs()));
-            err = err.max(oe);
+            let me = (0..3).fold(0.0f64, |a, i| nan_max(a, (mu[i] - s.mu[i]).abs()));
+            err = nan_max(err, oe);
             row.push(oe);
             row.push(me);
         }
@@ -169,7 +179,7 @@ fn tabulate<S: RigidBody>(
             ("orthogonality ‖RᵀR − I‖".into(), orth),
         ],
         relative_invariant_errors: vec![
-            ("energy".into(), relative(de, e0.abs())),
+            ("energy".into(), relative(de, scale)),
             (
                 if body.has_potential() {
                     "vertical angular momentum lz".into()
@@ -180,7 +190,7 @@ fn tabulate<S: RigidBody>(
             ),
             ("orthogonality ‖RᵀR − I‖".into(), orth),
         ],
-        energy_scale: (e0 != 0.0).then(|| ("|E₀|".to_string(), e0.abs())),
+        energy_scale: (scale > 0.0).then(|| (scale_label.to_string(), scale)),
         closest_approach: None,
         newton_iterations_per_step: iters as f64 / steps.max(1) as f64,
         seconds,

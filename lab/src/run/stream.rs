@@ -174,8 +174,8 @@ fn stream_system(
                     .iter()
                     .zip(&qc)
                     .map(|(x, y)| (x - y).abs())
-                    .fold(0.0, f64::max);
-                *worst = worst.max(e);
+                    .fold(0.0, crate::distance::nan_max);
+                *worst = crate::distance::nan_max(*worst, e);
             }
         }
         Ok(())

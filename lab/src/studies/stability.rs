@@ -2,13 +2,19 @@
 //! method, numbers of basis functions).
 //!
 //! Every Galerkin cell (h, n) runs a fixed number of steps (default 100, so the horizon grows
-//! with h) and is classified by the relative energy error |E_k − E₀|/|E₀| over the run:
+//! with h) and is classified by the relative energy error max_k |E_k − E₀| / (T₀ + |V₀|) over
+//! the run (the scale of `gvi run`, [`crate::energy`]: kinetic plus absolute potential energy
+//! at the start, which does not vanish with E₀; |E₀| for a system without a constant mass
+//! matrix):
 //! - `accurate`: ≤ 10⁻⁶, and (when an exact solution is known) the max-norm position error
 //!   at the step ends is ≤ 10⁻⁴·max(1, |q₀|);
-//! - `bounded`: ≤ 1 and not growing (the max over the second half of the run is at most ten
-//!   times the max over the first half, or below 10⁻³);
+//! - `bounded`: at most |E₀| / (T₀ + |V₀|) (the energy did not move by more than itself: a
+//!   bound orbit whose energy reaches 0 can escape, and an escaped orbit's error is constant;
+//!   1 when E₀ is below 10⁻³ of T₀ + |V₀|, a parabolic orbit) and not growing (the max over
+//!   the second half of the run is at most ten times the max over the first half, or below
+//!   10⁻³);
 //! - `solver failure`: the Newton solve failed (the typed error's message is kept);
-//! - `blow-up`: a non-finite state, an energy error > 1, or a growing one.
+//! - `blow-up`: a non-finite state, an energy error above that limit, or a growing one.
 //!
 //! For the baselines (Störmer–Verlet, RK4, Gauss s = 2, Yoshida-6, Kahan–Li-8) the largest
 //! stable h is found by bisection with "bounded" over `baseline_steps` steps as the criterion
@@ -136,7 +142,8 @@ pub struct Cell {
     pub n: usize,
     /// Class.
     pub class: Class,
-    /// Max relative energy error over the completed steps.
+    /// Max relative energy error over the completed steps, over
+    /// [`StabilityStudy::energy_scale`].
     pub energy_error: f64,
     /// Max position error at the step ends, if an exact solution is known.
     pub position_error: Option<f64>,
@@ -166,6 +173,10 @@ pub struct StabilityStudy {
     pub cells: Vec<Cell>,
     /// The baselines' limits.
     pub baselines: Vec<BaselineLimit>,
+    /// The scale of the cells' relative energy errors: how it was taken (`T₀ + |V₀|` or
+    /// `|E₀|`, [`crate::energy`]) and its value at the scene's initial state; `None` without
+    /// an energy invariant.
+    pub energy_scale: Option<(String, f64)>,
 }
 
 /// Run the stability study.
@@ -240,29 +251,74 @@ fn study_system<S: System + Sync + 'static>(
         })
         .collect();
     pb.finish_and_clear();
+    let init = &scene.initial;
     Ok(StabilityStudy {
         scene: scene.name.clone(),
         config: config.clone(),
         cells,
         baselines: limits,
+        energy_scale: energy_reference(system, &init.q, &init.p)
+            .map(|(_, label, scale)| (label.to_string(), scale)),
     })
 }
 
-/// Max relative energy error over the states, and whether it grows (second half > 10 × first
-/// half and above 10⁻³).
-fn energy_profile<S: System>(system: &S, q: &[Vec<f64>], p: &[Vec<f64>]) -> (f64, bool) {
-    if system.invariant_names().is_empty() || q.is_empty() {
-        return (f64::NAN, false);
+/// The position of the `energy` invariant, E₀ and the scale of relative energy errors at
+/// (q0, p0) ([`crate::energy::energy_scale`]); `None` without an energy invariant.
+fn energy_reference<S: System>(
+    system: &S,
+    q0: &[f64],
+    p0: &[f64],
+) -> Option<(usize, &'static str, f64)> {
+    let index = system
+        .invariant_names()
+        .iter()
+        .position(|n| *n == "energy")?;
+    let mut inv = vec![0.0; system.invariant_names().len()];
+    system.invariants(q0, p0, &mut inv);
+    let (label, scale) = crate::energy::energy_scale(system, q0, p0, inv[index]);
+    Some((index, label, scale))
+}
+
+/// What [`classify`] reads off a run's energy.
+#[derive(Debug, Clone, Copy)]
+struct EnergyProfile {
+    /// Max relative energy error over the states (over T₀ + |V₀| at the first state:
+    /// [`crate::energy`]).
+    worst: f64,
+    /// Whether it grows (second half > 10 × first half and above 10⁻³).
+    growing: bool,
+    /// The largest relative error a bounded run may have: |E₀| / (T₀ + |V₀|), an energy that
+    /// moved by more than itself (for a bound orbit, E reached 0: it can escape, and an
+    /// escaped orbit keeps a constant, "bounded" error); 1 where E₀ is negligible against
+    /// its terms (below 10⁻³ of T₀ + |V₀|: a parabolic orbit, which has no such limit).
+    /// With T₀ + |V₀| = |E₀| (V ≥ 0, the oscillator) it is 1 either way.
+    limit: f64,
+}
+
+/// The [`EnergyProfile`] of a run's states.
+fn energy_profile<S: System>(system: &S, q: &[Vec<f64>], p: &[Vec<f64>]) -> EnergyProfile {
+    let none = EnergyProfile {
+        worst: f64::NAN,
+        growing: false,
+        limit: 1.0,
+    };
+    if q.is_empty() {
+        return none;
     }
+    let Some((index, _, scale)) = energy_reference(system, &q[0], &p[0]) else {
+        return none;
+    };
     let mut inv = vec![0.0; system.invariant_names().len()];
     system.invariants(&q[0], &p[0], &mut inv);
-    let e0 = inv[0];
-    let scale = e0.abs().max(1e-300);
+    let e0 = inv[index];
+    // A zero scale (no motion and no potential) leaves the absolute error: still 0 for a
+    // run that stays put, and a blow-up still shows.
+    let scale = scale.max(1e-300);
     let half = q.len() / 2;
     let (mut first, mut second) = (0.0f64, 0.0f64);
     for k in 0..q.len() {
         system.invariants(&q[k], &p[k], &mut inv);
-        let e = (inv[0] - e0).abs() / scale;
+        let e = (inv[index] - e0).abs() / scale;
         let e = if e.is_finite() { e } else { f64::INFINITY };
         if k <= half {
             first = first.max(e);
@@ -271,11 +327,21 @@ fn energy_profile<S: System>(system: &S, q: &[Vec<f64>], p: &[Vec<f64>]) -> (f64
         }
     }
     let worst = first.max(second);
-    (worst, second > 1e-3 && second > 10.0 * first)
+    let own = e0.abs() / scale;
+    EnergyProfile {
+        worst,
+        growing: second > 1e-3 && second > 10.0 * first,
+        limit: if own >= 1e-3 { own.min(1.0) } else { 1.0 },
+    }
 }
 
-fn classify(energy: f64, growing: bool, position_ok: bool) -> Class {
-    if !energy.is_finite() || energy > 1.0 || growing {
+fn classify(profile: EnergyProfile, position_ok: bool) -> Class {
+    let EnergyProfile {
+        worst: energy,
+        growing,
+        limit,
+    } = profile;
+    if !energy.is_finite() || energy > limit || growing {
         Class::BlowUp
     } else if energy <= 1e-6 && position_ok {
         Class::Accurate
@@ -313,22 +379,22 @@ fn galerkin_cell<S: System>(
         Err(f) => {
             cell.message = Some(f.error.to_string());
             if let Some(p) = f.partial {
-                cell.energy_error = energy_profile(system, &p.q, &p.p).0;
+                cell.energy_error = energy_profile(system, &p.q, &p.p).worst;
             }
             return cell;
         }
     };
-    let (energy, growing) = energy_profile(system, &traj.q, &traj.p);
-    cell.energy_error = energy;
+    let profile = energy_profile(system, &traj.q, &traj.p);
+    cell.energy_error = profile.worst;
     if let Ok(Some(exact)) = system.exact_solution(init.t0, &init.q, &init.p) {
         let err = (0..traj.q.len())
             .map(|k| super::max_norm_diff(&traj.q[k], &exact.position(traj.time(k))))
-            .fold(0.0, f64::max);
+            .fold(0.0, super::nan_max);
         cell.position_error = Some(if err.is_finite() { err } else { f64::INFINITY });
     }
     let scale = init.q.iter().fold(1.0f64, |a, x| a.max(x.abs()));
     let position_ok = cell.position_error.is_none_or(|e| e <= 1e-4 * scale);
-    cell.class = classify(energy, growing, position_ok);
+    cell.class = classify(profile, position_ok);
     cell
 }
 
@@ -342,8 +408,8 @@ pub fn bounded_at<S: System + 'static>(
 ) -> bool {
     match run_peer(system, &scene.initial, peer, h, 1, steps) {
         Ok(run) if run.failure.is_none() => {
-            let (e, growing) = energy_profile(system, &run.q, &run.p);
-            matches!(classify(e, growing, true), Class::Accurate | Class::Bounded)
+            let profile = energy_profile(system, &run.q, &run.p);
+            matches!(classify(profile, true), Class::Accurate | Class::Bounded)
         }
         _ => false,
     }

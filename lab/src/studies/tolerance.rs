@@ -237,7 +237,7 @@ fn max_error(traj: &Trajectory, reference: &[Vec<f64>]) -> f64 {
         .iter()
         .zip(reference)
         .map(|(a, b)| max_norm_diff(a, b))
-        .fold(0.0, f64::max)
+        .fold(0.0, crate::distance::nan_max)
 }
 
 fn study_system<S: System>(

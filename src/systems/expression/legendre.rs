@@ -7,6 +7,12 @@ use crate::error::{ExpressionError, GviError, Result, ensure_finite, ensure_len}
 use crate::lagrangian::Lagrangian;
 use nalgebra::{DMatrix, DVector};
 
+/// Newton iterations of the inverse Legendre transform before it is declared failed.
+const LEGENDRE_ITERATIONS: usize = 50;
+
+/// Halvings of a Newton step before the line search gives up (2⁻⁶⁰ ≈ 1e-18 of the step).
+const LEGENDRE_HALVINGS: usize = 60;
+
 impl ExpressionLagrangian {
     /// ∂L/∂v and ∂²L/∂v∂v (row-major) at (t, q, v).
     fn velocity_derivatives(&self, t: f64, q: &[f64], v: &[f64], lv: &mut [f64], lvv: &mut [f64]) {
@@ -40,29 +46,57 @@ impl ExpressionLagrangian {
         }
     }
 
-    /// The velocity v with ∂L/∂v(q, v) = p (inverse Legendre transform), by Newton's method
-    /// from v = 0 (one step for Lagrangians quadratic in v). Errors: wrong lengths, non-finite
-    /// input, a singular velocity Hessian at an iterate
-    /// ([`ExpressionError::SingularHessian`]), no convergence.
+    /// The velocity v with ∂L/∂v(q, v) = p (inverse Legendre transform), by damped Newton
+    /// iteration from v = 0 (one full step for Lagrangians quadratic in v). Errors: wrong
+    /// lengths, non-finite input, a singular velocity Hessian at an iterate
+    /// ([`ExpressionError::SingularHessian`]), no convergence ([`ExpressionError::Legendre`],
+    /// naming the residual).
     pub fn velocity(&self, q: &[f64], p: &[f64]) -> Result<Vec<f64>> {
         self.velocity_at(0.0, q, p)
     }
 
     /// [`velocity`](Self::velocity) at time t (for Lagrangians that read `t`).
     pub fn velocity_at(&self, t: f64, q: &[f64], p: &[f64]) -> Result<Vec<f64>> {
+        self.velocity_near(t, q, p, &vec![0.0; self.dim()])
+    }
+
+    /// [`velocity_at`](Self::velocity_at) started from `start` instead of v = 0: a warm start
+    /// from a nearby state's velocity (the previous step's) needs fewer iterations.
+    ///
+    /// Newton's method is damped: a step is halved until the residual max|p − ∂L/∂v| falls
+    /// (by at least 10⁻⁴ of the step fraction), because the full step can overshoot by
+    /// orders of magnitude where ∂L/∂v grows fast. For L = cosh(v), p = sinh v, the full
+    /// step from v = 0 lands at v = p, where sinh p overflows for p ≳ 710 and, for p = 48,
+    /// costs one Newton step per unit of v back down (the 50-iteration budget ran out).
+    /// A full step that decreases the residual is always taken first, so where the plain
+    /// iteration converged monotonically (every Lagrangian quadratic in v) the iterates are
+    /// the same.
+    pub fn velocity_near(&self, t: f64, q: &[f64], p: &[f64], start: &[f64]) -> Result<Vec<f64>> {
         let d = self.dim();
         ensure_len("q (number of coordinates)", d, q.len())?;
         ensure_len("p (number of coordinates)", d, p.len())?;
+        ensure_len(
+            "the starting velocity (number of coordinates)",
+            d,
+            start.len(),
+        )?;
         ensure_finite("q", q)?;
         ensure_finite("p", p)?;
-        let mut v = vec![0.0; d];
+        ensure_finite("the starting velocity", start)?;
+        let mut v = start.to_vec();
         let (mut lv, mut lvv) = (vec![0.0; d], vec![0.0; d * d]);
+        let (mut trial_lv, mut trial_lvv) = (vec![0.0; d], vec![0.0; d * d]);
+        let mut trial = vec![0.0; d];
         let scale = 1.0 + p.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        let mut residual = f64::INFINITY;
-        for _ in 0..50 {
-            self.velocity_derivatives(t, q, &v, &mut lv, &mut lvv);
-            let r = DVector::from_iterator(d, p.iter().zip(&lv).map(|(p, l)| p - l));
-            residual = r.amax();
+        let residual_of = |lv: &[f64]| {
+            p.iter()
+                .zip(lv)
+                .fold(0.0f64, |m, (p, l)| crate::reduce::nan_max(m, (p - l).abs()))
+        };
+        self.velocity_derivatives(t, q, &v, &mut lv, &mut lvv);
+        let mut residual = residual_of(&lv);
+        let mut iterations = 0;
+        while iterations < LEGENDRE_ITERATIONS {
             if residual <= 4.0 * f64::EPSILON * scale {
                 return Ok(v);
             }
@@ -70,6 +104,12 @@ impl ExpressionLagrangian {
             let m = DMatrix::from_row_slice(d, d, &lvv);
             let rcond = reciprocal_condition(&m);
             if rcond.is_nan() || rcond <= MIN_RCOND {
+                if iterations > 0 {
+                    // Singular at an iterate, not at the start: the iteration ran off where
+                    // L_vv vanishes (p outside the range of ∂L/∂v, e.g. |p| ≥ 1 for
+                    // L = √(1 + ẋ²)). Report the residual, not the iterate's Hessian.
+                    break;
+                }
                 return Err(ExpressionError::SingularHessian {
                     what: "the initial state".into(),
                     q: q.to_vec(),
@@ -78,24 +118,53 @@ impl ExpressionLagrangian {
                 }
                 .into());
             }
+            let r = DVector::from_iterator(d, p.iter().zip(&lv).map(|(p, l)| p - l));
             let Some(dv) = m.lu().solve(&r) else { break };
-            v.iter_mut().zip(dv.iter()).for_each(|(v, d)| *v += d);
-            if dv.amax() <= 1e-15 * (1.0 + v.iter().fold(0.0f64, |m, x| m.max(x.abs()))) {
-                self.velocity_derivatives(t, q, &v, &mut lv, &mut lvv);
-                residual = p
-                    .iter()
-                    .zip(&lv)
-                    .fold(0.0f64, |m, (p, l)| m.max((p - l).abs()));
+            iterations += 1;
+            // Backtracking on the residual: λ = 1, ½, ¼, … until it decreases.
+            let mut lambda = 1.0;
+            let mut accepted = None;
+            for _ in 0..LEGENDRE_HALVINGS {
+                for ((x, v), dv) in trial.iter_mut().zip(&v).zip(dv.iter()) {
+                    *x = v + lambda * dv;
+                }
+                self.velocity_derivatives(t, q, &trial, &mut trial_lv, &mut trial_lvv);
+                let r = residual_of(&trial_lv);
+                // NaN (overflow of L's derivatives) compares false: halve.
+                if r <= (1.0 - 1e-4 * lambda) * residual {
+                    accepted = Some(r);
+                    break;
+                }
+                lambda *= 0.5;
+            }
+            let Some(r) = accepted else {
+                // No decrease along the Newton direction: the residual is at its round-off
+                // floor (accept it if small) or Newton cannot make progress.
+                if residual <= 1e-10 * scale {
+                    return Ok(v);
+                }
+                break;
+            };
+            std::mem::swap(&mut v, &mut trial);
+            std::mem::swap(&mut lv, &mut trial_lv);
+            std::mem::swap(&mut lvv, &mut trial_lvv);
+            residual = r;
+            let step = lambda * dv.amax();
+            if step <= 1e-15 * (1.0 + v.iter().fold(0.0f64, |m, x| m.max(x.abs()))) {
                 if residual <= 1e-10 * scale {
                     return Ok(v);
                 }
                 break;
             }
         }
+        if residual <= 4.0 * f64::EPSILON * scale {
+            return Ok(v);
+        }
         Err(ExpressionError::Legendre {
             q: q.to_vec(),
             p: p.to_vec(),
             residual,
+            iterations,
         }
         .into())
     }

@@ -210,3 +210,48 @@ fn a_force_of_the_wrong_length_or_unknown_symbol_is_refused() {
     // Negative control: an autonomous L is not time-dependent.
     assert!(l.is_autonomous() && !l.is_forced());
 }
+
+/// L = cosh(ẋ) has p = sinh ẋ: the inverse Legendre transform must give v = asinh p for large
+/// p. Newton from v = 0 steps to v = p, where sinh p is enormous (and overflows beyond 710),
+/// so the iteration is damped. Negative control: the undamped iteration from 0 with the same
+/// 50-iteration budget needs all but one of them at p = 48, fails at p = 50 and overflows at
+/// p = 1e3.
+#[test]
+fn inverse_legendre_of_cosh_recovers_asinh_p_for_large_momenta() {
+    let l = ExpressionLagrangian::parse("cosh(x_dot) - x^2/2", &["x"], &[]).unwrap();
+    for p in [48.0, 50.0, 1e3, 1e6, -1e6] {
+        let v = l.velocity(&[0.2], &[p]).unwrap()[0];
+        let exact = f64::asinh(p);
+        assert!(
+            (v - exact).abs() <= 1e-14 * exact.abs(),
+            "p = {p}: {v} vs {exact}"
+        );
+    }
+    // A warm start from a nearby velocity gives the same v.
+    let v = l.velocity_near(0.0, &[0.2], &[1e3], &[7.5]).unwrap()[0];
+    assert!((v - 1e3f64.asinh()).abs() <= 1e-14 * 1e3f64.asinh(), "{v}");
+    // The undamped iteration (what velocity did before): Some(iterations) if it reaches
+    // asinh p to 1e-14 within 50 iterations.
+    let undamped = |p: f64| {
+        let mut v = 0.0f64;
+        for k in 1..=50 {
+            v += (p - v.sinh()) / v.cosh();
+            if (v - p.asinh()).abs() <= 1e-14 * p.asinh() {
+                return Some(k);
+            }
+        }
+        None
+    };
+    assert!(
+        undamped(48.0).is_some_and(|k| k >= 45),
+        "{:?}",
+        undamped(48.0)
+    );
+    assert_eq!(undamped(50.0), None);
+    assert_eq!(undamped(1e3), None);
+    // A momentum no velocity has (L = √(1 + ẋ²) has |p| = |ẋ|/√(1 + ẋ²) < 1) is a typed
+    // error naming the residual, not a panic or a wrong v.
+    let bounded = ExpressionLagrangian::parse("sqrt(1 + x_dot^2)", &["x"], &[]).unwrap();
+    let err = bounded.velocity(&[0.0], &[2.0]).unwrap_err().to_string();
+    assert!(err.contains("residual max|p − ∂L/∂v|"), "{err}");
+}

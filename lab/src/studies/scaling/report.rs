@@ -73,7 +73,7 @@ impl ScalingStudy {
         self.points
             .iter()
             .filter_map(|p| p.map_difference)
-            .fold(0.0, f64::max)
+            .fold(0.0, crate::distance::nan_max)
     }
 
     /// Markdown summary: exponents, auto / best, the point table.

@@ -488,7 +488,7 @@ fn time_point<S: System + 'static>(
                     .iter()
                     .zip(exact)
                     .map(|(q, e)| max_norm_diff(q, e))
-                    .fold(0.0, f64::max);
+                    .fold(0.0, crate::distance::nan_max);
                 if let Some(f) = run.failure {
                     point.failure = Some(f);
                     point.error = f64::INFINITY;
