@@ -10,6 +10,9 @@ use super::axis::{Axis, Scale, min_max, padded_range, to_plot, valid_range, wide
 use super::error::{PlotError, backend_err};
 use super::layout::{FONT, frame, palette, plot_area_size, titled, write_file};
 
+/// An axis range (lo, hi) in plot space.
+type Range = (f64, f64);
+
 /// How a [`Series`] is drawn.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Style {
@@ -252,6 +255,27 @@ impl Chart {
         all.filter(|p| !p.2.is_empty()).collect()
     }
 
+    /// Widen the axis with the smaller units per pixel so that both have the same: a circle
+    /// draws as a circle.
+    fn equal_aspect_axes(
+        &self,
+        size: (u32, u32),
+        mut x: Range,
+        mut y: Range,
+    ) -> Result<(Range, Range), PlotError> {
+        let bad = |what| PlotError::invalid(&self.title, what);
+        let (pw, ph) = plot_area_size(size, &self.title);
+        let (ux, uy) = ((x.1 - x.0) / f64::from(pw), (y.1 - y.0) / f64::from(ph));
+        if ux < uy {
+            x = widen(x, uy * f64::from(pw));
+        } else {
+            y = widen(y, ux * f64::from(ph));
+        }
+        x = valid_range(x).ok_or_else(|| bad("equal-aspect x range overflows"))?;
+        y = valid_range(y).ok_or_else(|| bad("equal-aspect y range overflows"))?;
+        Ok((x, y))
+    }
+
     /// Image size and axes (in plot space) for the prepared data.
     fn layout(&self, data: &[Prepared]) -> Result<((u32, u32), Axis, Axis), PlotError> {
         let pts = || data.iter().flat_map(|d| d.2.iter().flatten());
@@ -264,15 +288,7 @@ impl Chart {
         let size = (self.width, self.height);
         let size = (size.0.clamp(320, 16_384), size.1.clamp(240, 16_384));
         if self.equal_aspect {
-            let (pw, ph) = plot_area_size(size, &self.title);
-            let (ux, uy) = ((x.1 - x.0) / f64::from(pw), (y.1 - y.0) / f64::from(ph));
-            if ux < uy {
-                x = widen(x, uy * f64::from(pw));
-            } else {
-                y = widen(y, ux * f64::from(ph));
-            }
-            x = valid_range(x).ok_or_else(|| bad("equal-aspect x range overflows"))?;
-            y = valid_range(y).ok_or_else(|| bad("equal-aspect y range overflows"))?;
+            (x, y) = self.equal_aspect_axes(size, x, y)?;
         }
         if self.keep_legend_clear {
             let (_, box_h) = self.legend_box(data, size);
@@ -282,15 +298,7 @@ impl Chart {
                 let top = (yr.1 - y.0) / (1.0 - box_h - 0.03);
                 y = valid_range((y.0, y.0 + top)).ok_or_else(|| bad("y range overflows"))?;
                 if self.equal_aspect {
-                    let (pw, ph) = plot_area_size(size, &self.title);
-                    let (ux, uy) = ((x.1 - x.0) / f64::from(pw), (y.1 - y.0) / f64::from(ph));
-                    if ux < uy {
-                        x = widen(x, uy * f64::from(pw));
-                    } else {
-                        y = widen(y, ux * f64::from(ph));
-                    }
-                    x = valid_range(x).ok_or_else(|| bad("equal-aspect x range overflows"))?;
-                    y = valid_range(y).ok_or_else(|| bad("equal-aspect y range overflows"))?;
+                    (x, y) = self.equal_aspect_axes(size, x, y)?;
                 }
             }
         }
