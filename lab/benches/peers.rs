@@ -8,9 +8,10 @@
 //! positions and momenta, the Kepler force written out, samples stored as `[f64; 4]`); the
 //! bare DOP853 is the `differential-equations` crate used directly as a careful user would:
 //! `[f64; 4]` state, a hand-written right-hand side, one reused method object, the whole span
-//! in one `solve_ode` call with an output handler that stores nothing, and no samples at all
-//! (the wrapper also stops exactly at the 100 sample times, so the ratio charges it with its
-//! sampling).
+//! in one `solve_ode` call, timed twice: with an output handler that stores nothing and no
+//! samples at all (an upper bound on what sampling costs the wrapper, which stops exactly at the
+//! 100 sample times), and with the same 101 samples from the crate's own evenly spaced output
+//! (`EvenSolout`, its dense output: the same problem the study solves).
 //!
 //! Before criterion's own measurements it prints a table of wrapper/bare ratios of median
 //! wall times (`cargo bench -p galerkin-vi-lab --bench peers`). It asserts nothing about time;
@@ -194,7 +195,7 @@ mod dop {
     use differential_equations::interpolate::Interpolation;
     use differential_equations::methods::{DormandPrince, ExplicitRungeKutta, Ordinary};
     use differential_equations::ode::{ODE, OrdinaryNumericalMethod, solve_ode};
-    use differential_equations::solout::Solout;
+    use differential_equations::solout::{EvenSolout, Solout};
     use differential_equations::solution::Solution;
 
     struct KeplerRhs;
@@ -262,92 +263,138 @@ mod dop {
     /// Tolerances compared: the study's half-decade grid around 1e-9 at T = 200.
     pub const TOLERANCES: [f64; 3] = [1e-12, 3.1622776601683794e-14, 1e-14];
 
+    /// The same careful use sampling the same problem: the 101 states at t = 0, 2, …, 200
+    /// from the crate's own output handler for evenly spaced times (`EvenSolout`, DOP853's
+    /// seventh-order dense output between step ends: no step is shortened, each sampled step
+    /// pays the interpolant's three extra stages). Returns the last sample and the force
+    /// evaluations.
+    pub fn bare_dop853_sampled(method: &mut Dop) -> ([f64; 4], usize) {
+        method.h0 = 0.0;
+        let y = [Q0[0], Q0[1], P0[0], P0[1]];
+        let t_end = INTERVAL * SAMPLES as f64;
+        let mut out = EvenSolout::new(INTERVAL, 0.0, t_end);
+        let solution =
+            solve_ode(method, &KeplerRhs, 0.0, t_end, &y, &mut out).expect("DOP853 on Kepler");
+        assert_eq!(solution.y.len(), SAMPLES + 1, "one state per sample time");
+        (solution.y[SAMPLES], solution.evals.function)
+    }
+
     /// Prints wrapper / careful-bare ratios of wall times (interleaved runs: the median of
-    /// the per-pair ratios, robust to a machine whose load drifts), the wrapper on the study's
-    /// own system type (`AnySystem`, as `gvi work-precision` runs it) and on `Kepler`, with
-    /// the force evaluations of each, and checks that both reach the same end state to within
-    /// the tolerance-level error.
+    /// the per-round ratios, robust to a machine whose load drifts), the wrapper on the study's
+    /// own system type (`AnySystem`, as `gvi work-precision` runs it) and on `Kepler`, against
+    /// the bare crate with no samples (only the end state) and with the same 101 samples from
+    /// its own dense output, with the force evaluations of each, and checks that all reach the
+    /// same end state to within the tolerance-level error.
     pub fn compare(kepler: &Kepler, initial: &InitialState) {
         let any = galerkin_vi::systems::AnySystem::Kepler(*kepler);
         eprintln!(
             "\nDOP853: the study's wrapper (100 samples, each exactly at a step end) against the \
-             crate used bare over the whole span (no samples); ratios: median of interleaved pairs"
+             crate used bare over the whole span, without samples (bare) and with the same \
+             samples from its dense output (sampled); ratios: median of interleaved rounds"
         );
         eprintln!(
-            "{:<10} {:>11} {:>11} {:>11} {:>7} {:>7} {:>7} {:>9}",
-            "tol", "wrapper", "AnySystem", "bare", "ratio", "(Any)", "evals", "|Δ end|"
+            "{:<10} {:>10} {:>10} {:>10} {:>10} | {:>8} {:>8} {:>8} {:>8} | {:>7} {:>7} {:>9}",
+            "tol",
+            "wrapper",
+            "AnySystem",
+            "bare",
+            "sampled",
+            "w/bare",
+            "Any/bare",
+            "w/samp",
+            "Any/samp",
+            "evals/b",
+            "evals/s",
+            "|Δ end|"
         );
         for tolerance in TOLERANCES {
             let peer = Peer::Dop853 { tolerance };
             let mut method = new_dop(tolerance);
+            let mut sampled_method = new_dop(tolerance);
             let run = wrapper(kepler, initial, peer);
             let (end, bare_evals) = bare_dop853(&mut method);
+            let (end_sampled, sampled_evals) = bare_dop853_sampled(&mut sampled_method);
             let (q, p) = (&run.q[SAMPLES], &run.p[SAMPLES]);
-            let diff = [q[0] - end[0], q[1] - end[1], p[0] - end[2], p[1] - end[3]]
-                .iter()
-                .fold(0.0f64, |m, x| m.max(x.abs()));
+            let mut diff = 0.0f64;
+            for e in [end, end_sampled] {
+                for x in [q[0] - e[0], q[1] - e[1], p[0] - e[2], p[1] - e[3]] {
+                    diff = diff.max(x.abs());
+                }
+            }
             assert!(
                 diff < 1e-6,
                 "DOP853 {tolerance:e}: wrapper and bare differ by {diff:e}"
             );
-            let budget = Duration::from_millis(3000);
+            let budget = Duration::from_millis(4000);
+            let mut direct = || {
+                black_box(wrapper(kepler, initial, black_box(peer)));
+            };
             let mut study = || {
                 let run = run_peer(&any, initial, black_box(peer), INTERVAL, 1, SAMPLES);
                 black_box(run.expect("run_peer"));
             };
-            let mut direct = || {
-                black_box(wrapper(kepler, initial, black_box(peer)));
-            };
             let mut bare = || {
                 black_box(bare_dop853(&mut method));
             };
-            let [tw, ta, tb, rw, ra] = paired(&mut direct, &mut study, &mut bare, budget);
+            let mut sampled = || {
+                black_box(bare_dop853_sampled(&mut sampled_method));
+            };
+            let (t, r) = interleaved(
+                &mut [&mut direct, &mut study, &mut bare, &mut sampled],
+                budget,
+            );
             eprintln!(
-                "{:<10.3e} {:>8.1} µs {:>8.1} µs {:>8.1} µs {:>6.3}× {:>6.3}× {:>6.3}× {:>9.1e}",
+                "{:<10.3e} {:>7.1} µs {:>7.1} µs {:>7.1} µs {:>7.1} µs | {:>7.3}× {:>7.3}× \
+                 {:>7.3}× {:>7.3}× | {:>7.3} {:>7.3} {:>9.1e}",
                 tolerance,
-                tw * 1e6,
-                ta * 1e6,
-                tb * 1e6,
-                rw,
-                ra,
+                t[0] * 1e6,
+                t[1] * 1e6,
+                t[2] * 1e6,
+                t[3] * 1e6,
+                r(0, 2),
+                r(1, 2),
+                r(0, 3),
+                r(1, 3),
                 run.force_evaluations as f64 / bare_evals as f64,
+                run.force_evaluations as f64 / sampled_evals as f64,
                 diff
             );
         }
     }
 
-    /// Runs a, b and c in turn until `budget` (at least 15 rounds); returns the three median
-    /// times and the medians of the per-round ratios a/c and b/c.
-    fn paired(
-        a: &mut dyn FnMut(),
-        b: &mut dyn FnMut(),
-        c: &mut dyn FnMut(),
+    /// Runs the closures in turn, round after round, until `budget` (at least 15 rounds);
+    /// returns their median times and the median over rounds of the ratio of two of them
+    /// (`ratio(a, b)`: time of a / time of b in the same round).
+    fn interleaved(
+        runs: &mut [&mut dyn FnMut()],
         budget: Duration,
-    ) -> [f64; 5] {
-        let time = |f: &mut dyn FnMut()| {
-            let t = Instant::now();
+    ) -> (Vec<f64>, impl Fn(usize, usize) -> f64 + use<>) {
+        for f in runs.iter_mut() {
             f();
-            t.elapsed().as_secs_f64()
-        };
-        a();
-        b();
-        c();
-        let mut rounds: Vec<[f64; 3]> = Vec::new();
+        }
+        let mut rounds: Vec<Vec<f64>> = Vec::new();
         let start = Instant::now();
         while rounds.len() < 15 || (start.elapsed() < budget && rounds.len() < 1001) {
-            rounds.push([time(a), time(b), time(c)]);
+            rounds.push(
+                runs.iter_mut()
+                    .map(|f| {
+                        let t = Instant::now();
+                        f();
+                        t.elapsed().as_secs_f64()
+                    })
+                    .collect(),
+            );
         }
-        let median = |mut v: Vec<f64>| {
+        fn median(mut v: Vec<f64>) -> f64 {
             v.sort_by(f64::total_cmp);
             v[v.len() / 2]
-        };
-        [
-            median(rounds.iter().map(|r| r[0]).collect()),
-            median(rounds.iter().map(|r| r[1]).collect()),
-            median(rounds.iter().map(|r| r[2]).collect()),
-            median(rounds.iter().map(|r| r[0] / r[2]).collect()),
-            median(rounds.iter().map(|r| r[1] / r[2]).collect()),
-        ]
+        }
+        let times = (0..runs.len())
+            .map(|k| median(rounds.iter().map(|r| r[k]).collect()))
+            .collect();
+        (times, move |a: usize, b: usize| {
+            median(rounds.iter().map(|r| r[a] / r[b]).collect())
+        })
     }
 }
 
@@ -479,6 +526,9 @@ fn peers(c: &mut Criterion) {
         let mut method = dop::new_dop(tolerance);
         group.bench_function(format!("dop853-{tolerance:e}/bare"), |b| {
             b.iter(|| dop::bare_dop853(&mut method))
+        });
+        group.bench_function(format!("dop853-{tolerance:e}/bare-sampled"), |b| {
+            b.iter(|| dop::bare_dop853_sampled(&mut method))
         });
     }
     group.finish();
