@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Compare two outputs of `examples/record_maps.rs` (the "same maps" regression check).
+"""Compare two outputs of `examples/record_maps/` (the "same maps" regression check).
 
 Usage: scripts/compare-maps.py BASE.txt CURRENT.txt [--tol 1e-14] [--verbose]
 

@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
 # The "same maps" regression check: every built-in basis × quadrature × stage solver × scene of
-# examples/record_maps.rs must give the same map in the current checkout (working tree, with
+# examples/record_maps/ must give the same map in the current checkout (working tree, with
 # uncommitted changes) as at BASE_COMMIT — bit for bit, or within the tolerance (relative).
 #
 # Usage: scripts/same-maps.sh [BASE_COMMIT]        (default 9727f8f)
 #
-# Creates a temporary git worktree of BASE_COMMIT, copies the current examples/record_maps.rs
+# Creates a temporary git worktree of BASE_COMMIT, copies the current examples/record_maps/
 # into it, runs `cargo run --release --example record_maps -p galerkin-vi` there and here, and
 # compares the two recordings with scripts/compare-maps.py. Exits nonzero if a case differs by
 # more than the tolerance or changed status (ok/error). The worktree is removed at the end.
@@ -41,7 +41,10 @@ trap cleanup EXIT
 
 echo "same-maps: base $base_commit (${base_sha:0:12}) in $worktree" >&2
 git worktree add --quiet --detach "$worktree" "$base_sha"
-cp "$repo/examples/record_maps.rs" "$worktree/examples/record_maps.rs"
+# The recorder is examples/record_maps/ (a directory since it was split by case family; before
+# that, one file examples/record_maps.rs): the base gets the current one, whatever its shape.
+rm -rf "$worktree/examples/record_maps.rs" "$worktree/examples/record_maps"
+cp -r "$repo/examples/record_maps" "$worktree/examples/record_maps"
 
 echo "same-maps: recording the base (target dir $base_target)" >&2
 (cd "$worktree" && CARGO_TARGET_DIR=$base_target \

@@ -30,6 +30,7 @@ mod periodic;
 mod robustness;
 mod scaling;
 mod scene_fuzz;
+mod sections;
 mod silent_nonsense;
 mod solvers;
 mod stability;
