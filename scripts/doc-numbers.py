@@ -111,12 +111,39 @@ def fit_field(which: str, key: str) -> Callable[[str, Path], float]:
     return get
 
 
+def csv_field(path: str, basis: str, quadrature: str, n: int, column: str) -> Callable[[str, Path], float]:
+    """A column of the row (basis, quadrature, n) of a study's CSV, in the scratch directory."""
+
+    def get(_out: str, wd: Path) -> float:
+        import csv
+
+        with open(wd / path, newline="") as f:
+            for row in csv.DictReader(f):
+                if (row["basis"], row["quadrature"], row["n"]) == (basis, quadrature, str(n)):
+                    return float(row[column])
+        raise ValueError(f"no row {basis}, {quadrature}, n = {n} in {path}")
+
+    return get
+
+
+COMPARE_BASES = "gvi compare-bases kepler --range 4:64:4"
+BASES_CSV = "out/compare-bases/compare-bases.csv"
+
 QUOTES: list = [
     # README: the main command's summary (its first two lines go to stderr too).
     Block(
         "README.md",
         "The first command prints",
         MAIN,
+        drop=[r"^created directory "],
+    ),
+    # Ensembles: the summary of the guide's run (the throughput line's times are normalised).
+    Block(
+        "docs/guide/ensembles.md",
+        "It prints (on this 2-core machine;",
+        "gvi ensemble double-pendulum --count 64 --perturb 1e-6 --seed 1 --throughput-sample 32"
+        " --output out/dp.csv",
+        stream="both",
         drop=[r"^created directory "],
     ),
     # README: the fitted Kepler rate and where it comes from.
@@ -160,6 +187,19 @@ QUOTES: list = [
            out=r"Galerkin curves: error ≈ ([0-9.]+)e3·"),
     Number("docs/guide/studies.md", r"round-off floor ≈ ([0-9.e-]+)\)`", REFINE_GUIDE,
            out=r"round-off floor ≈ ([0-9.e-]+)\)"),
+    # Bases and quadratures: the three polynomial bases' map error at n = 64, the kinetic
+    # condition numbers, and the README's summary of them.
+    *[
+        Number("docs/guide/bases-and-quadratures.md", rf"([0-9.e-]+) \({name}\)", COMPARE_BASES,
+               value=csv_field(BASES_CSV, name.lower(), "gauss-legendre", 64, "map_error"))
+        for name in ("Chebyshev", "Legendre", "Hermite")
+    ],
+    Number("docs/guide/bases-and-quadratures.md", r"~n³ for Chebyshev \(([0-9.e]+) at n = 64\)", COMPARE_BASES,
+           value=csv_field(BASES_CSV, "chebyshev", "gauss-legendre", 64, "kinetic_condition")),
+    Number("docs/guide/bases-and-quadratures.md", r"~n⁶ for Hermite\s+\(([0-9.e]+)\)", COMPARE_BASES,
+           value=csv_field(BASES_CSV, "hermite", "gauss-legendre", 64, "kinetic_condition")),
+    Number("README.md", r"same map, down to ~([0-9.e-]+) at n = 64", COMPARE_BASES,
+           value=csv_field(BASES_CSV, "chebyshev", "gauss-legendre", 64, "map_error")),
     # Lie groups: the free rigid body's error.
     Number("docs/guide/lie-group.md", r"n = 16: error ([0-9.e-]+)", "gvi run rigid-body --output out/rb.csv",
            out=r"max position error at step ends: ([0-9.e-]+)"),
