@@ -8,6 +8,7 @@ mod counting;
 mod counts;
 mod dependencies;
 mod expression_proptest;
+mod enriched;
 mod extension;
 mod paper_objects;
 mod roundoff;

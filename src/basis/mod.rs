@@ -39,11 +39,13 @@
 //! 2.0e5, Fourier 3.7 / 5.5 / 7.9 / 11 (equispaced nodes, where the sine block is the DST-I).
 
 mod chebyshev;
+mod enriched;
 mod fourier;
 mod hermite;
 mod legendre;
 
 pub use chebyshev::ChebyshevLagrange;
+pub use enriched::Enriched;
 pub use fourier::Fourier;
 pub use hermite::Hermite;
 pub use legendre::Legendre;
@@ -84,6 +86,24 @@ pub trait Basis: std::fmt::Debug + Send + Sync + 'static {
     /// points of [0, 1], which include both ends so the fitted coefficients keep the contract.
     fn interpolation_nodes(&self) -> Vec<f64> {
         chebyshev_lobatto_points(self.len())
+    }
+
+    /// The step size h the basis was made for, if its functions depend on it (an
+    /// [`Enriched`] basis has frequency ωh in τ), else `None` (the default). The integrator
+    /// refuses another h with [`GviError::Mismatch`].
+    fn step_size(&self) -> Option<f64> {
+        None
+    }
+
+    /// Refuse a quadrature rule too weak for this basis, beyond the integrator's own check
+    /// (exactness for φ_a'φ_b' of a polynomial basis, an invertible kinetic matrix otherwise).
+    /// A non-polynomial basis whose products need a given resolution (an [`Enriched`] basis
+    /// at large ωh) says so here. Default: accept.
+    ///
+    /// Errors: [`GviError::InvalidQuadrature`], naming what the rule lacks.
+    fn check_quadrature(&self, rule: &crate::quadrature::QuadratureRule) -> Result<()> {
+        let _ = rule;
+        Ok(())
     }
 }
 
@@ -243,6 +263,12 @@ impl Basis for AnyBasis {
     }
     fn interpolation_nodes(&self) -> Vec<f64> {
         dispatch!(self, b => b.interpolation_nodes())
+    }
+    fn step_size(&self) -> Option<f64> {
+        dispatch!(self, b => b.step_size())
+    }
+    fn check_quadrature(&self, rule: &crate::quadrature::QuadratureRule) -> Result<()> {
+        dispatch!(self, b => b.check_quadrature(rule))
     }
 }
 
