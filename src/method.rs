@@ -66,6 +66,13 @@ pub struct MethodSpec {
     /// round-off.
     #[serde(default)]
     pub solver: crate::integrator::StageSolver,
+    /// The enrichment frequency ω of the `enriched` basis (required by it, refused by the
+    /// others): n = p + 1 + 2K functions, polynomial degree p plus sin(kωhτ), cos(kωhτ).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub omega: Option<f64>,
+    /// The number K of harmonics of the `enriched` basis (default 1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub harmonics: Option<usize>,
     /// Rigid-body scenes: the retraction of the Lie group integrator (`exp` or `cayley`;
     /// default `exp`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -82,13 +89,31 @@ impl MethodSpec {
             crate::quadrature::QuadratureRule,
         >,
     > {
-        let gvi = crate::integrator::GalerkinIntegrator::from_kinds(
-            self.basis,
-            self.n,
-            self.quadrature,
-            self.quad_points,
-            self.h,
-        )?;
+        let gvi = if self.basis.is_parametrised() || self.omega.is_some() || self.harmonics.is_some()
+        {
+            let basis = self
+                .basis
+                .build_with(self.n, self.h, self.omega, self.harmonics)?;
+            // The enriched basis needs its products resolved: at least its own Gauss count
+            // (unless the points are given, when a weak rule is a typed error).
+            let points = match (&basis, self.quad_points) {
+                (_, Some(points)) => points,
+                (crate::basis::AnyBasis::Enriched(b), None) => self
+                    .quadrature
+                    .default_points(self.n)
+                    .max(b.gauss_points()),
+                (_, None) => self.quadrature.default_points(self.n),
+            };
+            crate::integrator::GalerkinIntegrator::new(basis, self.quadrature.build(points)?, self.h)?
+        } else {
+            crate::integrator::GalerkinIntegrator::from_kinds(
+                self.basis,
+                self.n,
+                self.quadrature,
+                self.quad_points,
+                self.h,
+            )?
+        };
         let options = crate::integrator::NewtonOptions {
             solver: self.solver,
             ..*gvi.options()
@@ -225,6 +250,8 @@ impl MethodSpec {
             control: None,
             auto_h: false,
             solver: Default::default(),
+            omega: None,
+            harmonics: None,
             retraction: None,
         }
     }

@@ -340,7 +340,8 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             dim,
             capacity,
         );
-        traj.set_user_basis(BasisKind::of(&*self.basis).is_none());
+        // A parametrised built-in basis (enriched) cannot be rebuilt from its name and n.
+        traj.set_user_basis(BasisKind::of(&*self.basis).is_none_or(BasisKind::is_parametrised));
         traj
     }
 

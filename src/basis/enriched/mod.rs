@@ -293,7 +293,9 @@ impl Trig {
             coefficients,
             r0,
             r1,
-            scale: 1.0 / size,
+            // Unit size in value, and in slope at large x (r' ≈ x f'(xτ) there), so that the
+            // kinetic matrix is not scaled by x² against the polynomial block.
+            scale: 1.0 / (size * (0.5 * x).max(1.0)),
         })
     }
 
