@@ -23,7 +23,6 @@ use crate::error::{GviError, Result};
 use crate::lagrangian::Mechanical;
 use nalgebra::DMatrix;
 use num_dual::DualNum;
-use num_traits::Zero;
 
 /// The Fermi–Pasta–Ulam chain of m stiff springs with stiffness ω² (D = 2m).
 ///

@@ -36,11 +36,14 @@
 //! enriched map and the degree-(p + 2) polynomial map agree to round-off.
 //!
 //! Harmonics (K > 1) are a different matter: as θ → 0 all K sines tend to the *same* limit,
-//! so they are nearly dependent among themselves, at the level (Kθ)^{2(K−1)}. No choice of
-//! representative cures that without changing the space, so the constructor measures it (the
-//! condition of the Gram matrix of the trigonometric functions' Chebyshev coefficients) and
-//! refuses, with [`GviError::InvalidParameter`] named `harmonics`, a basis whose harmonics
-//! cannot be told apart at this ωh; use K = 1 there.
+//! so they are nearly dependent among themselves, and more so the larger p is (the part of
+//! sin(kθτ) outside P_p shrinks like (kθ/4)^{p+1}/(p + 1)!). No choice of representative cures
+//! that without changing the space, so the constructor measures it (the condition of the Gram
+//! matrix of the trigonometric functions' Chebyshev coefficients) and refuses, with
+//! [`GviError::InvalidParameter`] named `harmonics`, a basis whose harmonics cannot be told
+//! apart at this ωh — measured with K = 2: at θ ≤ 0.05 for p = 1, at θ = 1 for p = 16, i.e.
+//! where 2θ is small against p and the polynomials already resolve the harmonics. Use K = 1
+//! there.
 //!
 //! # One frequency for every coordinate
 //!
@@ -348,6 +351,9 @@ fn check_harmonics(trig: &[Trig], degree: usize, theta: f64) -> Result<()> {
             let mut v = vec![0.0; len];
             v[..t.coefficients.len()].copy_from_slice(&t.coefficients);
             v[..=degree].iter_mut().for_each(|x| *x = 0.0);
+            // Scale by the largest entry first: at tiny ωh the squares would underflow.
+            let largest = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+            v.iter_mut().for_each(|x| *x /= largest);
             let norm = v.iter().map(|x| x * x).sum::<f64>().sqrt();
             v.iter_mut().for_each(|x| *x /= norm);
             v

@@ -65,9 +65,17 @@ fn contract_and_derivatives_over_the_frequency_range() {
     for p in [1, 2, 4, 9, 16] {
         for theta in [1e-9, 1e-4, 0.05, 1.0, 3.0, 12.0, 60.0, 250.0] {
             for harmonics in [1, 2] {
-                let Ok(b) = Enriched::with_harmonics(p, harmonics, theta, 1.0) else {
-                    assert!(harmonics > 1 && theta < 1e-3, "p = {p}, θ = {theta}");
-                    continue;
+                let b = match Enriched::with_harmonics(p, harmonics, theta, 1.0) {
+                    Ok(b) => b,
+                    // Two harmonics are refused where they are numerically dependent: where
+                    // 2θ is small against p, so that polynomials of degree p nearly resolve
+                    // them (measured: θ ≤ 0.05 at p = 1, θ = 1 at p = 16).
+                    Err(GviError::InvalidParameter { name, .. })
+                        if name == "harmonics" && harmonics > 1 && 2.0 * theta < p as f64 + 1.0 =>
+                    {
+                        continue;
+                    }
+                    Err(e) => panic!("p = {p}, θ = {theta}, K = {harmonics}: {e}"),
                 };
                 assert_eq!(b.len(), p + 1 + 2 * harmonics);
                 // Derivatives of frequency-θ functions: central differences are exact to
@@ -141,7 +149,9 @@ fn conditioning_stays_bounded_as_omega_h_goes_to_zero() {
             assert!(naive_cond > 1e13 || !naive_cond.is_finite(), "θ = {theta}: naive {naive_cond:e}");
         }
     }
-    assert!(worst < 1e4, "worst enriched condition number {worst:e}");
+    // Measured: at most 1.2e3 (θ ≤ 1e-2; the sine and cosine tails meet at an angle of about
+    // 1/(2p + 4)), against 2.0 for the Legendre basis of P_{p+2}.
+    assert!(worst < 2e3, "worst enriched condition number {worst:e}");
 }
 
 #[test]
