@@ -212,7 +212,9 @@ fn fpu_oscillatory_energy_is_near_constant() {
     fpu.invariants(&qs[steps], &ps[steps], &mut inv);
     let rk4_i = inv[1];
     println!("enriched ωh = 2, T = 200: max |I − I(0)| {worst_i:.2e}, max |H − H(0)| {worst_h:.2e}, max I₃ {max_i3:.3}; RK4 I(T) = {rk4_i:.2e}");
-    assert!(worst_i < 0.05, "I deviates by {worst_i}");
+    // The exact flow's I itself deviates from I(0) by up to 0.0624 over T = 200 (DOP853 at
+    // 1e-13, lab/examples/enriched_fpu.rs); measured here 0.0649.
+    assert!(worst_i < 0.07, "I deviates by {worst_i}");
     assert!(max_i3 > 0.1, "the third stiff spring never took energy: {max_i3}");
     assert!((rk4_i - i0).abs() > 0.5, "RK4 should lose I: {rk4_i}");
 }

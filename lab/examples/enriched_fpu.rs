@@ -10,7 +10,7 @@ use galerkin_vi::GalerkinIntegrator;
 use galerkin_vi::baselines::{
     GalerkinMethod, GaussCollocationBaseline, OneStepMethod, StormerVerlet, integrate_one_step,
 };
-use galerkin_vi::basis::{ChebyshevLagrange, Enriched};
+use galerkin_vi::basis::{Basis, ChebyshevLagrange, Enriched};
 use galerkin_vi::quadrature::GaussLegendre;
 use galerkin_vi::systems::{Fpu, System};
 use galerkin_vi::Result;

@@ -12,6 +12,7 @@ mod bases;
 mod compare_refinement;
 mod custom_solver;
 mod ensemble;
+mod enriched;
 mod errors;
 mod expression;
 mod expression_allocation;
