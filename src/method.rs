@@ -89,31 +89,34 @@ impl MethodSpec {
             crate::quadrature::QuadratureRule,
         >,
     > {
-        let gvi = if self.basis.is_parametrised() || self.omega.is_some() || self.harmonics.is_some()
-        {
-            let basis = self
-                .basis
-                .build_with(self.n, self.h, self.omega, self.harmonics)?;
-            // The enriched basis needs its products resolved: at least its own Gauss count
-            // (unless the points are given, when a weak rule is a typed error).
-            let points = match (&basis, self.quad_points) {
-                (_, Some(points)) => points,
-                (crate::basis::AnyBasis::Enriched(b), None) => self
-                    .quadrature
-                    .default_points(self.n)
-                    .max(b.gauss_points()),
-                (_, None) => self.quadrature.default_points(self.n),
+        let gvi =
+            if self.basis.is_parametrised() || self.omega.is_some() || self.harmonics.is_some() {
+                let basis = self
+                    .basis
+                    .build_with(self.n, self.h, self.omega, self.harmonics)?;
+                // The enriched basis needs its products resolved: at least its own Gauss count
+                // (unless the points are given, when a weak rule is a typed error).
+                let points = match (&basis, self.quad_points) {
+                    (_, Some(points)) => points,
+                    (crate::basis::AnyBasis::Enriched(b), None) => {
+                        self.quadrature.default_points(self.n).max(b.gauss_points())
+                    }
+                    (_, None) => self.quadrature.default_points(self.n),
+                };
+                crate::integrator::GalerkinIntegrator::new(
+                    basis,
+                    self.quadrature.build(points)?,
+                    self.h,
+                )?
+            } else {
+                crate::integrator::GalerkinIntegrator::from_kinds(
+                    self.basis,
+                    self.n,
+                    self.quadrature,
+                    self.quad_points,
+                    self.h,
+                )?
             };
-            crate::integrator::GalerkinIntegrator::new(basis, self.quadrature.build(points)?, self.h)?
-        } else {
-            crate::integrator::GalerkinIntegrator::from_kinds(
-                self.basis,
-                self.n,
-                self.quadrature,
-                self.quad_points,
-                self.h,
-            )?
-        };
         let options = crate::integrator::NewtonOptions {
             solver: self.solver,
             ..*gvi.options()
@@ -159,7 +162,8 @@ impl MethodSpec {
     /// (which chooses h from the tolerance) has `tol`. The integrator checks the rest (n, the
     /// quadrature) when it is built.
     ///
-    /// Errors: [`GviError::InvalidStepSize`]; [`GviError::InvalidInput`] named `auto_h`.
+    /// Errors: [`GviError::InvalidStepSize`]; [`GviError::InvalidInput`] named `auto_h`, or
+    /// `tol` with the enriched basis (which needs a fixed n).
     pub fn validate(&self) -> Result<()> {
         if !(self.h.is_finite() && self.h > 0.0) {
             return Err(GviError::InvalidStepSize { h: self.h });
@@ -168,6 +172,15 @@ impl MethodSpec {
             return Err(GviError::InvalidInput {
                 name: "auto_h".into(),
                 reason: "choosing h needs a tolerance (tol)".into(),
+            });
+        }
+        // The tolerance-driven ladder and the Lie group integrator build bases from n alone.
+        if self.tol.is_some() && (self.basis.is_parametrised() || self.omega.is_some()) {
+            return Err(GviError::InvalidInput {
+                name: "tol".into(),
+                reason: "a tolerance-driven run chooses n per step from bases built from n \
+                         alone; the enriched basis (omega) needs a fixed n"
+                    .into(),
             });
         }
         Ok(())
@@ -223,6 +236,11 @@ impl MethodSpec {
     /// The Lie group integrator on SO(3) this method names (basis, n, quadrature, points, h
     /// and `retraction`, default exp), for rigid bodies ([`crate::lie`]).
     pub fn lie_integrator(&self) -> Result<crate::lie::LieGalerkin> {
+        if self.omega.is_some() || self.harmonics.is_some() {
+            return Err(GviError::Unsupported(
+                "the Lie group integrator takes no enriched basis (omega, harmonics)".into(),
+            ));
+        }
         Ok(crate::lie::LieGalerkin::from_kinds(
             self.basis,
             self.n,

@@ -16,13 +16,23 @@ use galerkin_vi::systems::{Fpu, Kepler, System};
 use galerkin_vi::{GviError, Result};
 
 /// The enriched integrator at its recommended Gauss rule (at least 2n points).
-fn enriched(degree: usize, omega: f64, h: f64) -> Result<GalerkinIntegrator<Enriched, GaussLegendre>> {
+fn enriched(
+    degree: usize,
+    omega: f64,
+    h: f64,
+) -> Result<GalerkinIntegrator<Enriched, GaussLegendre>> {
     let basis = Enriched::new(degree, omega, h)?;
     let points = basis.gauss_points().max(2 * basis.len());
     GalerkinIntegrator::new(basis, GaussLegendre::new(points)?, h)
 }
 
-fn rk4_states(fpu: &Fpu, q: &[f64], p: &[f64], h: f64, steps: usize) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
+fn rk4_states(
+    fpu: &Fpu,
+    q: &[f64],
+    p: &[f64],
+    h: f64,
+    steps: usize,
+) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
     let mut rk4 = Rk4::new(fpu, h).unwrap();
     integrate_one_step(&mut rk4, q, p, steps).unwrap()
 }
@@ -96,7 +106,10 @@ fn enriched_map_conserves_angular_momentum() {
         .iter()
         .zip(&ps)
         .fold(0.0f64, |m, (q, p)| m.max((ang(q, p) - l0).abs()));
-    println!("angular momentum drift: enriched {drift:.1e}, RK4 {rk4_drift:.1e} ({})", rk4.name());
+    println!(
+        "angular momentum drift: enriched {drift:.1e}, RK4 {rk4_drift:.1e} ({})",
+        rk4.name()
+    );
     assert!(drift < 1e-13, "enriched drift {drift:e}");
     assert!(rk4_drift > 1e-6, "RK4 should drift: {rk4_drift:e}");
 }
@@ -116,7 +129,8 @@ fn small_omega_h_reaches_the_polynomial_limit() {
     let poly = GalerkinIntegrator::new(Legendre::new(7).unwrap(), rule(), h).unwrap();
     let want = poly.integrate(&kepler, 0.0, &q0, &p0, 80).unwrap();
     for theta in [1e-8, 1e-5] {
-        let e = GalerkinIntegrator::new(Enriched::new(4, theta / h, h).unwrap(), rule(), h).unwrap();
+        let e =
+            GalerkinIntegrator::new(Enriched::new(4, theta / h, h).unwrap(), rule(), h).unwrap();
         let got = e.integrate(&kepler, 0.0, &q0, &p0, 80).unwrap();
         let diff = got
             .q
@@ -124,24 +138,40 @@ fn small_omega_h_reaches_the_polynomial_limit() {
             .zip(&want.q)
             .flat_map(|(a, b)| a.iter().zip(b).map(|(x, y)| (x - y).abs()))
             .fold(0.0f64, f64::max);
-        println!("ωh = {theta:e}: enriched vs Legendre(7) {diff:.1e}; kinetic condition {:.1e}", e.kinetic_condition_number());
+        println!(
+            "ωh = {theta:e}: enriched vs Legendre(7) {diff:.1e}; kinetic condition {:.1e}",
+            e.kinetic_condition_number()
+        );
         assert!(diff < 1e-11, "ωh = {theta}: {diff:e}");
     }
     let naive = GalerkinIntegrator::new(NaiveEnriched { p: 4, theta: 1e-5 }, rule(), h);
     match naive {
         Err(e) => {
             println!("naive enrichment at ωh = 1e-5 refused: {e}");
-            assert!(matches!(e, GviError::QuadratureTooWeak { .. } | GviError::InvalidBasisSize { .. }));
+            assert!(matches!(
+                e,
+                GviError::QuadratureTooWeak { .. } | GviError::InvalidBasisSize { .. }
+            ));
         }
         Ok(gvi) => {
             let cond = gvi.kinetic_condition_number();
             let got = gvi.integrate(&kepler, 0.0, &q0, &p0, 80);
             let diff = match got {
-                Ok(t) => t.q.iter().zip(&want.q).flat_map(|(a, b)| a.iter().zip(b).map(|(x, y)| (x - y).abs())).fold(0.0f64, f64::max),
+                Ok(t) => {
+                    t.q.iter()
+                        .zip(&want.q)
+                        .flat_map(|(a, b)| a.iter().zip(b).map(|(x, y)| (x - y).abs()))
+                        .fold(0.0f64, f64::max)
+                }
                 Err(_) => f64::INFINITY,
             };
-            println!("naive enrichment at ωh = 1e-5: condition {cond:.1e}, off the limit by {diff:.1e}");
-            assert!(cond > 1e12 && diff > 1e-9, "the naive basis should be ill-conditioned");
+            println!(
+                "naive enrichment at ωh = 1e-5: condition {cond:.1e}, off the limit by {diff:.1e}"
+            );
+            assert!(
+                cond > 1e12 && diff > 1e-9,
+                "the naive basis should be ill-conditioned"
+            );
         }
     }
 }
@@ -173,13 +203,25 @@ fn convergence_is_geometric_in_the_degree_at_large_omega_h() {
     let fit = fitted_rate(&rich, RefineBy::N, ErrorMeasure::Map).unwrap();
     for (i, r) in rich.iter().enumerate() {
         let pe = poly.as_ref().map(|p| p[i].map_error).unwrap_or(f64::NAN);
-        println!("n = {:2}: enriched map error {:.2e} (curve {:.2e}), Legendre {pe:.2e}", r.n, r.map_error, r.error);
+        println!(
+            "n = {:2}: enriched map error {:.2e} (curve {:.2e}), Legendre {pe:.2e}",
+            r.n, r.map_error, r.error
+        );
     }
-    println!("enriched: error ≈ C·{:.3}ⁿ (max log-residual {:.2}, {} points)", fit.rate, fit.max_residual, fit.used);
+    println!(
+        "enriched: error ≈ C·{:.3}ⁿ (max log-residual {:.2}, {} points)",
+        fit.rate, fit.max_residual, fit.used
+    );
     assert!(fit.rate < 0.5 && fit.used >= 4, "rate {}", fit.rate);
     if let Ok(poly) = poly {
         for (r, p) in rich.iter().zip(&poly).skip(1) {
-            assert!(r.map_error < 0.1 * p.map_error, "n = {}: {} vs {}", r.n, r.map_error, p.map_error);
+            assert!(
+                r.map_error < 0.1 * p.map_error,
+                "n = {}: {} vs {}",
+                r.n,
+                r.map_error,
+                p.map_error
+            );
         }
     }
 }
@@ -211,11 +253,16 @@ fn fpu_oscillatory_energy_is_near_constant() {
     let (qs, ps) = rk4_states(&fpu, &q0, &p0, h, steps);
     fpu.invariants(&qs[steps], &ps[steps], &mut inv);
     let rk4_i = inv[1];
-    println!("enriched ωh = 2, T = 200: max |I − I(0)| {worst_i:.2e}, max |H − H(0)| {worst_h:.2e}, max I₃ {max_i3:.3}; RK4 I(T) = {rk4_i:.2e}");
+    println!(
+        "enriched ωh = 2, T = 200: max |I − I(0)| {worst_i:.2e}, max |H − H(0)| {worst_h:.2e}, max I₃ {max_i3:.3}; RK4 I(T) = {rk4_i:.2e}"
+    );
     // The exact flow's I itself deviates from I(0) by up to 0.0624 over T = 200 (DOP853 at
     // 1e-13, lab/examples/enriched_fpu.rs); measured here 0.0649.
     assert!(worst_i < 0.07, "I deviates by {worst_i}");
-    assert!(max_i3 > 0.1, "the third stiff spring never took energy: {max_i3}");
+    assert!(
+        max_i3 > 0.1,
+        "the third stiff spring never took energy: {max_i3}"
+    );
     assert!((rk4_i - i0).abs() > 0.5, "RK4 should lose I: {rk4_i}");
 }
 

@@ -7,8 +7,8 @@ mod counting;
 
 mod counts;
 mod dependencies;
-mod expression_proptest;
 mod enriched;
+mod expression_proptest;
 mod extension;
 mod paper_objects;
 mod roundoff;

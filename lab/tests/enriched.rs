@@ -23,7 +23,10 @@ fn fpu_scene_runs_with_the_enriched_basis() {
         })
         .build()
         .unwrap();
-    assert_eq!((scene.method.basis, scene.method.omega, scene.method.n), (BasisKind::Enriched, Some(50.0), 7));
+    assert_eq!(
+        (scene.method.basis, scene.method.omega, scene.method.n),
+        (BasisKind::Enriched, Some(50.0), 7)
+    );
     let BuiltSystem::Euclidean(system) = &scene.system else {
         panic!("fpu is Euclidean");
     };
@@ -63,10 +66,16 @@ fn enriched_by_name_and_its_errors() {
         Ok(_) => panic!("expected an error"),
     };
     let e = core(with("kepler", enriched(None, 9)));
-    assert!(matches!(&e, GviError::InvalidInput { name, .. } if name == "basis"), "{e}");
+    assert!(
+        matches!(&e, GviError::InvalidInput { name, .. } if name == "basis"),
+        "{e}"
+    );
     for bad in [0.0, -2.0, f64::NAN, f64::INFINITY] {
         let e = core(with("kepler", enriched(Some(bad), 9)));
-        assert!(matches!(&e, GviError::InvalidParameter { name, .. } if name == "omega"), "{e}");
+        assert!(
+            matches!(&e, GviError::InvalidParameter { name, .. } if name == "omega"),
+            "{e}"
+        );
     }
     let e = core(with("kepler", enriched(Some(1.0), 3)));
     assert!(matches!(e, GviError::InvalidBasisSize { .. }), "{e}");
@@ -77,7 +86,10 @@ fn enriched_by_name_and_its_errors() {
             ..Overrides::default()
         },
     ));
-    assert!(matches!(&e, GviError::InvalidInput { name, .. } if name == "omega"), "{e}");
+    assert!(
+        matches!(&e, GviError::InvalidInput { name, .. } if name == "omega"),
+        "{e}"
+    );
     // `--basis chebyshev` on the enriched fpu scene drops its ω instead of failing.
     let gvi = with(
         "fpu",
@@ -96,14 +108,28 @@ fn enriched_by_name_and_its_errors() {
 fn command_line_selects_the_enriched_basis() {
     let (code, out, err) = gvi(&["run", "fpu", "--steps", "50"]);
     assert_eq!(code, 0, "{err}");
-    assert!(out.lines().next().unwrap_or("").contains("oscillatory_energy"), "{out}");
+    assert!(
+        out.lines()
+            .next()
+            .unwrap_or("")
+            .contains("oscillatory_energy"),
+        "{out}"
+    );
     let (code, _, err) = gvi(&[
         "run", "kepler", "--basis", "enriched", "--omega", "1", "--n", "9", "--steps", "10",
     ]);
     assert_eq!(code, 0, "{err}");
     for (args, needle) in [
-        (vec!["run", "kepler", "--basis", "enriched", "--n", "9"], "omega"),
-        (vec!["run", "kepler", "--basis", "enriched", "--omega", "-1", "--n", "9"], "omega"),
+        (
+            vec!["run", "kepler", "--basis", "enriched", "--n", "9"],
+            "omega",
+        ),
+        (
+            vec![
+                "run", "kepler", "--basis", "enriched", "--omega", "-1", "--n", "9",
+            ],
+            "omega",
+        ),
         (vec!["run", "kepler", "--omega", "2"], "omega"),
         (vec!["run", "fpu", "--quad-points", "8"], "Gauss"),
     ] {

@@ -232,9 +232,12 @@ impl BasisKind {
         harmonics: Option<usize>,
     ) -> Result<AnyBasis> {
         if self != BasisKind::Enriched {
-            if let Some((name, _)) = [("omega", omega.is_some()), ("harmonics", harmonics.is_some())]
-                .into_iter()
-                .find(|(_, given)| *given)
+            if let Some((name, _)) = [
+                ("omega", omega.is_some()),
+                ("harmonics", harmonics.is_some()),
+            ]
+            .into_iter()
+            .find(|(_, given)| *given)
             {
                 return Err(GviError::InvalidInput {
                     name: name.into(),
@@ -257,7 +260,12 @@ impl BasisKind {
                 ),
             });
         }
-        Ok(AnyBasis::Enriched(Enriched::with_harmonics(n - 1 - 2 * k, k, omega, h)?))
+        Ok(AnyBasis::Enriched(Enriched::with_harmonics(
+            n - 1 - 2 * k,
+            k,
+            omega,
+            h,
+        )?))
     }
 }
 

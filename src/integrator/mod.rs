@@ -175,7 +175,10 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             && (made_for - h).abs() > 1e-12 * h
         {
             return Err(GviError::Mismatch {
-                expected: format!("the step size h = {made_for} the {} basis was made for", basis.name()),
+                expected: format!(
+                    "the step size h = {made_for} the {} basis was made for",
+                    basis.name()
+                ),
                 got: format!("h = {h}"),
             });
         }

@@ -132,9 +132,10 @@ impl Fpu {
     }
 
     fn elongation<T: DualNum<Primitive = f64> + Copy>(spring: &[(usize, f64); 4], q: &[T]) -> T {
-        spring
-            .iter()
-            .fold(T::zero(), |acc, &(i, c)| if c == 0.0 { acc } else { acc + q[i] * c })
+        spring.iter().fold(
+            T::zero(),
+            |acc, &(i, c)| if c == 0.0 { acc } else { acc + q[i] * c },
+        )
     }
 }
 
@@ -234,9 +235,15 @@ mod tests {
         let stiff: f64 = (1..=3)
             .map(|i| 0.25 * w * w * (chain[2 * i] - chain[2 * i - 1]).powi(2))
             .sum();
-        let soft: f64 = (0..=3).map(|i| (chain[2 * i + 1] - chain[2 * i]).powi(4)).sum();
+        let soft: f64 = (0..=3)
+            .map(|i| (chain[2 * i + 1] - chain[2 * i]).powi(4))
+            .sum();
         let v: f64 = fpu.potential(&q[..]);
-        assert!((v - stiff - soft).abs() < 1e-13 * v.abs(), "{v} vs {}", stiff + soft);
+        assert!(
+            (v - stiff - soft).abs() < 1e-13 * v.abs(),
+            "{v} vs {}",
+            stiff + soft
+        );
     }
 
     #[test]

@@ -113,7 +113,9 @@ impl Scene {
                 gravity,
                 mass,
             } => AnySystem::from(Pendulum::new(*length, *gravity, *mass)?).into(),
-            SystemSpec::Fpu { springs, omega } => AnySystem::from(Fpu::new(*springs, *omega)?).into(),
+            SystemSpec::Fpu { springs, omega } => {
+                AnySystem::from(Fpu::new(*springs, *omega)?).into()
+            }
             SystemSpec::NBody {
                 dim,
                 g,

@@ -134,9 +134,16 @@ mod tests {
                 let a = chebyshev_coefficients(x, cosine, coefficient_count(x, 4));
                 for k in 0..=40 {
                     let tau = k as f64 / 40.0;
-                    let want = if cosine { (x * tau).cos() } else { (x * tau).sin() };
+                    let want = if cosine {
+                        (x * tau).cos()
+                    } else {
+                        (x * tau).sin()
+                    };
                     let got = sum(&a, 2.0 * tau - 1.0);
-                    assert!((got - want).abs() < 1e-13, "x = {x}, τ = {tau}: {got} vs {want}");
+                    assert!(
+                        (got - want).abs() < 1e-13,
+                        "x = {x}, τ = {tau}: {got} vs {want}"
+                    );
                 }
             }
         }

@@ -81,7 +81,10 @@ fn contract_and_derivatives_over_the_frequency_range() {
                 // Derivatives of frequency-θ functions: central differences are exact to
                 // ~ (θδ)²; δ = 1e-6 keeps that below 1e-7 up to θ = 250.
                 let fd = check_contract(&b);
-                assert!(fd < 1e-6, "p = {p}, θ = {theta}, K = {harmonics}: FD mismatch {fd}");
+                assert!(
+                    fd < 1e-6,
+                    "p = {p}, θ = {theta}, K = {harmonics}: FD mismatch {fd}"
+                );
             }
         }
     }
@@ -144,9 +147,14 @@ fn conditioning_stays_bounded_as_omega_h_goes_to_zero() {
             theta,
         };
         let naive_cond = kinetic_condition(&naive, 40 + (2.0 * theta) as usize);
-        eprintln!("θ = {theta:e}: enriched {cond:.2e}, naive {naive_cond:.2e}, P_(p+2) {legendre:.2e}");
+        eprintln!(
+            "θ = {theta:e}: enriched {cond:.2e}, naive {naive_cond:.2e}, P_(p+2) {legendre:.2e}"
+        );
         if theta <= 1e-4 {
-            assert!(naive_cond > 1e13 || !naive_cond.is_finite(), "θ = {theta}: naive {naive_cond:e}");
+            assert!(
+                naive_cond > 1e13 || !naive_cond.is_finite(),
+                "θ = {theta}: naive {naive_cond:e}"
+            );
         }
     }
     // Measured: at most 1.2e3 (θ ≤ 1e-2; the sine and cosine tails meet at an angle of about
@@ -159,7 +167,10 @@ fn harmonics_that_cannot_be_told_apart_are_refused() {
     assert!(Enriched::with_harmonics(4, 2, 0.5, 1.0).is_ok());
     assert!(Enriched::with_harmonics(4, 3, 3.0, 1.0).is_ok());
     let e = Enriched::with_harmonics(4, 2, 1e-4, 1.0).unwrap_err();
-    assert!(matches!(&e, GviError::InvalidParameter { name, .. } if name == "harmonics"), "{e}");
+    assert!(
+        matches!(&e, GviError::InvalidParameter { name, .. } if name == "harmonics"),
+        "{e}"
+    );
     // One harmonic is never refused for being small.
     assert!(Enriched::new(4, 1e-30, 1.0).is_ok());
 }
@@ -176,7 +187,10 @@ fn bad_parameters_are_typed_errors() {
     param(Enriched::new(3, 1e5, 1.0), "omega");
     param(Enriched::new(3, 1e-300, 1e-10), "omega");
     for h in [0.0, -0.1, f64::NAN] {
-        assert!(matches!(Enriched::new(3, 1.0, h), Err(GviError::InvalidStepSize { .. })));
+        assert!(matches!(
+            Enriched::new(3, 1.0, h),
+            Err(GviError::InvalidStepSize { .. })
+        ));
     }
     for (p, k) in [(0, 1), (3, 0), (Enriched::MAX_DEGREE + 1, 1)] {
         assert!(matches!(
@@ -194,7 +208,10 @@ fn quadrature_check_and_recommended_points() {
     assert!(b.check_quadrature(&rule(m)).is_ok());
     let e = b.check_quadrature(&rule(m - 1)).unwrap_err();
     assert!(matches!(e, GviError::InvalidQuadrature { .. }), "{e}");
-    assert!(e.to_string().contains(&format!("at least {m} Gauss")), "{e}");
+    assert!(
+        e.to_string().contains(&format!("at least {m} Gauss")),
+        "{e}"
+    );
     // The count grows with θ (products up to frequency 2θ), not with p alone.
     let small = Enriched::new(4, 1.0, 0.5).unwrap().gauss_points();
     eprintln!("θ = 25: {m} points; θ = 0.5: {small} points");
@@ -239,7 +256,11 @@ fn extrapolation_continues_the_curve() {
         for t in [1.3, 1.7, 2.0] {
             b.eval(t, &mut v, &mut d);
             let got: f64 = v.iter().zip(&c).map(|(a, b)| a * b).sum();
-            assert!((got - f(t)).abs() < 1e-8 * (1.0 + f(t).abs()), "θ = {theta}, τ = {t}: {got} vs {}", f(t));
+            assert!(
+                (got - f(t)).abs() < 1e-8 * (1.0 + f(t).abs()),
+                "θ = {theta}, τ = {t}: {got} vs {}",
+                f(t)
+            );
         }
     }
 }
