@@ -51,7 +51,7 @@ pub(super) fn bessel_j(z: f64, nmax: usize) -> Vec<f64> {
         if j <= nmax {
             out[j] = cur;
         }
-        if j > 0 && j % 2 == 0 {
+        if j > 0 && j.is_multiple_of(2) {
             norm += 2.0 * cur;
         }
         if cur.abs() > 1e250 {
@@ -86,9 +86,9 @@ pub(super) fn chebyshev_coefficients(x: f64, cosine: bool, count: usize) -> Vec<
     j.iter()
         .enumerate()
         .map(|(k, &jk)| {
-            let sign = if (k / 2) % 2 == 0 { 1.0 } else { -1.0 };
+            let sign = if (k / 2).is_multiple_of(2) { 1.0 } else { -1.0 };
             let weight = if k == 0 { 1.0 } else { 2.0 };
-            let f = if k % 2 == 0 { even } else { odd };
+            let f = if k.is_multiple_of(2) { even } else { odd };
             f * sign * weight * jk
         })
         .collect()
