@@ -66,6 +66,13 @@ pub struct MethodSpec {
     /// round-off.
     #[serde(default)]
     pub solver: crate::integrator::StageSolver,
+    /// The enrichment frequency ω of the `enriched` basis (required by it, refused by the
+    /// others): n = p + 1 + 2K functions, polynomial degree p plus sin(kωhτ), cos(kωhτ).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub omega: Option<f64>,
+    /// The number K of harmonics of the `enriched` basis (default 1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub harmonics: Option<usize>,
     /// Rigid-body scenes: the retraction of the Lie group integrator (`exp` or `cayley`;
     /// default `exp`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -82,13 +89,34 @@ impl MethodSpec {
             crate::quadrature::QuadratureRule,
         >,
     > {
-        let gvi = crate::integrator::GalerkinIntegrator::from_kinds(
-            self.basis,
-            self.n,
-            self.quadrature,
-            self.quad_points,
-            self.h,
-        )?;
+        let gvi =
+            if self.basis.is_parametrised() || self.omega.is_some() || self.harmonics.is_some() {
+                let basis = self
+                    .basis
+                    .build_with(self.n, self.h, self.omega, self.harmonics)?;
+                // The enriched basis needs its products resolved: at least its own Gauss count
+                // (unless the points are given, when a weak rule is a typed error).
+                let points = match (&basis, self.quad_points) {
+                    (_, Some(points)) => points,
+                    (crate::basis::AnyBasis::Enriched(b), None) => {
+                        self.quadrature.default_points(self.n).max(b.gauss_points())
+                    }
+                    (_, None) => self.quadrature.default_points(self.n),
+                };
+                crate::integrator::GalerkinIntegrator::new(
+                    basis,
+                    self.quadrature.build(points)?,
+                    self.h,
+                )?
+            } else {
+                crate::integrator::GalerkinIntegrator::from_kinds(
+                    self.basis,
+                    self.n,
+                    self.quadrature,
+                    self.quad_points,
+                    self.h,
+                )?
+            };
         let options = crate::integrator::NewtonOptions {
             solver: self.solver,
             ..*gvi.options()
@@ -134,7 +162,8 @@ impl MethodSpec {
     /// (which chooses h from the tolerance) has `tol`. The integrator checks the rest (n, the
     /// quadrature) when it is built.
     ///
-    /// Errors: [`GviError::InvalidStepSize`]; [`GviError::InvalidInput`] named `auto_h`.
+    /// Errors: [`GviError::InvalidStepSize`]; [`GviError::InvalidInput`] named `auto_h`, or
+    /// `tol` with the enriched basis (which needs a fixed n).
     pub fn validate(&self) -> Result<()> {
         if !(self.h.is_finite() && self.h > 0.0) {
             return Err(GviError::InvalidStepSize { h: self.h });
@@ -143,6 +172,15 @@ impl MethodSpec {
             return Err(GviError::InvalidInput {
                 name: "auto_h".into(),
                 reason: "choosing h needs a tolerance (tol)".into(),
+            });
+        }
+        // The tolerance-driven ladder and the Lie group integrator build bases from n alone.
+        if self.tol.is_some() && (self.basis.is_parametrised() || self.omega.is_some()) {
+            return Err(GviError::InvalidInput {
+                name: "tol".into(),
+                reason: "a tolerance-driven run chooses n per step from bases built from n \
+                         alone; the enriched basis (omega) needs a fixed n"
+                    .into(),
             });
         }
         Ok(())
@@ -198,6 +236,11 @@ impl MethodSpec {
     /// The Lie group integrator on SO(3) this method names (basis, n, quadrature, points, h
     /// and `retraction`, default exp), for rigid bodies ([`crate::lie`]).
     pub fn lie_integrator(&self) -> Result<crate::lie::LieGalerkin> {
+        if self.omega.is_some() || self.harmonics.is_some() {
+            return Err(GviError::Unsupported(
+                "the Lie group integrator takes no enriched basis (omega, harmonics)".into(),
+            ));
+        }
         Ok(crate::lie::LieGalerkin::from_kinds(
             self.basis,
             self.n,
@@ -225,6 +268,8 @@ impl MethodSpec {
             control: None,
             auto_h: false,
             solver: Default::default(),
+            omega: None,
+            harmonics: None,
             retraction: None,
         }
     }

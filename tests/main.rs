@@ -7,6 +7,7 @@ mod counting;
 
 mod counts;
 mod dependencies;
+mod enriched;
 mod expression_proptest;
 mod extension;
 mod paper_objects;

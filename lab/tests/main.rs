@@ -11,6 +11,7 @@ mod baselines;
 mod bases;
 mod compare_refinement;
 mod custom_solver;
+mod enriched;
 mod ensemble;
 mod errors;
 mod expression;

@@ -140,6 +140,23 @@ impl Pendulum {
     }
 }
 
+/// The Fermi–Pasta–Ulam chain of `springs` stiff springs of frequency `omega` in the
+/// variables of Hairer, Lubich & Wanner (D = 2·springs: centres, then elongations); the
+/// invariants are the energy, the oscillatory energy I and I₁ … I_m.
+#[pyclass(extends = System, frozen, module = "galerkin_vi.systems")]
+pub struct Fpu;
+
+#[pymethods]
+impl Fpu {
+    #[new]
+    #[pyo3(signature = (springs = 3, omega = 50.0))]
+    fn new(springs: usize, omega: f64) -> PyResult<PyClassInitializer<Self>> {
+        let omega = finite("omega", omega)?;
+        let s = sys::Fpu::new(springs, omega).py_err()?;
+        Ok(PyClassInitializer::from(System::new(SysKind::Fpu(s))).add_subclass(Fpu))
+    }
+}
+
 /// Newtonian point masses in `dim` = 2 or 3 dimensions with gravitational constant `g`;
 /// the configuration is body-major (x₀, y₀, x₁, y₁, …), momenta p = m v.
 #[pyclass(extends = System, frozen, module = "galerkin_vi.systems")]
@@ -236,6 +253,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Kepler>()?;
     m.add_class::<HarmonicOscillator>()?;
     m.add_class::<Pendulum>()?;
+    m.add_class::<Fpu>()?;
     m.add_class::<NBody>()?;
     m.add_class::<Expression>()?;
     Ok(())

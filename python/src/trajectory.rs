@@ -20,7 +20,9 @@ use std::sync::Arc;
 
 /// A Galerkin variational integrator: `Integrator(basis="chebyshev", n=16,
 /// quadrature="gauss-legendre", h=1.0, solver="auto", quad_points=None, economical=False,
-/// compact=False)`. `quad_points` is an explicit number of quadrature points;
+/// compact=False, omega=None, harmonics=None)`. `basis="enriched"` takes the enrichment
+/// frequency `omega` (and optionally `harmonics`, default 1): polynomials of degree
+/// n − 1 − 2·harmonics plus sin/cos of ωh. `quad_points` is an explicit number of quadrature points;
 /// `economical=True` takes the quadrature's economical number for n (⌈3n/2⌉ Gauss–Legendre
 /// points, as `gvi run --economical`), `compact=True` its compact rule (n Gauss–Legendre
 /// points); at most one of the three.
@@ -61,7 +63,7 @@ impl Integrator {
     #[new]
     #[pyo3(signature = (basis = "chebyshev", n = 16, quadrature = "gauss-legendre", h = 1.0,
                         solver = "auto", quad_points = None, economical = false,
-                        compact = false))]
+                        compact = false, omega = None, harmonics = None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         basis: &str,
@@ -72,12 +74,16 @@ impl Integrator {
         quad_points: Option<usize>,
         economical: bool,
         compact: bool,
+        omega: Option<f64>,
+        harmonics: Option<usize>,
     ) -> PyResult<Self> {
         let mut method = MethodSpec::spectral(n, finite("h", h)?, 1);
         method.basis = basis.parse::<galerkin_vi::basis::BasisKind>().py_err()?;
         method.quadrature = quadrature
             .parse::<galerkin_vi::quadrature::QuadratureKind>()
             .py_err()?;
+        method.omega = omega.map(|w| finite("omega", w)).transpose()?;
+        method.harmonics = harmonics;
         method.solver = solver
             .parse::<galerkin_vi::integrator::StageSolver>()
             .py_err()?;

@@ -39,11 +39,13 @@
 //! 2.0e5, Fourier 3.7 / 5.5 / 7.9 / 11 (equispaced nodes, where the sine block is the DST-I).
 
 mod chebyshev;
+mod enriched;
 mod fourier;
 mod hermite;
 mod legendre;
 
 pub use chebyshev::ChebyshevLagrange;
+pub use enriched::Enriched;
 pub use fourier::Fourier;
 pub use hermite::Hermite;
 pub use legendre::Legendre;
@@ -85,6 +87,24 @@ pub trait Basis: std::fmt::Debug + Send + Sync + 'static {
     fn interpolation_nodes(&self) -> Vec<f64> {
         chebyshev_lobatto_points(self.len())
     }
+
+    /// The step size h the basis was made for, if its functions depend on it (an
+    /// [`Enriched`] basis has frequency ωh in τ), else `None` (the default). The integrator
+    /// refuses another h with [`GviError::Mismatch`].
+    fn step_size(&self) -> Option<f64> {
+        None
+    }
+
+    /// Refuse a quadrature rule too weak for this basis, beyond the integrator's own check
+    /// (exactness for φ_a'φ_b' of a polynomial basis, an invertible kinetic matrix otherwise).
+    /// A non-polynomial basis whose products need a given resolution (an [`Enriched`] basis
+    /// at large ωh) says so here. Default: accept.
+    ///
+    /// Errors: [`GviError::InvalidQuadrature`], naming what the rule lacks.
+    fn check_quadrature(&self, rule: &crate::quadrature::QuadratureRule) -> Result<()> {
+        let _ = rule;
+        Ok(())
+    }
 }
 
 /// The n Chebyshev–Lobatto points τ_i = (1 − cos(iπ/(n−1)))/2 of [0, 1], increasing.
@@ -116,10 +136,15 @@ pub enum BasisKind {
     Hermite,
     /// Linear end functions plus sines sin(kπτ) (not polynomial).
     Fourier,
+    /// Polynomials plus sin(kωhτ), cos(kωhτ) ([`Enriched`]): needs the frequency ω and h,
+    /// so it is built by [`build_with`](BasisKind::build_with), not [`build`](BasisKind::build),
+    /// and is not in [`ALL`](BasisKind::ALL).
+    Enriched,
 }
 
 impl BasisKind {
-    /// All kinds, for sweeps.
+    /// The kinds built from n alone (every kind but [`Enriched`](BasisKind::Enriched)), for
+    /// sweeps.
     pub const ALL: [BasisKind; 4] = [
         BasisKind::Chebyshev,
         BasisKind::Legendre,
@@ -134,7 +159,16 @@ impl BasisKind {
             BasisKind::Legendre => "legendre",
             BasisKind::Hermite => "hermite",
             BasisKind::Fourier => "fourier",
+            BasisKind::Enriched => "enriched",
         }
+    }
+
+    /// Whether the basis needs more than n to be built (the enriched basis: ω and h). A
+    /// serialised trajectory cannot rebuild such a basis from its name and n, so it records
+    /// it as a user's basis, to be attached again
+    /// ([`Trajectory::attach_basis`](crate::Trajectory::attach_basis)).
+    pub fn is_parametrised(self) -> bool {
+        matches!(self, BasisKind::Enriched)
     }
 
     /// The built-in kind of `basis`, or `None` for a basis written outside the crate. Decided
@@ -154,19 +188,84 @@ impl BasisKind {
             Some(BasisKind::Hermite)
         } else if any.is::<Fourier>() {
             Some(BasisKind::Fourier)
+        } else if any.is::<Enriched>() {
+            Some(BasisKind::Enriched)
         } else {
             None
         }
     }
 
     /// Build the basis with n functions.
+    ///
+    /// Errors: the basis's own (n out of range); [`GviError::InvalidInput`] for
+    /// [`Enriched`](BasisKind::Enriched), which needs ω and h ([`build_with`](Self::build_with)).
     pub fn build(self, n: usize) -> Result<AnyBasis> {
         Ok(match self {
             BasisKind::Chebyshev => AnyBasis::Chebyshev(ChebyshevLagrange::new(n)?),
             BasisKind::Legendre => AnyBasis::Legendre(Legendre::new(n)?),
             BasisKind::Hermite => AnyBasis::Hermite(Hermite::new(n)?),
             BasisKind::Fourier => AnyBasis::Fourier(Fourier::new(n)?),
+            BasisKind::Enriched => {
+                return Err(GviError::InvalidInput {
+                    name: "basis".into(),
+                    reason: "the enriched basis needs a frequency omega and the step size h \
+                             (scene: [method] omega = …; command line: --omega)"
+                        .into(),
+                });
+            }
         })
+    }
+
+    /// Build the basis with n functions for step size h, with the enrichment frequency
+    /// `omega` and number of `harmonics` (default 1) of the enriched basis: n = p + 1 + 2K
+    /// functions, polynomial degree p = n − 1 − 2K.
+    ///
+    /// Errors: those of [`build`](Self::build) and [`Enriched::with_harmonics`];
+    /// [`GviError::InvalidInput`] named `omega` (or `harmonics`) when given to another basis,
+    /// or `omega` missing for the enriched one; [`GviError::InvalidBasisSize`] when n leaves
+    /// no room for polynomial degree ≥ 1.
+    pub fn build_with(
+        self,
+        n: usize,
+        h: f64,
+        omega: Option<f64>,
+        harmonics: Option<usize>,
+    ) -> Result<AnyBasis> {
+        if self != BasisKind::Enriched {
+            if let Some((name, _)) = [
+                ("omega", omega.is_some()),
+                ("harmonics", harmonics.is_some()),
+            ]
+            .into_iter()
+            .find(|(_, given)| *given)
+            {
+                return Err(GviError::InvalidInput {
+                    name: name.into(),
+                    reason: format!("only the enriched basis takes {name} (the basis is {self})"),
+                });
+            }
+            return self.build(n);
+        }
+        let Some(omega) = omega else {
+            return self.build(n);
+        };
+        let k = harmonics.unwrap_or(1);
+        if n < 2 * k + 2 {
+            return Err(GviError::InvalidBasisSize {
+                n,
+                basis: "enriched".into(),
+                reason: format!(
+                    "n = p + 1 + 2K needs n ≥ {} for polynomial degree p ≥ 1 with K = {k}",
+                    2 * k + 2
+                ),
+            });
+        }
+        Ok(AnyBasis::Enriched(Enriched::with_harmonics(
+            n - 1 - 2 * k,
+            k,
+            omega,
+            h,
+        )?))
     }
 }
 
@@ -181,11 +280,12 @@ impl std::str::FromStr for BasisKind {
     fn from_str(s: &str) -> Result<Self> {
         BasisKind::ALL
             .into_iter()
+            .chain([BasisKind::Enriched])
             .find(|k| k.as_str().eq_ignore_ascii_case(s.trim()))
             .ok_or_else(|| GviError::InvalidInput {
                 name: "basis".into(),
                 reason: format!(
-                    "unknown basis '{s}' (expected one of: {})",
+                    "unknown basis '{s}' (expected one of: {}, enriched)",
                     BasisKind::ALL.map(|k| k.as_str()).join(", ")
                 ),
             })
@@ -203,6 +303,8 @@ pub enum AnyBasis {
     Hermite(Hermite),
     /// See [`Fourier`].
     Fourier(Fourier),
+    /// See [`Enriched`].
+    Enriched(Enriched),
 }
 
 impl AnyBasis {
@@ -213,6 +315,7 @@ impl AnyBasis {
             AnyBasis::Legendre(_) => BasisKind::Legendre,
             AnyBasis::Hermite(_) => BasisKind::Hermite,
             AnyBasis::Fourier(_) => BasisKind::Fourier,
+            AnyBasis::Enriched(_) => BasisKind::Enriched,
         }
     }
 }
@@ -224,6 +327,7 @@ macro_rules! dispatch {
             AnyBasis::Legendre($b) => $e,
             AnyBasis::Hermite($b) => $e,
             AnyBasis::Fourier($b) => $e,
+            AnyBasis::Enriched($b) => $e,
         }
     };
 }
@@ -243,6 +347,12 @@ impl Basis for AnyBasis {
     }
     fn interpolation_nodes(&self) -> Vec<f64> {
         dispatch!(self, b => b.interpolation_nodes())
+    }
+    fn step_size(&self) -> Option<f64> {
+        dispatch!(self, b => b.step_size())
+    }
+    fn check_quadrature(&self, rule: &crate::quadrature::QuadratureRule) -> Result<()> {
+        dispatch!(self, b => b.check_quadrature(rule))
     }
 }
 

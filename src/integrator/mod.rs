@@ -171,7 +171,19 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 reason: "a Galerkin curve needs at least the two end functions".into(),
             });
         }
+        if let Some(made_for) = basis.step_size()
+            && (made_for - h).abs() > 1e-12 * h
+        {
+            return Err(GviError::Mismatch {
+                expected: format!(
+                    "the step size h = {made_for} the {} basis was made for",
+                    basis.name()
+                ),
+                got: format!("h = {h}"),
+            });
+        }
         let rule = quadrature.rule()?;
+        basis.check_quadrature(&rule)?;
         let tables = Tables::build(&basis, &rule)?;
         let integrator = GalerkinIntegrator {
             basis: std::sync::Arc::new(basis),
@@ -331,7 +343,8 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             dim,
             capacity,
         );
-        traj.set_user_basis(BasisKind::of(&*self.basis).is_none());
+        // A parametrised built-in basis (enriched) cannot be rebuilt from its name and n.
+        traj.set_user_basis(BasisKind::of(&*self.basis).is_none_or(BasisKind::is_parametrised));
         traj
     }
 

@@ -19,7 +19,7 @@
 //! separable.
 
 use super::{
-    ExactSolution, ExpressionLagrangian, HarmonicOscillator, Kepler, NBody, Pendulum, System,
+    ExactSolution, ExpressionLagrangian, Fpu, HarmonicOscillator, Kepler, NBody, Pendulum, System,
 };
 use crate::error::Result;
 use crate::lagrangian::Lagrangian;
@@ -66,6 +66,8 @@ pub enum AnySystem {
     NBody(NBody),
     /// See [`ExpressionLagrangian`].
     Expression(ExpressionLagrangian),
+    /// See [`Fpu`].
+    Fpu(Fpu),
 }
 
 macro_rules! dispatch {
@@ -76,6 +78,7 @@ macro_rules! dispatch {
             AnySystem::Pendulum($s) => $e,
             AnySystem::NBody($s) => $e,
             AnySystem::Expression($s) => $e,
+            AnySystem::Fpu($s) => $e,
         }
     };
 }
@@ -119,6 +122,12 @@ impl From<Pendulum> for AnySystem {
 impl From<NBody> for AnySystem {
     fn from(s: NBody) -> Self {
         AnySystem::NBody(s)
+    }
+}
+
+impl From<Fpu> for AnySystem {
+    fn from(s: Fpu) -> Self {
+        AnySystem::Fpu(s)
     }
 }
 
@@ -397,6 +406,7 @@ mod tests {
         );
         check_identical(&Kepler::new(1.0).unwrap(), StageSolver::Auto);
         check_identical(&Pendulum::new(1.2, 9.8, 0.5).unwrap(), StageSolver::Auto);
+        check_identical(&Fpu::new(2, 5.0).unwrap(), StageSolver::Auto);
         let nbody = NBody::new(vec![1.0, 1e-3, 2e-3, 1e-4], 1.0, 3)
             .unwrap()
             .with_names(vec!["S".into(), "A".into(), "B".into(), "C".into()])

@@ -1,6 +1,7 @@
 //! Built-in mechanical systems: the harmonic oscillator and the planar Kepler problem of the
 //! paper's §5 (with exact solutions), the gravitational N-body problem of its §5.2.2, and the
-//! simple pendulum.
+//! simple pendulum, and the Fermi–Pasta–Ulam chain of stiff and soft springs ([`Fpu`], Hairer,
+//! Lubich and Wanner's multiscale test problem).
 //!
 //! Each implements [`Mechanical`](crate::Mechanical) with hand-written gradient and Hessian
 //! (the AD defaults are checked against them in tests) and [`System`], which adds the
@@ -15,6 +16,7 @@
 
 mod any;
 pub mod expression;
+mod fpu;
 mod harmonic;
 mod kepler;
 pub mod kepler_orbit;
@@ -23,6 +25,7 @@ mod pendulum;
 
 pub use any::AnySystem;
 pub use expression::ExpressionLagrangian;
+pub use fpu::Fpu;
 pub use harmonic::HarmonicOscillator;
 pub use kepler::Kepler;
 pub use nbody::NBody;

@@ -136,6 +136,8 @@ pub fn refuse_ignored(
         "--quad-points" => run.quad_points.is_some(),
         "--economical" => run.economical,
         "--solver" => run.solver.is_some(),
+        "--omega" => run.omega.is_some(),
+        "--harmonics" => run.harmonics.is_some(),
         _ => false,
     };
     match flags.iter().find(|f| given(f)) {

@@ -21,9 +21,16 @@ pub enum Format {
 pub struct SceneArgs {
     /// Built-in scene name (see `gvi scenes`) or path to a TOML scene file.
     pub scene: String,
-    /// Basis: chebyshev (default), legendre, hermite or fourier.
+    /// Basis: chebyshev (default), legendre, hermite, fourier, or enriched (polynomials plus
+    /// sin/cos of --omega; n = degree + 1 + 2·harmonics).
     #[arg(long)]
     pub basis: Option<String>,
+    /// Enrichment frequency ω of the enriched basis (finite, > 0).
+    #[arg(long, allow_hyphen_values = true)]
+    pub omega: Option<f64>,
+    /// Number of harmonics of the enriched basis (default 1).
+    #[arg(long)]
+    pub harmonics: Option<usize>,
     /// Quadrature: gauss-legendre (default), gauss-lobatto, clenshaw-curtis or
     /// trapezoid.
     #[arg(long)]
@@ -115,6 +122,8 @@ impl SceneArgs {
             retraction: self.retraction.as_deref().map(str::parse).transpose()?,
             q0: self.q0.clone(),
             p0: self.p0.clone(),
+            omega: self.omega,
+            harmonics: self.harmonics,
             ..Overrides::default()
         })
     }

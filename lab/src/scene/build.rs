@@ -12,7 +12,7 @@ use super::{Scene, SystemSpec};
 use crate::error::{GviError, LabError, Result};
 use galerkin_vi::lie::body::{FreeRigidBody, HeavyTop};
 use galerkin_vi::method::{InitialState, MethodSpec};
-use galerkin_vi::systems::{AnySystem, HarmonicOscillator, Kepler, Pendulum};
+use galerkin_vi::systems::{AnySystem, Fpu, HarmonicOscillator, Kepler, Pendulum};
 
 /// The rigid body a scene names (run on SO(3) by [`galerkin_vi::lie`]).
 #[derive(Debug, Clone)]
@@ -113,6 +113,9 @@ impl Scene {
                 gravity,
                 mass,
             } => AnySystem::from(Pendulum::new(*length, *gravity, *mass)?).into(),
+            SystemSpec::Fpu { springs, omega } => {
+                AnySystem::from(Fpu::new(*springs, *omega)?).into()
+            }
             SystemSpec::NBody {
                 dim,
                 g,

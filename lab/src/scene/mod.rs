@@ -41,7 +41,7 @@ pub use build::{AnyRigidBody, BuiltScene, BuiltSystem};
 pub use overrides::Overrides;
 
 /// The built-in scenes: (name, TOML text).
-pub const BUILTIN_SCENES: [(&str, &str); 17] = [
+pub const BUILTIN_SCENES: [(&str, &str); 19] = [
     ("harmonic", include_str!("../../../scenes/harmonic.toml")),
     ("kepler", include_str!("../../../scenes/kepler.toml")),
     ("pendulum", include_str!("../../../scenes/pendulum.toml")),
@@ -88,6 +88,11 @@ pub const BUILTIN_SCENES: [(&str, &str); 17] = [
     (
         "damped-oscillator",
         include_str!("../../../scenes/damped-oscillator.toml"),
+    ),
+    ("fpu", include_str!("../../../scenes/fpu.toml")),
+    (
+        "varying-frequency",
+        include_str!("../../../scenes/varying-frequency.toml"),
     ),
 ];
 
@@ -221,6 +226,16 @@ pub enum SystemSpec {
         #[serde(default = "one")]
         mass: f64,
     },
+    /// [`Fpu`](galerkin_vi::systems::Fpu): the Fermi–Pasta–Ulam chain of m stiff springs of
+    /// frequency ω (Hairer–Lubich–Wanner's form; D = 2m).
+    Fpu {
+        /// Number m of stiff springs (default 3).
+        #[serde(default = "three")]
+        springs: usize,
+        /// Stiff frequency ω (default 50).
+        #[serde(default = "fifty")]
+        omega: f64,
+    },
     /// [`FreeRigidBody`](galerkin_vi::lie::FreeRigidBody) on SO(3) (Lie group integrator;
     /// `[initial] q` is the rotation vector of R₀, `p` the body momentum).
     RigidBody {
@@ -246,6 +261,14 @@ fn one() -> f64 {
     1.0
 }
 
+fn three() -> usize {
+    3
+}
+
+fn fifty() -> f64 {
+    50.0
+}
+
 /// The `type` of a `[system]` table, as written in scene files (`kepler`, `nbody`,
 /// `lagrangian`, …).
 pub fn system_type(system: &SystemSpec) -> &'static str {
@@ -255,6 +278,7 @@ pub fn system_type(system: &SystemSpec) -> &'static str {
         SystemSpec::NBody { .. } => "nbody",
         SystemSpec::Lagrangian(_) => "lagrangian",
         SystemSpec::Pendulum { .. } => "pendulum",
+        SystemSpec::Fpu { .. } => "fpu",
         SystemSpec::RigidBody { .. } => "rigid-body",
         SystemSpec::HeavyTop { .. } => "heavy-top",
     }

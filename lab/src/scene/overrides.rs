@@ -54,6 +54,10 @@ pub struct Overrides {
     pub ladder: Option<Vec<usize>>,
     /// Choose h from the tolerance.
     pub auto_h: bool,
+    /// Enrichment frequency ω of the enriched basis.
+    pub omega: Option<f64>,
+    /// Number of harmonics of the enriched basis.
+    pub harmonics: Option<usize>,
 }
 
 impl Scene {
@@ -62,7 +66,19 @@ impl Scene {
     pub fn with_overrides(mut self, o: &Overrides) -> Scene {
         let m = &mut self.method;
         if let Some(b) = o.basis {
+            // Another basis drops the scene's enrichment parameters (only the enriched basis
+            // takes them); given on the command line too, they are refused when it is built.
+            if !b.is_parametrised() {
+                m.omega = None;
+                m.harmonics = None;
+            }
             m.basis = b;
+        }
+        if o.omega.is_some() {
+            m.omega = o.omega;
+        }
+        if o.harmonics.is_some() {
+            m.harmonics = o.harmonics;
         }
         if let Some(q) = o.quadrature {
             m.quadrature = q;

@@ -211,12 +211,14 @@ fn refine_system<S: System + Sync>(
 
 /// The largest n a basis accepts (its `MAX_N`).
 fn max_n(kind: BasisKind) -> usize {
-    use galerkin_vi::basis::{ChebyshevLagrange, Fourier, Hermite, Legendre};
+    use galerkin_vi::basis::{ChebyshevLagrange, Enriched, Fourier, Hermite, Legendre};
     match kind {
         BasisKind::Chebyshev => ChebyshevLagrange::MAX_N,
         BasisKind::Legendre => Legendre::MAX_N,
         BasisKind::Hermite => Hermite::MAX_N,
         BasisKind::Fourier => Fourier::MAX_N,
+        // Degree p plus one harmonic (the study's n is the number of functions).
+        BasisKind::Enriched => Enriched::MAX_DEGREE + 3,
     }
 }
 
