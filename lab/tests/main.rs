@@ -36,4 +36,5 @@ mod stability;
 mod stdout_errors;
 mod streaming;
 mod studies;
+mod timetransform;
 mod work_precision;
