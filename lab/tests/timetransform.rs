@@ -152,6 +152,9 @@ fn bad_time_transform_input_is_refused() {
     refused(&["run", "rigid-body", "--time-transform", "sundman"], "rigid body");
     refused(&["run", "henon-heiles", "--time-transform", "sundman"], "N-body");
     refused(&["run", "kepler-e099", "--tol", "1e-8"], "--tol");
+    // The commands that step in physical time refuse a time-transformed scene.
+    refused(&["check", "kepler-e099"], "only `gvi run`");
+    refused(&["section", "pythagorean", "--every", "1"], "only `gvi run`");
     // A monitor that is zero at the start: two bodies at one point.
     refused(
         &["run", "pythagorean", "--q0", "1,3,1,3,1,-1"],

@@ -251,7 +251,25 @@ pub fn load_scene(a: &SceneArgs) -> Result<BuiltScene, LabError> {
         .with_overrides(&a.overrides()?)
         .build()?;
     refuse_unused_scene_flags(a, &scene)?;
+    refuse_time_transform(&scene.method)?;
     Ok(scene)
+}
+
+/// Refuse a time-transformed method in the commands that run the method's integrator in
+/// physical time (checks, studies, sections, ensembles, reports): they would ignore
+/// `[method.time_transform]` and step with h as a physical step. Only `gvi run` runs it.
+pub fn refuse_time_transform(
+    method: &galerkin_vi::method::MethodSpec,
+) -> Result<(), LabError> {
+    if method.time_transform.is_some() {
+        return Err(galerkin_vi::GviError::Unsupported(
+            "the scene's method has a time transformation ([method.time_transform]), which \
+             only `gvi run` runs; this command would step in physical time and ignore it"
+                .into(),
+        )
+        .into());
+    }
+    Ok(())
 }
 
 fn ignored(flag: &str, reason: String) -> LabError {
