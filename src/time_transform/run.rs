@@ -3,7 +3,7 @@
 //! Galerkin curves through t(τ) (see `clock`).
 
 use super::clock::CurveClock;
-use super::{Monitor, TimeStepper, TimeTransformed};
+use super::{Monitor, TimeTransformed};
 use crate::basis::Basis;
 use crate::curve::GalerkinCurveRef;
 use crate::error::{GviError, Result};
