@@ -90,7 +90,8 @@ fn fixed_step_error(e: f64, n: usize, steps: usize, orbits: usize) -> f64 {
 /// solver fails at periapsis).
 #[test]
 fn kepler_high_eccentricity_over_100_orbits_matches_the_exact_solution() {
-    for (e, per_orbit, bound) in [(0.9, 40, 1e-6), (0.99, 60, 1e-5)] {
+    // Measured 1.1e-12 and 1.7e-12 (docs/guide/time-transformations.md).
+    for (e, per_orbit, bound) in [(0.9, 40, 1e-11), (0.99, 60, 1e-11)] {
         let (err, steps) = kepler_error(e, 12, per_orbit, 100);
         eprintln!("e = {e}: time-transformed n = 12, {steps} steps: max error {err:.3e}");
         assert!(err < bound, "e = {e}: {err:e}");
@@ -109,44 +110,55 @@ fn energy_error_is_bounded_without_drift() {
     let kepler = Kepler::new(1.0).unwrap();
     let tt = TimeTransformed::new(kepler, CentralDistance::new(1.5).unwrap(), &q0, &p0, None)
         .unwrap();
-    let per_orbit = 24;
+    // Few steps at a low n, so that the energy error is truncation (1e-5), not round-off; a
+    // step count per orbit that is not a whole number, so that the step ends visit every
+    // phase of the orbit within a few orbits (with a whole number they creep along the orbit
+    // with its small period error, and the sampled maximum follows them).
+    let per_orbit = 16.37;
     let orbits = 1000;
-    let ds = fictitious_period(e, 1.5) / per_orbit as f64;
-    let gvi = GalerkinIntegrator::spectral(6, ds).unwrap();
+    let ds = fictitious_period(e, 1.5) / per_orbit;
+    let gvi = GalerkinIntegrator::spectral(4, ds).unwrap();
     let mut stepper = tt.stepper(&gvi, 0.0, &q0, &p0).unwrap();
     let e0 = tt.hamiltonian(&q0, &p0);
-    let steps = per_orbit * orbits;
+    let steps = (per_orbit * orbits as f64) as usize;
     let mut errors = Vec::with_capacity(steps);
     for _ in 0..steps {
         stepper.step().unwrap();
         errors.push(tt.hamiltonian(stepper.position(), stepper.momentum()) - e0);
     }
     assert!((stepper.time() / TAU - orbits as f64).abs() < 0.01, "{}", stepper.time() / TAU);
-    let (max, drift) = drift(&errors);
-    eprintln!("Galerkin n = 6, {per_orbit} steps/orbit: max |ΔH| {max:.3e}, drift {drift:.3e}");
-    assert!(max < 1e-6, "{max:e}");
-    assert!(drift < 0.05 * max, "drift {drift:e} of max {max:e}");
+    let (max, growth) = drift(&errors);
+    let tenths: Vec<String> = errors
+        .chunks(steps / 10)
+        .map(|c| format!("{:.2e}", c.iter().fold(0.0f64, |m, x| m.max(x.abs()))))
+        .collect();
+    eprintln!("max |ΔH| per tenth of the run: {}", tenths.join(" "));
+    eprintln!("Galerkin n = 4, {per_orbit} steps/orbit: max |ΔH| {max:.3e}, growth {growth:.2}");
+    assert!(max < 2e-6, "{max:e}"); // measured 8.70e-7
+    assert!(growth < 1.2, "growth {growth}"); // measured 1.00
 
-    // RK4 on dq/ds = g M⁻¹p, dp/ds = −∇g (H − E₀) − g ∇V with the same Δs.
+    // RK4 on dq/ds = g M⁻¹p, dp/ds = −∇g (H − E₀) − g ∇V over the same span, at Δs/8 (at Δs
+    // itself its energy error is O(1) within the run).
     let (mut q, mut p) = (q0.to_vec(), p0.to_vec());
     let mut rk_errors = Vec::with_capacity(steps);
     for _ in 0..steps {
-        rk4_step(&tt, ds, &mut q, &mut p);
+        for _ in 0..8 {
+            rk4_step(&tt, ds / 8.0, &mut q, &mut p);
+        }
         rk_errors.push(tt.hamiltonian(&q, &p) - e0);
     }
-    let (rk_max, rk_drift) = drift(&rk_errors);
-    eprintln!("RK4 on the s-flow: max |ΔH| {rk_max:.3e}, drift {rk_drift:.3e}");
-    assert!(rk_drift > 0.5 * rk_max, "RK4 drift {rk_drift:e} of max {rk_max:e}");
+    let (rk_max, rk_growth) = drift(&rk_errors);
+    eprintln!("RK4 on the s-flow: max |ΔH| {rk_max:.3e}, growth {rk_growth:.2}");
+    assert!(rk_growth > 5.0, "RK4 growth {rk_growth}");
 }
 
-/// The largest |error| and the drift: the change of the error's mean from the first tenth of
-/// the run to the last (oscillations average out over the many orbits of a tenth).
+/// The largest |error| over the run, and the growth: the largest |error| over the last tenth
+/// of the run over that over the first tenth (about 1 for a bounded error, about 10 or more
+/// for one that grows linearly).
 fn drift(errors: &[f64]) -> (f64, f64) {
     let tenth = errors.len() / 10;
-    let mean = |s: &[f64]| s.iter().sum::<f64>() / s.len() as f64;
-    let max = errors.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-    let change = (mean(&errors[errors.len() - tenth..]) - mean(&errors[..tenth])).abs();
-    (max, change)
+    let max = |s: &[f64]| s.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    (max(errors), max(&errors[errors.len() - tenth..]) / max(&errors[..tenth]))
 }
 
 fn rk4_step<S: Lagrangian, M: Monitor>(tt: &TimeTransformed<S, M>, h: f64, q: &mut [f64], p: &mut [f64]) {
@@ -238,7 +250,9 @@ fn momenta(q: &[f64], p: &[f64]) -> [f64; 3] {
     m
 }
 
-/// The largest change of the linear and the angular momentum over `steps` fictitious steps.
+/// The largest change of the linear and the angular momentum over `steps` fictitious steps
+/// (or up to a solver failure: the controls' monitors change the motion), and the physical
+/// time reached.
 fn momentum_changes<M: Monitor>(monitor: M, steps: usize) -> (f64, f64, f64) {
     let (nb, q0, p0) = pythagorean();
     let tt = TimeTransformed::new(nb, monitor, &q0, &p0, None).unwrap();
@@ -247,7 +261,9 @@ fn momentum_changes<M: Monitor>(monitor: M, steps: usize) -> (f64, f64, f64) {
     let start = momenta(&q0, &p0);
     let (mut linear, mut angular): (f64, f64) = (0.0, 0.0);
     for _ in 0..steps {
-        stepper.step().unwrap();
+        if stepper.step().is_err() {
+            break;
+        }
         let m = momenta(stepper.position(), stepper.momentum());
         linear = linear.max((m[0] - start[0]).abs()).max((m[1] - start[1]).abs());
         angular = angular.max((m[2] - start[2]).abs());
@@ -280,15 +296,20 @@ fn nbody_momentum_maps_are_conserved_in_s() {
         let monitor = PairDistances::new(3, 2, 1.0, combine).unwrap();
         let (linear, angular, t) = momentum_changes(monitor, steps);
         eprintln!("{combine:?}: to t = {t:.3}: |ΔP| {linear:.2e}, |ΔL| {angular:.2e}");
+        // Past the first close encounter (bodies 2 and 3 near t = 1.88).
+        assert!(t > 1.8, "{t}");
         assert!(linear < 1e-12 && angular < 1e-12, "{linear:e} {angular:e}");
     }
-    let (linear, _, _) = momentum_changes(CentralDistance::new(1.0).unwrap(), steps);
-    eprintln!("|q| monitor: |ΔP| {linear:.2e}");
-    assert!(linear > 1e-4, "{linear:e}");
-    let (linear, angular, _) = momentum_changes(AlongX, steps);
-    eprintln!("x-separation monitor: |ΔP| {linear:.2e}, |ΔL| {angular:.2e}");
+    // On H = E₀ the s-flow of any monitor conserves the physical momenta (it is the physical
+    // motion); what breaks them for an asymmetric monitor is the discrete energy error, so
+    // the controls' changes are small, but far above round-off.
+    let (linear, _, t) = momentum_changes(CentralDistance::new(1.0).unwrap(), steps);
+    eprintln!("|q| monitor: to t = {t:.3}: |ΔP| {linear:.2e}");
+    assert!(linear > 1e-10, "{linear:e}");
+    let (linear, angular, t) = momentum_changes(AlongX, steps);
+    eprintln!("x-separation monitor: to t = {t:.3}: |ΔP| {linear:.2e}, |ΔL| {angular:.2e}");
     assert!(linear < 1e-12, "{linear:e}");
-    assert!(angular > 1e-4, "{angular:e}");
+    assert!(angular > 1e-10, "{angular:e}");
 }
 
 /// Events in physical time: apoapsis passages (y falls through 0) at t = π + 2πk, located on
