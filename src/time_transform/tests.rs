@@ -130,8 +130,11 @@ fn the_clock_integrates_the_monitor_along_the_curve() {
         assert!((stepper.last_step() - 0.7).abs() < 1e-12);
         let mid = stepper.time_on_curve(0.37);
         assert!((mid - stepper.previous_time() - 0.37 * 0.7).abs() < 1e-12);
-        // τ = 1 is the step's end, bit for bit.
-        assert_eq!(stepper.time_on_curve(1.0) - stepper.previous_time(), stepper.last_step());
+        // τ = 1 is the step's end: the same increment, bit for bit.
+        assert_eq!(
+            stepper.time_on_curve(1.0),
+            stepper.previous_time() + stepper.last_step()
+        );
     }
 }
 
