@@ -101,7 +101,7 @@ fn kepler_high_eccentricity_over_100_orbits_matches_the_exact_solution() {
     }
 }
 
-/// The energy error of the s-flow stays bounded with no drift over 1000 orbits of e = 0.9;
+/// The energy error of the s-flow stays bounded with no drift over 10⁴ orbits of e = 0.9;
 /// negative control: RK4 on the same s-flow with the same Δs drifts.
 #[test]
 fn energy_error_is_bounded_without_drift() {
@@ -115,7 +115,7 @@ fn energy_error_is_bounded_without_drift() {
     // phase of the orbit within a few orbits (with a whole number they creep along the orbit
     // with its small period error, and the sampled maximum follows them).
     let per_orbit = 16.37;
-    let orbits = 1000;
+    let orbits = 10_000;
     let ds = fictitious_period(e, 1.5) / per_orbit;
     let gvi = GalerkinIntegrator::spectral(4, ds).unwrap();
     let mut stepper = tt.stepper(&gvi, 0.0, &q0, &p0).unwrap();
@@ -126,7 +126,9 @@ fn energy_error_is_bounded_without_drift() {
         stepper.step().unwrap();
         errors.push(tt.hamiltonian(stepper.position(), stepper.momentum()) - e0);
     }
-    assert!((stepper.time() / TAU - orbits as f64).abs() < 0.01, "{}", stepper.time() / TAU);
+    // The fictitious steps cover the orbits in physical time (to the period error).
+    eprintln!("physical time: {} orbits", stepper.time() / TAU);
+    assert!((stepper.time() / TAU - orbits as f64).abs() < 0.5, "{}", stepper.time() / TAU);
     let (max, growth) = drift(&errors);
     let tenths: Vec<String> = errors
         .chunks(steps / 10)
