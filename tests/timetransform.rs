@@ -40,8 +40,8 @@ fn fictitious_period(e: f64, alpha: f64) -> f64 {
 fn kepler_error(e: f64, n: usize, per_orbit: usize, orbits: usize) -> (f64, usize) {
     let (q0, p0) = kepler_at_periapsis(e);
     let kepler = Kepler::new(1.0).unwrap();
-    let tt = TimeTransformed::new(kepler, CentralDistance::new(1.5).unwrap(), &q0, &p0, None)
-        .unwrap();
+    let tt =
+        TimeTransformed::new(kepler, CentralDistance::new(1.5).unwrap(), &q0, &p0, None).unwrap();
     let ds = fictitious_period(e, 1.5) / per_orbit as f64;
     let gvi = GalerkinIntegrator::spectral(n, ds).unwrap();
     let options = TimeTransformOptions {
@@ -97,7 +97,10 @@ fn kepler_high_eccentricity_over_100_orbits_matches_the_exact_solution() {
         assert!(err < bound, "e = {e}: {err:e}");
         let fixed = fixed_step_error(e, 12, steps, 100);
         eprintln!("e = {e}: fixed step, same n and steps: max error {fixed:.3e}");
-        assert!(fixed > 1e3 * err, "e = {e}: fixed-step {fixed:e} vs {err:e}");
+        assert!(
+            fixed > 1e3 * err,
+            "e = {e}: fixed-step {fixed:e} vs {err:e}"
+        );
     }
 }
 
@@ -108,8 +111,8 @@ fn energy_error_is_bounded_without_drift() {
     let e = 0.9;
     let (q0, p0) = kepler_at_periapsis(e);
     let kepler = Kepler::new(1.0).unwrap();
-    let tt = TimeTransformed::new(kepler, CentralDistance::new(1.5).unwrap(), &q0, &p0, None)
-        .unwrap();
+    let tt =
+        TimeTransformed::new(kepler, CentralDistance::new(1.5).unwrap(), &q0, &p0, None).unwrap();
     // Few steps at a low n, so that the energy error is truncation (1e-5), not round-off; a
     // step count per orbit that is not a whole number, so that the step ends visit every
     // phase of the orbit within a few orbits (with a whole number they creep along the orbit
@@ -128,7 +131,11 @@ fn energy_error_is_bounded_without_drift() {
     }
     // The fictitious steps cover the orbits in physical time (to the period error).
     eprintln!("physical time: {} orbits", stepper.time() / TAU);
-    assert!((stepper.time() / TAU - orbits as f64).abs() < 0.5, "{}", stepper.time() / TAU);
+    assert!(
+        (stepper.time() / TAU - orbits as f64).abs() < 0.5,
+        "{}",
+        stepper.time() / TAU
+    );
     let (max, growth) = drift(&errors);
     let tenths: Vec<String> = errors
         .chunks(steps / 10)
@@ -160,17 +167,29 @@ fn energy_error_is_bounded_without_drift() {
 fn drift(errors: &[f64]) -> (f64, f64) {
     let tenth = errors.len() / 10;
     let max = |s: &[f64]| s.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-    (max(errors), max(&errors[errors.len() - tenth..]) / max(&errors[..tenth]))
+    (
+        max(errors),
+        max(&errors[errors.len() - tenth..]) / max(&errors[..tenth]),
+    )
 }
 
-fn rk4_step<S: Lagrangian, M: Monitor>(tt: &TimeTransformed<S, M>, h: f64, q: &mut [f64], p: &mut [f64]) {
+fn rk4_step<S: Lagrangian, M: Monitor>(
+    tt: &TimeTransformed<S, M>,
+    h: f64,
+    q: &mut [f64],
+    p: &mut [f64],
+) {
     let d = q.len();
     let mut kq = vec![vec![0.0; d]; 4];
     let mut kp = vec![vec![0.0; d]; 4];
     let c = [0.0, 0.5, 0.5, 1.0];
     for s in 0..4 {
-        let qs: Vec<f64> = (0..d).map(|r| q[r] + if s > 0 { c[s] * h * kq[s - 1][r] } else { 0.0 }).collect();
-        let ps: Vec<f64> = (0..d).map(|r| p[r] + if s > 0 { c[s] * h * kp[s - 1][r] } else { 0.0 }).collect();
+        let qs: Vec<f64> = (0..d)
+            .map(|r| q[r] + if s > 0 { c[s] * h * kq[s - 1][r] } else { 0.0 })
+            .collect();
+        let ps: Vec<f64> = (0..d)
+            .map(|r| p[r] + if s > 0 { c[s] * h * kp[s - 1][r] } else { 0.0 })
+            .collect();
         let (a, b) = (&mut kq[s], &mut kp[s]);
         tt.vector_field(&qs, &ps, a, b);
     }
@@ -188,8 +207,8 @@ fn the_s_flow_is_symplectic_and_naive_variable_steps_are_not() {
     let e = 0.99;
     let (q0, p0) = kepler_at_periapsis(e);
     let kepler = Kepler::new(1.0).unwrap();
-    let tt = TimeTransformed::new(kepler, CentralDistance::new(1.5).unwrap(), &q0, &p0, None)
-        .unwrap();
+    let tt =
+        TimeTransformed::new(kepler, CentralDistance::new(1.5).unwrap(), &q0, &p0, None).unwrap();
     let ds = fictitious_period(e, 1.5) / 40.0;
     let gvi = GalerkinIntegrator::spectral(10, ds).unwrap();
     // At periapsis and a quarter of the fictitious period later.
@@ -204,7 +223,10 @@ fn the_s_flow_is_symplectic_and_naive_variable_steps_are_not() {
     for (q, p) in &states {
         let exact = gvi.step_jacobian(&tt, q, p).unwrap();
         let defect = relative_symplecticity_defect(&exact.matrix);
-        eprintln!("time-transformed step at r = {:.3}: exact tangent defect {defect:.2e}", q[0].hypot(q[1]));
+        eprintln!(
+            "time-transformed step at r = {:.3}: exact tangent defect {defect:.2e}",
+            q[0].hypot(q[1])
+        );
         assert!(defect < 1e-12, "{defect:e}");
         let map = |q: &[f64], p: &[f64]| {
             let j = gvi.step_jacobian(&tt, q, p).unwrap();
@@ -267,7 +289,9 @@ fn momentum_changes<M: Monitor>(monitor: M, steps: usize) -> (f64, f64, f64) {
             break;
         }
         let m = momenta(stepper.position(), stepper.momentum());
-        linear = linear.max((m[0] - start[0]).abs()).max((m[1] - start[1]).abs());
+        linear = linear
+            .max((m[0] - start[0]).abs())
+            .max((m[1] - start[1]).abs());
         angular = angular.max((m[2] - start[2]).abs());
     }
     (linear, angular, stepper.time())
@@ -321,8 +345,8 @@ fn events_and_dense_output_in_physical_time() {
     let e = 0.9;
     let (q0, p0) = kepler_at_periapsis(e);
     let kepler = Kepler::new(1.0).unwrap();
-    let tt = TimeTransformed::new(kepler, CentralDistance::new(1.5).unwrap(), &q0, &p0, None)
-        .unwrap();
+    let tt =
+        TimeTransformed::new(kepler, CentralDistance::new(1.5).unwrap(), &q0, &p0, None).unwrap();
     let ds = fictitious_period(e, 1.5) / 40.0;
     let gvi = GalerkinIntegrator::spectral(12, ds).unwrap();
     let mut events = [
@@ -339,7 +363,12 @@ fn events_and_dense_output_in_physical_time() {
     let run = integrate_time_transformed(&gvi, &tt, 0.0, &q0, &p0, &mut events, &options).unwrap();
     assert!(run.stopped);
     assert!((run.end.t - 10.25 * TAU).abs() < 1e-12, "{}", run.end.t);
-    let apo: Vec<f64> = run.crossings.iter().filter(|c| c.event == 0).map(|c| c.t).collect();
+    let apo: Vec<f64> = run
+        .crossings
+        .iter()
+        .filter(|c| c.event == 0)
+        .map(|c| c.t)
+        .collect();
     assert_eq!(apo.len(), 10);
     let worst = apo
         .iter()

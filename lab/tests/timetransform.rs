@@ -14,7 +14,11 @@ fn table(csv: &str) -> (Vec<String>, Vec<Vec<f64>>) {
         .map(String::from)
         .collect();
     let rows = lines
-        .map(|l| l.split(',').map(|c| c.parse::<f64>().unwrap_or(f64::NAN)).collect())
+        .map(|l| {
+            l.split(',')
+                .map(|c| c.parse::<f64>().unwrap_or(f64::NAN))
+                .collect()
+        })
         .collect();
     (header, rows)
 }
@@ -43,7 +47,11 @@ fn kepler_e099_scene_runs_in_physical_time() {
     let last = rows.last().unwrap();
     assert_eq!(last[t], t_end);
     // 60 fictitious steps per orbit.
-    assert!((rows.len() as f64 - 601.0).abs() <= 2.0, "{} rows", rows.len());
+    assert!(
+        (rows.len() as f64 - 601.0).abs() <= 2.0,
+        "{} rows",
+        rows.len()
+    );
     let worst = rows.iter().map(|r| r[pos]).fold(0.0, f64::max);
     assert!(worst < 1e-7, "max position error {worst:e}");
     let steps: Vec<f64> = rows[1..].iter().map(|r| r[dt]).collect();
@@ -135,7 +143,10 @@ fn bad_time_transform_input_is_refused() {
         assert!(err.contains(needle), "{args:?}: {err}");
         assert!(!err.contains("panicked"), "{args:?}: {err}");
     };
-    refused(&["run", "kepler", "--time-transform", "warp"], "unknown 'warp'");
+    refused(
+        &["run", "kepler", "--time-transform", "warp"],
+        "unknown 'warp'",
+    );
     refused(
         &["run", "kepler-e099", "--energy-level", "nan"],
         "energy E0",
@@ -149,12 +160,21 @@ fn bad_time_transform_input_is_refused() {
         &["run", "pythagorean", "--time-transform", "radius"],
         "Kepler",
     );
-    refused(&["run", "rigid-body", "--time-transform", "sundman"], "rigid body");
-    refused(&["run", "henon-heiles", "--time-transform", "sundman"], "N-body");
+    refused(
+        &["run", "rigid-body", "--time-transform", "sundman"],
+        "rigid body",
+    );
+    refused(
+        &["run", "henon-heiles", "--time-transform", "sundman"],
+        "N-body",
+    );
     refused(&["run", "kepler-e099", "--tol", "1e-8"], "--tol");
     // The commands that step in physical time refuse a time-transformed scene.
     refused(&["check", "kepler-e099"], "only `gvi run`");
-    refused(&["section", "pythagorean", "--every", "1"], "only `gvi run`");
+    refused(
+        &["section", "pythagorean", "--every", "1"],
+        "only `gvi run`",
+    );
     // A monitor that is zero at the start: two bodies at one point.
     refused(
         &["run", "pythagorean", "--q0", "1,3,1,3,1,-1"],

@@ -61,7 +61,9 @@ fn kepler_e099_error_and_cost() {
         let kepler = Kepler::new(1.0).unwrap();
         let exact = KeplerOrbit::from_state(1.0, q0, p0, 0.0).unwrap();
         let t_end = TAU * ORBITS as f64;
-        println!("\nKepler e = {e}, {ORBITS} orbits, max position error at {PER_ORBIT_OUTPUTS} times per orbit");
+        println!(
+            "\nKepler e = {e}, {ORBITS} orbits, max position error at {PER_ORBIT_OUTPUTS} times per orbit"
+        );
         println!("| method | steps | force evaluations | max error | seconds |");
         println!("|---|---|---|---|---|");
         let tt = TimeTransformed::new(kepler, CentralDistance::new(1.5).unwrap(), &q0, &p0, None)
@@ -90,12 +92,22 @@ fn kepler_e099_error_and_cost() {
                         max_error(&exact, &times, &qs)
                     );
                 }
-                Err(f) => println!("| time-transformed n = {n}, {per_orbit} steps/orbit | failed: {} | | | |", f.error),
+                Err(f) => println!(
+                    "| time-transformed n = {n}, {per_orbit} steps/orbit | failed: {} | | | |",
+                    f.error
+                ),
             }
         }
         // Fixed physical steps, n = 12 and 16: a step count per orbit (h = 2π/steps) whose
         // outputs fall on the step ends.
-        for (n, per_orbit) in [(12, 1024), (12, 2048), (12, 4096), (16, 1024), (16, 2048), (16, 4096)] {
+        for (n, per_orbit) in [
+            (12, 1024),
+            (12, 2048),
+            (12, 4096),
+            (16, 1024),
+            (16, 2048),
+            (16, 4096),
+        ] {
             let steps = per_orbit * ORBITS;
             let gvi = GalerkinIntegrator::spectral(n, TAU / per_orbit as f64).unwrap();
             let clock = Instant::now();
@@ -152,7 +164,11 @@ fn pythagorean() -> (NBody, Vec<f64>, Vec<f64>) {
 
 /// States at t = 0, 0.1, …, 70 of the time-transformed run, its energy error over the run,
 /// steps, force evaluations and seconds.
-fn pythagorean_tt(n: usize, ds: f64, combine: Combine) -> (Vec<Vec<f64>>, f64, usize, usize, f64, f64) {
+fn pythagorean_tt(
+    n: usize,
+    ds: f64,
+    combine: Combine,
+) -> (Vec<Vec<f64>>, f64, usize, usize, f64, f64) {
     let (nb, q0, p0) = pythagorean();
     let monitor = PairDistances::new(3, 2, 1.5, combine).unwrap();
     let tt = TimeTransformed::new(nb.clone(), monitor, &q0, &p0, None).unwrap();
@@ -173,7 +189,10 @@ fn pythagorean_tt(n: usize, ds: f64, combine: Combine) -> (Vec<Vec<f64>>, f64, u
         .iter()
         .map(|o| ((tt.hamiltonian(&o.q, &o.p) - e0) / e0).abs())
         .fold(0.0, galerkin_vi::reduce::nan_max);
-    let min_dt = run.step_ends[1..].iter().map(|o| o.dt).fold(f64::INFINITY, f64::min);
+    let min_dt = run.step_ends[1..]
+        .iter()
+        .map(|o| o.dt)
+        .fold(f64::INFINITY, f64::min);
     (
         run.outputs.iter().map(|o| o.q.clone()).collect(),
         energy,
@@ -207,13 +226,23 @@ fn pythagorean_dop(tol: f64) -> (Vec<Vec<f64>>, f64, usize, usize, f64) {
         qs.push(q.clone());
     }
     let seconds = clock.elapsed().as_secs_f64();
-    (qs, energy, dop.adaptive_steps(), dop.force_evaluations(), seconds)
+    (
+        qs,
+        energy,
+        dop.adaptive_steps(),
+        dop.force_evaluations(),
+        seconds,
+    )
 }
 
 /// The first output time at which two runs differ by more than `tol` in position (max norm).
 fn agree_until(a: &[Vec<f64>], b: &[Vec<f64>], tol: f64) -> f64 {
     for (k, (x, y)) in a.iter().zip(b).enumerate() {
-        let d = x.iter().zip(y).map(|(u, v)| (u - v).abs()).fold(0.0, f64::max);
+        let d = x
+            .iter()
+            .zip(y)
+            .map(|(u, v)| (u - v).abs())
+            .fold(0.0, f64::max);
         if !(d <= tol) {
             return 0.1 * k as f64;
         }
@@ -226,7 +255,9 @@ fn agree_until(a: &[Vec<f64>], b: &[Vec<f64>], tol: f64) -> f64 {
 fn pythagorean_against_tight_integrations() {
     let (reference, e_ref, s_ref, f_ref, t_ref) = pythagorean_dop(1e-15);
     println!("\nPythagorean problem to t = 70");
-    println!("| run | steps | force evaluations | max relative energy error | seconds | smallest Δt | agrees with DOP853 1e-15 to 1e-6 until | to 1e-2 until |");
+    println!(
+        "| run | steps | force evaluations | max relative energy error | seconds | smallest Δt | agrees with DOP853 1e-15 to 1e-6 until | to 1e-2 until |"
+    );
     println!("|---|---|---|---|---|---|---|---|");
     println!("| DOP853 tol = 1e-15 | {s_ref} | {f_ref} | {e_ref:.1e} | {t_ref:.3} | | | |");
     for tol in [1e-13, 1e-11] {

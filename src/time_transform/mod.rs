@@ -128,10 +128,13 @@ impl<S: Lagrangian, M: Monitor> TimeTransformed<S, M> {
         if let Some(md) = monitor.dim() {
             ensure_len("monitor dimension", d, md)?;
         }
-        let inverse = m.clone().try_inverse().ok_or_else(|| GviError::InvalidInput {
-            name: "mass matrix".into(),
-            reason: "is singular".into(),
-        })?;
+        let inverse = m
+            .clone()
+            .try_inverse()
+            .ok_or_else(|| GviError::InvalidInput {
+                name: "mass matrix".into(),
+                reason: "is singular".into(),
+            })?;
         let g0 = monitor.value_f64(q0);
         if !(g0.is_finite() && g0 > 0.0) {
             return Err(GviError::InvalidParameter {
@@ -230,7 +233,10 @@ impl<S: Lagrangian, M: Monitor> TimeTransformed<S, M> {
         let shift = self.hamiltonian(q, p) - self.energy;
         self.system.force(q, dp); // −∇V
         for r in 0..d {
-            dq[r] = g * (0..d).map(|c| self.mass_inverse[r * d + c] * p[c]).sum::<f64>();
+            dq[r] = g
+                * (0..d)
+                    .map(|c| self.mass_inverse[r * d + c] * p[c])
+                    .sum::<f64>();
             dp[r] = g * dp[r] - self.scale * grad_g[r] * shift;
         }
     }

@@ -123,7 +123,9 @@ impl TimeTransformedRun {
                 reason: format!("{t} is outside the run [{first}, {last}]"),
             });
         }
-        let k = self.step_ends[1..].partition_point(|e| e.t < t).min(steps - 1);
+        let k = self.step_ends[1..]
+            .partition_point(|e| e.t < t)
+            .min(steps - 1);
         let curve = GalerkinCurveRef::new(
             &self.curves[k * n * d..(k + 1) * n * d],
             n,

@@ -21,7 +21,12 @@ fn check_derivatives<S: Lagrangian, M: Monitor>(tt: &TimeTransformed<S, M>, q: &
     ad::gradient_blocks(|y| tt.lagrangian(&y[..d], &y[d..]), q, v, &mut aq, &mut av);
     let scale = aq.iter().chain(&av).fold(1e-300f64, |m, x| m.max(x.abs()));
     for r in 0..d {
-        assert!((lq[r] - aq[r]).abs() <= 1e-12 * scale, "L_q[{r}]: {} vs {}", lq[r], aq[r]);
+        assert!(
+            (lq[r] - aq[r]).abs() <= 1e-12 * scale,
+            "L_q[{r}]: {} vs {}",
+            lq[r],
+            aq[r]
+        );
         assert!((lv[r] - av[r]).abs() <= 1e-12 * scale, "L_v[{r}]");
     }
     let dd = d * d;
@@ -41,8 +46,18 @@ fn check_derivatives<S: Lagrangian, M: Monitor>(tt: &TimeTransformed<S, M>, q: &
         .chain(&avv)
         .fold(1e-300f64, |m, x| m.max(x.abs()));
     for i in 0..dd {
-        assert!((qq[i] - aqq[i]).abs() <= 1e-11 * scale, "L_qq[{i}]: {} vs {}", qq[i], aqq[i]);
-        assert!((qv[i] - aqv[i]).abs() <= 1e-11 * scale, "L_qv[{i}]: {} vs {}", qv[i], aqv[i]);
+        assert!(
+            (qq[i] - aqq[i]).abs() <= 1e-11 * scale,
+            "L_qq[{i}]: {} vs {}",
+            qq[i],
+            aqq[i]
+        );
+        assert!(
+            (qv[i] - aqv[i]).abs() <= 1e-11 * scale,
+            "L_qv[{i}]: {} vs {}",
+            qv[i],
+            aqv[i]
+        );
         assert!((vv[i] - avv[i]).abs() <= 1e-11 * scale, "L_vv[{i}]");
     }
     // The value, the Legendre transform and the energy against their definitions.
@@ -52,7 +67,9 @@ fn check_derivatives<S: Lagrangian, M: Monitor>(tt: &TimeTransformed<S, M>, q: &
     assert_eq!(p, lv);
     let e = lv.iter().zip(v).map(|(a, b)| a * b).sum::<f64>() - tt.value(q, v);
     assert!((tt.energy(q, v) - e).abs() <= 1e-12 * e.abs().max(1.0));
-    assert!((tt.energy(q, v) - tt.transformed_hamiltonian(q, &p)).abs() <= 1e-12 * e.abs().max(1.0));
+    assert!(
+        (tt.energy(q, v) - tt.transformed_hamiltonian(q, &p)).abs() <= 1e-12 * e.abs().max(1.0)
+    );
 }
 
 #[test]
@@ -68,7 +85,11 @@ fn hand_written_derivatives_match_ad() {
     for combine in [Combine::Min, Combine::Softmin, Combine::Product] {
         let m = PairDistances::new(3, 2, 1.5, combine).unwrap();
         let tt = TimeTransformed::new(nb.clone(), m, &q0, &p0, Some(-20.0)).unwrap();
-        check_derivatives(&tt, &[1.1, 2.9, -1.8, -1.2, 0.9, -0.7], &[0.3, -0.2, 0.1, 0.5, -0.4, 0.2]);
+        check_derivatives(
+            &tt,
+            &[1.1, 2.9, -1.8, -1.2, 0.9, -0.7],
+            &[0.3, -0.2, 0.1, 0.5, -0.4, 0.2],
+        );
     }
     // 3-D bodies.
     let nb3 = NBody::new(vec![1.0, 2.0, 0.5], 1.0, 3).unwrap();
@@ -95,11 +116,17 @@ fn monitor_derivatives_match_ad() {
         let mut g1 = [0.0; 6];
         assert!((m.gradient(&q, &mut g1) - value).abs() < 1e-13 * value);
         for i in 0..6 {
-            assert!((g[i] - ag[i]).abs() < 1e-12 * value.max(1.0), "{combine:?} grad {i}");
+            assert!(
+                (g[i] - ag[i]).abs() < 1e-12 * value.max(1.0),
+                "{combine:?} grad {i}"
+            );
             assert!((g1[i] - ag[i]).abs() < 1e-12 * value.max(1.0));
         }
         for i in 0..36 {
-            assert!((h[i] - ah[i]).abs() < 1e-11 * value.max(1.0), "{combine:?} hess {i}");
+            assert!(
+                (h[i] - ah[i]).abs() < 1e-11 * value.max(1.0),
+                "{combine:?} hess {i}"
+            );
         }
     }
     // Min is the closest pair's distance: bodies 1 and 2 here.
@@ -152,14 +179,23 @@ fn bad_input_is_a_typed_error() {
     // Not finite: r^{-1} at r = 0.
     let inverse = CentralDistance::new(-1.0).unwrap();
     let e = TimeTransformed::new(kepler, inverse, &[0.0, 0.0], &p0, Some(-0.5)).unwrap_err();
-    assert!(matches!(&e, GviError::InvalidParameter { value, .. } if value.is_infinite()), "{e}");
+    assert!(
+        matches!(&e, GviError::InvalidParameter { value, .. } if value.is_infinite()),
+        "{e}"
+    );
     // E₀ not finite.
     for bad in [f64::NAN, f64::INFINITY] {
         let e = TimeTransformed::new(kepler, radius, &q0, &p0, Some(bad)).unwrap_err();
-        assert!(matches!(&e, GviError::InvalidParameter { name, .. } if name.contains("E0")), "{e}");
+        assert!(
+            matches!(&e, GviError::InvalidParameter { name, .. } if name.contains("E0")),
+            "{e}"
+        );
     }
     // α not finite.
-    assert!(matches!(CentralDistance::new(f64::NAN), Err(GviError::InvalidParameter { .. })));
+    assert!(matches!(
+        CentralDistance::new(f64::NAN),
+        Err(GviError::InvalidParameter { .. })
+    ));
     assert!(PairDistances::new(1, 2, 1.0, Combine::Min).is_err());
     assert!(PairDistances::new(3, 4, 1.0, Combine::Min).is_err());
     // A state of the wrong length, a non-finite state, a monitor of another dimension.
@@ -191,7 +227,10 @@ fn bad_input_is_a_typed_error() {
     assert!("warp".parse::<MonitorKind>().is_err());
     let mut spec = TimeTransformSpec::new(MonitorKind::Radius);
     let nbody = crate::systems::AnySystem::NBody(pythagorean().0);
-    assert!(matches!(spec.monitor_for(&nbody), Err(GviError::Unsupported(_))));
+    assert!(matches!(
+        spec.monitor_for(&nbody),
+        Err(GviError::Unsupported(_))
+    ));
     spec.energy = Some(f64::NAN);
     assert!(spec.validate().is_err());
     spec.energy = None;
@@ -203,30 +242,48 @@ fn bad_input_is_a_typed_error() {
 fn run_options_are_checked() {
     let kepler = Kepler::new(1.0).unwrap();
     let (q0, p0) = ([0.4, 0.0], [0.0, 2.0]);
-    let tt = TimeTransformed::new(kepler, CentralDistance::new(1.5).unwrap(), &q0, &p0, None)
-        .unwrap();
+    let tt =
+        TimeTransformed::new(kepler, CentralDistance::new(1.5).unwrap(), &q0, &p0, None).unwrap();
     let gvi = GalerkinIntegrator::spectral(8, 0.1).unwrap();
     let run = |o: &TimeTransformOptions| {
         integrate_time_transformed(&gvi, &tt, 0.0, &q0, &p0, &mut [], o).map(|_| ())
     };
     let base = TimeTransformOptions::default();
     for bad in [
-        TimeTransformOptions { t_end: Some(-1.0), ..base.clone() },
-        TimeTransformOptions { t_end: Some(f64::NAN), ..base.clone() },
-        TimeTransformOptions { every: Some(0.0), ..base.clone() },
-        TimeTransformOptions { max_steps: 0, ..base.clone() },
+        TimeTransformOptions {
+            t_end: Some(-1.0),
+            ..base.clone()
+        },
+        TimeTransformOptions {
+            t_end: Some(f64::NAN),
+            ..base.clone()
+        },
+        TimeTransformOptions {
+            every: Some(0.0),
+            ..base.clone()
+        },
+        TimeTransformOptions {
+            max_steps: 0,
+            ..base.clone()
+        },
     ] {
         let e = run(&bad).unwrap_err();
         assert!(e.partial.is_none(), "{e}");
     }
     // Too few steps for t_end: an error that keeps the run.
-    let short = TimeTransformOptions { t_end: Some(100.0), max_steps: 5, ..base.clone() };
+    let short = TimeTransformOptions {
+        t_end: Some(100.0),
+        max_steps: 5,
+        ..base.clone()
+    };
     let e = run(&short).unwrap_err();
     assert!(matches!(e.error, GviError::InvalidStepCount { .. }));
     assert_eq!(e.partial.map(|p| p.steps()), Some(5));
     // An event that maps the state is refused.
-    let mut events = [crate::events::Event::new("x", |_t: f64, q: &[f64], _p: &[f64]| q[0])
-        .apply(|_t, _q, p| p[0] = -p[0])];
+    let mut events = [
+        crate::events::Event::new("x", |_t: f64, q: &[f64], _p: &[f64]| q[0])
+            .apply(|_t, _q, p| p[0] = -p[0]),
+    ];
     let e = integrate_time_transformed(&gvi, &tt, 0.0, &q0, &p0, &mut events, &base).unwrap_err();
     assert!(matches!(e.error, GviError::Unsupported(_)));
 }

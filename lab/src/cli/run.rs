@@ -258,9 +258,7 @@ pub fn load_scene(a: &SceneArgs) -> Result<BuiltScene, LabError> {
 /// Refuse a time-transformed method in the commands that run the method's integrator in
 /// physical time (checks, studies, sections, ensembles, reports): they would ignore
 /// `[method.time_transform]` and step with h as a physical step. Only `gvi run` runs it.
-pub fn refuse_time_transform(
-    method: &galerkin_vi::method::MethodSpec,
-) -> Result<(), LabError> {
+pub fn refuse_time_transform(method: &galerkin_vi::method::MethodSpec) -> Result<(), LabError> {
     if method.time_transform.is_some() {
         return Err(galerkin_vi::GviError::Unsupported(
             "the scene's method has a time transformation ([method.time_transform]), which \

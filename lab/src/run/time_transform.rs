@@ -6,13 +6,13 @@
 use crate::error::{LabError, Result};
 use crate::plot::{Chart, Series};
 use crate::scene::{BuiltScene, BuiltSystem};
+use galerkin_vi::GviError;
 use galerkin_vi::events::EventOptions;
 use galerkin_vi::systems::{AnySystem, System};
 use galerkin_vi::time_transform::{
     Monitor, TimeTransformOptions, TimeTransformSpec, TimeTransformed, TimeTransformedRun,
     integrate_time_transformed,
 };
-use galerkin_vi::GviError;
 use serde::Serialize;
 use std::time::Instant;
 
@@ -116,7 +116,9 @@ impl TimeTransformResult {
         };
         crate::table::csv_records(
             &self.columns,
-            self.rows.iter().map(|r| self.columns.iter().zip(r).map(cell)),
+            self.rows
+                .iter()
+                .map(|r| self.columns.iter().zip(r).map(cell)),
         )
     }
 
@@ -171,8 +173,7 @@ fn run_system(
     let exact = system.exact_solution(init.t0, &init.q, &init.p)?;
     let start = Instant::now();
     let (run, failure) =
-        match integrate_time_transformed(&gvi, &tt, init.t0, &init.q, &init.p, &mut [], &options)
-        {
+        match integrate_time_transformed(&gvi, &tt, init.t0, &init.q, &init.p, &mut [], &options) {
             Ok(run) => (run, None),
             Err(f) => match f.partial {
                 Some(p) => (*p, Some(LabError::from(f.error))),
@@ -208,12 +209,11 @@ fn run_system(
         max_e = galerkin_vi::reduce::nan_max(max_e, (tt.hamiltonian(&o.q, &o.p) - h0).abs());
         if let Some(ex) = &exact {
             let qe = ex.position(o.t);
-            let err = o
-                .q
-                .iter()
-                .zip(&qe)
-                .map(|(a, b)| (a - b).abs())
-                .fold(0.0, galerkin_vi::reduce::nan_max);
+            let err =
+                o.q.iter()
+                    .zip(&qe)
+                    .map(|(a, b)| (a - b).abs())
+                    .fold(0.0, galerkin_vi::reduce::nan_max);
             max_pos = Some(galerkin_vi::reduce::nan_max(max_pos.unwrap_or(0.0), err));
             row.push(err);
         }
@@ -264,7 +264,9 @@ fn step_range(run: &TimeTransformedRun) -> (f64, f64) {
         .iter()
         .map(|o| o.dt)
         .filter(|dt| *dt > 0.0)
-        .fold((f64::INFINITY, 0.0f64), |(lo, hi), dt| (lo.min(dt), hi.max(dt)))
+        .fold((f64::INFINITY, 0.0f64), |(lo, hi), dt| {
+            (lo.min(dt), hi.max(dt))
+        })
 }
 
 /// The physical step Δt_k against t_k (log scale), from the step ends. A long run keeps the
@@ -272,12 +274,7 @@ fn step_range(run: &TimeTransformedRun) -> (f64, f64) {
 /// consecutive steps: striding would skip the short steps of an encounter, which are the
 /// point of the chart.
 fn step_chart(scene: &BuiltScene, run: &TimeTransformedRun) -> Chart {
-    let all: Vec<(f64, f64)> = run
-        .step_ends
-        .iter()
-        .skip(1)
-        .map(|o| (o.t, o.dt))
-        .collect();
+    let all: Vec<(f64, f64)> = run.step_ends.iter().skip(1).map(|o| (o.t, o.dt)).collect();
     let max = crate::plot::MAX_POINTS_PER_SERIES;
     let points = if all.len() <= max {
         all

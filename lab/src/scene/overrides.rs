@@ -112,9 +112,9 @@ impl Scene {
             m.ladder = Some(l.clone());
         }
         if let Some(kind) = o.time_transform {
-            let spec = m.time_transform.get_or_insert_with(|| {
-                galerkin_vi::time_transform::TimeTransformSpec::new(kind)
-            });
+            let spec = m
+                .time_transform
+                .get_or_insert_with(|| galerkin_vi::time_transform::TimeTransformSpec::new(kind));
             spec.monitor = kind;
         }
         if let Some(spec) = &mut m.time_transform {
