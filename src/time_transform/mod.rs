@@ -185,9 +185,12 @@ impl<S: Lagrangian, M: Monitor> TimeTransformed<S, M> {
         self.scale * self.monitor.value_f64(q)
     }
 
-    /// V(q) = −L(q, 0) of the physical system.
+    /// V(q) of the physical system: [`Lagrangian::potential_energy`], or −L(q, 0) for a
+    /// system that does not give it.
     pub fn potential(&self, q: &[f64]) -> f64 {
-        -self.system.value(q, &self.zeros)
+        self.system
+            .potential_energy(q)
+            .unwrap_or_else(|| -self.system.value(q, &self.zeros))
     }
 
     /// ½ pᵀM⁻¹p.

@@ -103,6 +103,27 @@ fn hand_written_derivatives_match_ad() {
 }
 
 #[test]
+fn potential_energy_is_minus_the_lagrangian_at_rest() {
+    let (nb, q, _) = pythagorean();
+    let kepler = Kepler::new(1.3).unwrap();
+    for (v, l) in [
+        (nb.potential_energy(&q), nb.value(&q, &[0.0; 6])),
+        (
+            kepler.potential_energy(&[0.4, 0.3]),
+            kepler.value(&[0.4, 0.3], &[0.0; 2]),
+        ),
+    ] {
+        assert_eq!(v, Some(-l));
+    }
+    let any = crate::systems::AnySystem::NBody(nb.clone());
+    assert_eq!(any.potential_energy(&q), nb.potential_energy(&q));
+    assert_eq!(
+        crate::systems::AnySystem::Harmonic(HarmonicOscillator::unit()).potential_energy(&[1.0]),
+        Some(0.5)
+    );
+}
+
+#[test]
 fn monitor_derivatives_match_ad() {
     let q = [1.1, 2.9, -1.8, -1.2, 0.9, -0.7];
     for combine in [Combine::Min, Combine::Softmin, Combine::Product] {

@@ -99,7 +99,7 @@ pub struct RunArgs {
     pub strict: bool,
     /// A Poincaré time transformation (docs/guide/time-transformations.md): fixed fictitious
     /// steps h (= the physical step at the initial state) whose physical length follows the
-    /// monitor g: sundman (|q|^alpha for kepler, the smallest pair distance^alpha for nbody),
+    /// monitor g: sundman (|q|^alpha for kepler, a smooth minimum of the pair distances^alpha for nbody),
     /// radius, min-distance, softmin-distance or product-distance. Rows are in physical time
     /// (columns step, s, t, dt, ...); --plot charts the physical step against t.
     #[arg(long)]
