@@ -166,7 +166,9 @@ fn run_system(
         t_end: spec.t_end,
         max_steps: scene.method.steps,
         every: spec.every,
-        keep_steps: spec.every.is_none() || chart,
+        // The step ends are kept for the summary (energy, step range) and the chart even
+        // when the rows are at output times.
+        keep_steps: true,
         keep_curves: false,
         events: EventOptions::default(),
     };
@@ -219,6 +221,10 @@ fn run_system(
         }
         rows.push(row);
     }
+    // The energy error over every step end as well as the rows.
+    for o in &run.step_ends {
+        max_e = galerkin_vi::reduce::nan_max(max_e, (tt.hamiltonian(&o.q, &o.p) - h0).abs());
+    }
     let (min_step, max_step) = step_range(&run);
     let steps = run.steps();
     let summary = TimeTransformSummary {
@@ -252,8 +258,7 @@ fn run_system(
     })
 }
 
-/// The smallest and largest physical step of the run (from the step ends, or the located
-/// states' steps when the step ends were not kept).
+/// The smallest and largest physical step of the run (from the step ends).
 fn step_range(run: &TimeTransformedRun) -> (f64, f64) {
     let states = if run.step_ends.len() > 1 {
         &run.step_ends[1..]
