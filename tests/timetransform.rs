@@ -395,3 +395,76 @@ fn events_and_dense_output_in_physical_time() {
         Err(GviError::InvalidInput { .. })
     ));
 }
+
+/// A time-transformed step allocates nothing once the workspace is warm (Kepler and the
+/// Pythagorean problem through its first encounter, with the built-in monitors); the
+/// negative control, a step of a monitor written with a `Vec` inside its value, does.
+#[test]
+fn a_time_transformed_step_allocates_nothing() {
+    use crate::counting::allocations;
+    let count = |steps: &mut dyn FnMut()| {
+        let before = allocations();
+        steps();
+        allocations() - before
+    };
+    let (q0, p0) = kepler_at_periapsis(0.99);
+    let tt = TimeTransformed::new(
+        Kepler::new(1.0).unwrap(),
+        CentralDistance::new(1.5).unwrap(),
+        &q0,
+        &p0,
+        None,
+    )
+    .unwrap();
+    let gvi = GalerkinIntegrator::spectral(12, fictitious_period(0.99, 1.5) / 60.0).unwrap();
+    let mut stepper = tt.stepper(&gvi, 0.0, &q0, &p0).unwrap();
+    for _ in 0..5 {
+        stepper.step().unwrap();
+    }
+    let kepler = count(&mut || {
+        for _ in 0..200 {
+            stepper.step().unwrap();
+        }
+    });
+    assert_eq!(kepler, 0, "Kepler: {kepler} allocations in 200 steps");
+    let (nb, q0, p0) = pythagorean();
+    let monitor = PairDistances::new(3, 2, 1.5, Combine::Softmin).unwrap();
+    let tt = TimeTransformed::new(nb, monitor, &q0, &p0, None).unwrap();
+    let gvi = GalerkinIntegrator::spectral(10, 0.01).unwrap();
+    let mut stepper = tt.stepper(&gvi, 0.0, &q0, &p0).unwrap();
+    for _ in 0..5 {
+        stepper.step().unwrap();
+    }
+    let nbody = count(&mut || {
+        for _ in 0..300 {
+            stepper.step().unwrap();
+        }
+    });
+    assert_eq!(nbody, 0, "N-body: {nbody} allocations in 300 steps");
+    assert!(stepper.time() > 1.8, "{}", stepper.time());
+    // Negative control: the same monitor behind a Vec in its value allocates per node.
+    struct Allocating(PairDistances);
+    impl Monitor for Allocating {
+        fn name(&self) -> String {
+            "allocating".into()
+        }
+        fn value<T: DualNum<Primitive = f64> + Copy>(&self, q: &[T]) -> T {
+            let copy: Vec<T> = q.to_vec();
+            self.0.value(&copy)
+        }
+        fn gradient(&self, q: &[f64], grad: &mut [f64]) -> f64 {
+            self.0.gradient(q, grad)
+        }
+        fn hessian(&self, q: &[f64], grad: &mut [f64], hess: &mut [f64]) -> f64 {
+            self.0.hessian(q, grad, hess)
+        }
+    }
+    let (nb, q0, p0) = pythagorean();
+    let tt = TimeTransformed::new(nb, Allocating(monitor), &q0, &p0, None).unwrap();
+    let mut stepper = tt.stepper(&gvi, 0.0, &q0, &p0).unwrap();
+    stepper.step().unwrap();
+    let control = count(&mut || {
+        stepper.step().unwrap();
+    });
+    assert!(control > 0, "the allocating monitor was not counted");
+}
