@@ -318,9 +318,7 @@ impl<S: Lagrangian, M: Monitor> Lagrangian for TimeTransformed<S, M> {
         }
         // L_qv(r, s) = ∂²L/∂q_r∂v_s = −∇g_r (Mv)_s / g²; grad_g is read before lqv is
         // overwritten, so keep a copy of it in lvv's place first (lvv is rewritten next).
-        for r in 0..d {
-            lvv[r] = grad_g[r];
-        }
+        lvv[..d].copy_from_slice(&grad_g[..d]);
         for s in 0..d {
             let mv: f64 = (0..d).map(|c| self.mass[s * d + c] * v[c]).sum();
             for r in 0..d {
