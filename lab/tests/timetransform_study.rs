@@ -243,7 +243,7 @@ fn agree_until(a: &[Vec<f64>], b: &[Vec<f64>], tol: f64) -> f64 {
             .zip(y)
             .map(|(u, v)| (u - v).abs())
             .fold(0.0, f64::max);
-        if !(d <= tol) {
+        if d > tol || d.is_nan() {
             return 0.1 * k as f64;
         }
     }
