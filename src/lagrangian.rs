@@ -75,6 +75,15 @@ pub trait Lagrangian {
         None
     }
 
+    /// For separable Lagrangians: the potential V(q) (L = ½ vᵀMv − V(q)), or `None` (the
+    /// default). Allocation-free where given, unlike −L(q, 0) through the generic value of a
+    /// [`Mechanical`] system (which forms M); the time transformation
+    /// ([`crate::time_transform`]) evaluates it at every quadrature node.
+    fn potential_energy(&self, q: &[f64]) -> Option<f64> {
+        let _ = q;
+        None
+    }
+
     /// For separable Lagrangians: the generalised force L_q(q) = −∇V(q).
     fn force(&self, q: &[f64], out: &mut [f64]) {
         let d = self.dim();
@@ -366,6 +375,10 @@ impl<S: Mechanical> Lagrangian for S {
 
     fn mass_matrix(&self) -> Option<DMatrix<f64>> {
         Some(self.mass())
+    }
+
+    fn potential_energy(&self, q: &[f64]) -> Option<f64> {
+        Some(self.potential(q))
     }
 
     fn force(&self, q: &[f64], out: &mut [f64]) {

@@ -52,6 +52,7 @@ pub mod solve;
 pub mod stats;
 pub mod symmetries;
 pub mod systems;
+pub mod time_transform;
 pub mod trajectory;
 
 pub use error::{GviError, Result};

@@ -77,6 +77,12 @@ pub struct MethodSpec {
     /// default `exp`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub retraction: Option<crate::lie::Retraction>,
+    /// A Poincaré time transformation (`[method.time_transform]`): fixed fictitious steps of
+    /// h with physical steps that follow the monitor ([`crate::time_transform`]). Runs with
+    /// it go through [`crate::time_transform::integrate_time_transformed`]; [`crate::solve::solve`]
+    /// refuses them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub time_transform: Option<crate::time_transform::TimeTransformSpec>,
 }
 
 impl MethodSpec {
@@ -271,6 +277,7 @@ impl MethodSpec {
             omega: None,
             harmonics: None,
             retraction: None,
+            time_transform: None,
         }
     }
 }

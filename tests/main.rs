@@ -12,4 +12,5 @@ mod expression_proptest;
 mod extension;
 mod paper_objects;
 mod roundoff;
+mod timetransform;
 mod velocity_form;

@@ -28,6 +28,7 @@ use chart::run_chart;
 pub use chart::{chart_indices, chart_times};
 pub mod rigid_body;
 pub mod stream;
+pub mod time_transform;
 use monitor::Monitor;
 pub use monitor::{Encounter, SANITY_THRESHOLD};
 

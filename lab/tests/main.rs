@@ -38,4 +38,7 @@ mod stability;
 mod stdout_errors;
 mod streaming;
 mod studies;
+mod timetransform;
+#[cfg(feature = "dop853")]
+mod timetransform_study;
 mod work_precision;

@@ -167,6 +167,26 @@ impl<'a> Event<'a> {
     pub fn name(&self) -> &str {
         &self.name
     }
+
+    /// g(t, q, p).
+    pub(crate) fn evaluate(&self, t: f64, q: &[f64], p: &[f64]) -> f64 {
+        self.function.value(t, q, p)
+    }
+
+    /// Whether a crossing in this direction counts.
+    pub(crate) fn accepts(&self, rising: bool) -> bool {
+        self.direction.accepts(rising)
+    }
+
+    /// Whether the event stops the run.
+    pub(crate) fn stops(&self) -> bool {
+        matches!(self.action, Action::Stop)
+    }
+
+    /// Whether the event maps the state.
+    pub(crate) fn maps(&self) -> bool {
+        matches!(self.action, Action::Apply(_))
+    }
 }
 
 /// An N-body close encounter: the smallest separation of two bodies falls below `r_min`
@@ -220,7 +240,7 @@ impl Default for EventOptions {
 }
 
 impl EventOptions {
-    fn validate(&self) -> Result<()> {
+    pub(crate) fn validate(&self) -> Result<()> {
         if self.samples_per_step == 0 {
             return Err(GviError::InvalidInput {
                 name: "samples_per_step".into(),

@@ -292,6 +292,7 @@ fn solve_with<S: System>(
     stop: Option<&dyn Fn() -> bool>,
 ) -> std::result::Result<Solution, SolveFailure> {
     method.validate()?;
+    refuse_time_transform(method)?;
     let (t0, q0, p0) = (initial.t0, &initial.q[..], &initial.p[..]);
     let Some(mut opts) = method.adaptive_options() else {
         let gvi = method.integrator()?;
@@ -336,6 +337,19 @@ fn solve_with<S: System>(
             }),
         }),
     }
+}
+
+/// A method with a time transformation runs in fictitious time with physical steps that
+/// vary: its states are not a [`Trajectory`] on the grid t₀ + k h.
+fn refuse_time_transform(method: &MethodSpec) -> Result<()> {
+    if method.time_transform.is_some() {
+        return Err(GviError::Unsupported(
+            "a time-transformed method runs through \
+             galerkin_vi::time_transform::integrate_time_transformed (gvi run), not solve"
+                .into(),
+        ));
+    }
+    Ok(())
 }
 
 /// One state of a streamed run, shown to the visitor of [`solve_streaming`].
@@ -428,6 +442,7 @@ where
     F: FnMut(StreamStep<'_>) -> std::result::Result<(), B>,
 {
     method.validate()?;
+    refuse_time_transform(method)?;
     if method.chooses_n() {
         return Err(GviError::Unsupported(
             "a tolerance-driven run is not streamed (it keeps the whole trajectory)".into(),

@@ -161,6 +161,9 @@ impl Lagrangian for AnySystem {
     fn mass_matrix(&self) -> Option<DMatrix<f64>> {
         dispatch!(self, s => s.mass_matrix())
     }
+    fn potential_energy(&self, q: &[f64]) -> Option<f64> {
+        dispatch!(self, s => s.potential_energy(q))
+    }
     #[inline]
     fn force(&self, q: &[f64], out: &mut [f64]) {
         dispatch!(self, s => s.force(q, out))

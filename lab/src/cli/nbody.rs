@@ -57,6 +57,7 @@ pub fn run_nbody_report(args: NBodyReportArgs) -> Result<(), LabError> {
             ..Overrides::default()
         })
         .build()?;
+    super::run::refuse_time_transform(&scene.method)?;
     Plan::new()
         .output_dir("--out", &args.out, &file_names(&scene.name))
         .scene(&args.scene)

@@ -104,6 +104,28 @@ pub struct RunArgs {
     /// above 1e-2, an unresolved close encounter. The table is still written.
     #[arg(long)]
     pub strict: bool,
+    /// A Poincaré time transformation (docs/guide/time-transformations.md): fixed fictitious
+    /// steps h (= the physical step at the initial state) whose physical length follows the
+    /// monitor g: sundman (|q|^alpha for kepler, a smooth minimum of the pair distances^alpha for nbody),
+    /// radius, min-distance, softmin-distance or product-distance. Rows are in physical time
+    /// (columns step, s, t, dt, ...); --plot charts the physical step against t.
+    #[arg(long)]
+    pub time_transform: Option<String>,
+    /// The monitor's exponent alpha (default 1.5).
+    #[arg(long, allow_hyphen_values = true)]
+    pub alpha: Option<f64>,
+    /// The energy level E0 of the time transformation (default: the initial state's energy,
+    /// the only level on which the fictitious time reparametrises the physical motion).
+    #[arg(long, allow_hyphen_values = true)]
+    pub energy_level: Option<f64>,
+    /// Time-transformed runs: the physical end time, located on t(s) (--steps caps the
+    /// fictitious steps; reaching the cap first is an error).
+    #[arg(long, allow_hyphen_values = true)]
+    pub t_end: Option<f64>,
+    /// Time-transformed runs: rows at t0 + k*EVERY in physical time, each located on the
+    /// Galerkin curve as a zero of t(s) - t0 - k*EVERY, instead of at the step ends.
+    #[arg(long, allow_hyphen_values = true)]
+    pub every: Option<f64>,
 }
 
 impl SceneArgs {
@@ -137,8 +159,98 @@ impl RunArgs {
         o.control = self.control.as_deref().map(str::parse).transpose()?;
         o.auto_h = self.auto_h;
         o.ladder = self.ladder.clone();
+        o.time_transform = self.time_transform.as_deref().map(str::parse).transpose()?;
+        o.time_alpha = self.alpha;
+        o.time_energy = self.energy_level;
+        o.t_end = self.t_end;
+        o.every = self.every;
         Ok(o)
     }
+}
+
+/// Refuse the time-transformation flags on a scene without a time transformation (they
+/// would be ignored), and `--tol` with one (its steps are fixed in fictitious time).
+fn refuse_unused_time_flags(args: &RunArgs, scene: &BuiltScene) -> Result<(), LabError> {
+    let transformed = scene.method.time_transform.is_some();
+    if !transformed {
+        for (flag, given) in [
+            ("--alpha", args.alpha.is_some()),
+            ("--energy-level", args.energy_level.is_some()),
+            ("--t-end", args.t_end.is_some()),
+            ("--every", args.every.is_some()),
+        ] {
+            if given {
+                return Err(ignored(
+                    flag,
+                    format!(
+                        "{} has no time transformation; give --time-transform MONITOR (or \
+                         [method.time_transform] in the scene) for {flag} to mean something",
+                        scene.name
+                    ),
+                ));
+            }
+        }
+    } else if args.tol.is_some() {
+        return Err(ignored(
+            "--tol",
+            "a time-transformed run takes fixed fictitious steps at a fixed n; --tol would \
+             be ignored"
+                .into(),
+        ));
+    }
+    Ok(())
+}
+
+/// `gvi run` of a scene with a time transformation: rows in physical time, the chart of the
+/// physical step (crate::run::time_transform).
+fn run_time_transformed(
+    args: &RunArgs,
+    scene: &BuiltScene,
+    started: std::time::Instant,
+) -> Result<(), LabError> {
+    let mut plan = Plan::new();
+    if let Some(o) = &args.output {
+        plan.output("--output", o);
+    }
+    if let Some(p) = &args.plot {
+        plan.chart("--plot", p);
+    }
+    plan.scene(&args.scene.scene).check()?;
+    refuse_if_too_big(scene, args)?;
+    let to_terminal = args.output.is_none() && std::io::stdout().is_terminal();
+    let result = crate::run::time_transform::run_time_transformed(scene, args.plot.is_some())?;
+    if !to_terminal {
+        let text = match args.format {
+            Format::Csv => result.to_csv()?,
+            Format::Json => result.to_json()?,
+        };
+        write_output(args.output.as_deref(), &text)?;
+    }
+    if let (Some(path), Some(chart)) = (&args.plot, &result.chart) {
+        chart
+            .save_svg(path)
+            .map_err(|e| LabError::Plot(e.to_string()))?;
+        eprintln!("chart written to {}", path.display());
+    }
+    eprintln!(
+        "{}; whole command: {:.3} s (wall clock)",
+        result.summary,
+        started.elapsed().as_secs_f64()
+    );
+    if to_terminal {
+        eprintln!("{TERMINAL_HINT}");
+    }
+    if let Some(e) = result.failure {
+        return Err(e);
+    }
+    let rel = result.summary.max_relative_energy_error;
+    if args.strict && rel > crate::run::SANITY_THRESHOLD {
+        return Err(LabError::Untrustworthy(format!(
+            "relative energy error {rel:.3e} above {:e}",
+            crate::run::SANITY_THRESHOLD
+        )));
+    }
+    Ok(())
 }
 
 /// Load the scene named on the command line, apply the flag overrides and build it (once);
@@ -148,7 +260,23 @@ pub fn load_scene(a: &SceneArgs) -> Result<BuiltScene, LabError> {
         .with_overrides(&a.overrides()?)
         .build()?;
     refuse_unused_scene_flags(a, &scene)?;
+    refuse_time_transform(&scene.method)?;
     Ok(scene)
+}
+
+/// Refuse a time-transformed method in the commands that run the method's integrator in
+/// physical time (checks, studies, sections, ensembles, reports): they would ignore
+/// `[method.time_transform]` and step with h as a physical step. Only `gvi run` runs it.
+pub fn refuse_time_transform(method: &galerkin_vi::method::MethodSpec) -> Result<(), LabError> {
+    if method.time_transform.is_some() {
+        return Err(galerkin_vi::GviError::Unsupported(
+            "the scene's method has a time transformation ([method.time_transform]), which \
+             only `gvi run` runs; this command would step in physical time and ignore it"
+                .into(),
+        )
+        .into());
+    }
+    Ok(())
 }
 
 fn ignored(flag: &str, reason: String) -> LabError {
@@ -232,6 +360,10 @@ pub fn run(args: RunArgs) -> Result<(), LabError> {
         .with_overrides(&args.overrides()?)
         .build()?;
     refuse_unused_scene_flags(&args.scene, &scene)?;
+    refuse_unused_time_flags(&args, &scene)?;
+    if scene.method.time_transform.is_some() {
+        return run_time_transformed(&args, &scene, started);
+    }
     // Every output is checked before any work: usable, distinct, and not the scene file.
     let mut outputs: Vec<(&str, PathBuf)> = Vec::new();
     if let Some(o) = &args.output {

@@ -51,6 +51,7 @@ pub fn run_tolerance_study(args: ToleranceArgs) -> Result<(), LabError> {
     }
     let scene_arg = args.scene.as_str();
     let mut scene = Scene::load(&args.scene)?;
+    super::run::refuse_time_transform(&scene.method)?;
     let mut overrides = Overrides {
         basis: args.basis.as_deref().map(str::parse).transpose()?,
         h: args.h,

@@ -176,6 +176,20 @@ impl Scene {
             )?)),
         };
         check_initial(&system, &initial)?;
+        if let Some(spec) = &self.method.time_transform {
+            match &system {
+                BuiltSystem::Euclidean(s) => {
+                    crate::run::time_transform::check(s, spec, &initial.q, &initial.p)?
+                }
+                BuiltSystem::RigidBody(_) => {
+                    return Err(GviError::Unsupported(
+                        "a time transformation needs a system on R^D, not a rigid body on SO(3)"
+                            .into(),
+                    )
+                    .into());
+                }
+            }
+        }
         if self.method.steps == 0 {
             return Err(GviError::InvalidStepCount {
                 steps: 0,

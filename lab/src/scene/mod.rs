@@ -3,8 +3,9 @@
 //! Built-in scenes (`harmonic`, `kepler`, `pendulum`, the rigid bodies `rigid-body` and
 //! `heavy-top`, `pendulum-3d` (run by [`galerkin_vi::lie`]), the N-body scenes `solar-system`,
 //! `outer-solar-system`, `two-body`, `figure-eight`, `lagrange-triangle` and the synthetic
-//! `planetesimal-ring`, and the expression-Lagrangian scenes `henon-heiles`,
-//! `double-pendulum` and `magnetic`) are
+//! `planetesimal-ring`, the expression-Lagrangian scenes `henon-heiles`,
+//! `double-pendulum` and `magnetic`, and the time-transformed `kepler-e099` and
+//! `pythagorean`) are
 //! compiled into the crate from the `scenes/` directory; any other argument is read as a path to a user's TOML file. Unknown
 //! keys are rejected so that a typo is an error, not a silently ignored setting.
 //!
@@ -41,7 +42,7 @@ pub use build::{AnyRigidBody, BuiltScene, BuiltSystem};
 pub use overrides::Overrides;
 
 /// The built-in scenes: (name, TOML text).
-pub const BUILTIN_SCENES: [(&str, &str); 19] = [
+pub const BUILTIN_SCENES: [(&str, &str); 21] = [
     ("harmonic", include_str!("../../../scenes/harmonic.toml")),
     ("kepler", include_str!("../../../scenes/kepler.toml")),
     ("pendulum", include_str!("../../../scenes/pendulum.toml")),
@@ -85,6 +86,14 @@ pub const BUILTIN_SCENES: [(&str, &str); 19] = [
     ),
     ("magnetic", include_str!("../../../scenes/magnetic.toml")),
     ("duffing", include_str!("../../../scenes/duffing.toml")),
+    (
+        "kepler-e099",
+        include_str!("../../../scenes/kepler-e099.toml"),
+    ),
+    (
+        "pythagorean",
+        include_str!("../../../scenes/pythagorean.toml"),
+    ),
     (
         "damped-oscillator",
         include_str!("../../../scenes/damped-oscillator.toml"),

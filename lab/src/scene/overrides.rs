@@ -58,6 +58,17 @@ pub struct Overrides {
     pub omega: Option<f64>,
     /// Number of harmonics of the enriched basis.
     pub harmonics: Option<usize>,
+    /// A Poincaré time transformation with this monitor (replacing the scene's monitor, or
+    /// adding `[method.time_transform]` with its defaults).
+    pub time_transform: Option<galerkin_vi::time_transform::MonitorKind>,
+    /// The monitor's exponent α (needs a time transformation).
+    pub time_alpha: Option<f64>,
+    /// The energy level E₀ of the time transformation.
+    pub time_energy: Option<f64>,
+    /// The physical end time of a time-transformed run.
+    pub t_end: Option<f64>,
+    /// Rows at t₀ + k·every in physical time (time-transformed runs).
+    pub every: Option<f64>,
 }
 
 impl Scene {
@@ -115,6 +126,26 @@ impl Scene {
         }
         if let Some(l) = &o.ladder {
             m.ladder = Some(l.clone());
+        }
+        if let Some(kind) = o.time_transform {
+            let spec = m
+                .time_transform
+                .get_or_insert_with(|| galerkin_vi::time_transform::TimeTransformSpec::new(kind));
+            spec.monitor = kind;
+        }
+        if let Some(spec) = &mut m.time_transform {
+            if let Some(a) = o.time_alpha {
+                spec.alpha = a;
+            }
+            if o.time_energy.is_some() {
+                spec.energy = o.time_energy;
+            }
+            if o.t_end.is_some() {
+                spec.t_end = o.t_end;
+            }
+            if o.every.is_some() {
+                spec.every = o.every;
+            }
         }
         if let Some(q) = &o.q0 {
             self.initial.q = q.clone();
