@@ -4,6 +4,8 @@
 
 #[path = "common/counting.rs"]
 mod counting;
+#[path = "common/kepler_periapsis.rs"]
+mod kepler_periapsis;
 
 mod counts;
 mod dependencies;

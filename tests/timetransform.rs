@@ -3,6 +3,7 @@
 //! the N-body momentum maps — each geometric check with a negative control that lacks the
 //! property and fails it. Measured numbers are in docs/guide/time-transformations.md.
 
+use crate::kepler_periapsis::{fictitious_period, kepler_at_periapsis};
 use galerkin_vi::GviError;
 use galerkin_vi::events::{Event, EventOptions};
 use galerkin_vi::geometry::{finite_difference_jacobian, relative_symplecticity_defect};
@@ -13,27 +14,6 @@ use galerkin_vi::time_transform::{
     integrate_time_transformed,
 };
 use std::f64::consts::{PI, TAU};
-
-/// Kepler with a = 1, μ = 1 (period 2π) from periapsis at eccentricity e.
-fn kepler_at_periapsis(e: f64) -> ([f64; 2], [f64; 2]) {
-    ([1.0 - e, 0.0], [0.0, ((1.0 + e) / (1.0 - e)).sqrt()])
-}
-
-/// The fictitious time of one orbit for g = (r/r_p)^α: ∫ dt/g = ∫ r (r_p/r)^α dE over the
-/// eccentric anomaly (dt = r dE for a = μ = 1), by the trapezoid rule (spectral for a
-/// periodic integrand).
-fn fictitious_period(e: f64, alpha: f64) -> f64 {
-    let m = 20_000;
-    let rp = 1.0 - e;
-    (0..m)
-        .map(|i| {
-            let r = 1.0 - e * (TAU * i as f64 / m as f64).cos();
-            r * (rp / r).powf(alpha)
-        })
-        .sum::<f64>()
-        * TAU
-        / m as f64
-}
 
 /// Max position error of the outputs of a time-transformed Kepler run at t = k·2π/16 over
 /// `orbits` orbits, n basis functions, `per_orbit` fictitious steps per orbit.

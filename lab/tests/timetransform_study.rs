@@ -10,6 +10,7 @@
 //! Pythagorean three-body problem to t = 70 against tight DOP853 and a second, independent
 //! tight integration (the time-transformed method at another n and Δs).
 
+use crate::common::kepler_periapsis::{fictitious_period, kepler_at_periapsis};
 use galerkin_vi::baselines::OneStepMethod;
 use galerkin_vi::prelude::*;
 use galerkin_vi::systems::kepler_orbit::KeplerOrbit;
@@ -20,24 +21,6 @@ use galerkin_vi::time_transform::{
 use galerkin_vi_lab::dop853::Dop853Baseline;
 use std::f64::consts::TAU;
 use std::time::Instant;
-
-fn kepler_at_periapsis(e: f64) -> ([f64; 2], [f64; 2]) {
-    ([1.0 - e, 0.0], [0.0, ((1.0 + e) / (1.0 - e)).sqrt()])
-}
-
-/// ∫ dt/g over one orbit for g = (r/r_p)^α (a = μ = 1), by the trapezoid rule in E.
-fn fictitious_period(e: f64, alpha: f64) -> f64 {
-    let m = 20_000;
-    let rp = 1.0 - e;
-    (0..m)
-        .map(|i| {
-            let r = 1.0 - e * (TAU * i as f64 / m as f64).cos();
-            r * (rp / r).powf(alpha)
-        })
-        .sum::<f64>()
-        * TAU
-        / m as f64
-}
 
 const ORBITS: usize = 100;
 const PER_ORBIT_OUTPUTS: usize = 16;

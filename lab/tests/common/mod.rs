@@ -8,3 +8,5 @@ pub mod systems;
 
 #[path = "../../../tests/common/counting.rs"]
 pub mod counting;
+#[path = "../../../tests/common/kepler_periapsis.rs"]
+pub mod kepler_periapsis;
