@@ -362,6 +362,35 @@ mod dop {
         }
     }
 
+    /// Issue 35's first target, measured as the work–precision study runs both: the fastest
+    /// Galerkin configuration at 1e-9 on this problem (Legendre n = 13, h = 0.4, 13 Gauss
+    /// points, the study's `galerkin-legendre-compact` row) against DOP853 at 10^-13.5, the
+    /// tolerance at which it reaches 1e-9 here, both through `run_peer` on `AnySystem`.
+    /// Prints their median times and the median of the per-round ratio (interleaved rounds).
+    pub fn fastest_at_1e9(initial: &InitialState) {
+        let any = galerkin_vi::systems::AnySystem::Kepler(*KEPLER);
+        let galerkin = fastest_galerkin();
+        let dop = Peer::Dop853 {
+            tolerance: TOLERANCES[1],
+        };
+        let mut g = || {
+            let run = run_peer(&any, initial, black_box(galerkin), INTERVAL, 5, SAMPLES);
+            black_box(run.expect("run_peer"));
+        };
+        let mut d = || {
+            let run = run_peer(&any, initial, black_box(dop), INTERVAL, 1, SAMPLES);
+            black_box(run.expect("run_peer"));
+        };
+        let (t, r) = interleaved(&mut [&mut g, &mut d], Duration::from_millis(4000));
+        eprintln!(
+            "\nKepler T = 200 at 1e-9 (issue 35): Galerkin Legendre n = 13, h = 0.4, 13 points \
+             {:.3} ms; DOP853 10^-13.5 {:.3} ms; ratio {:.3}× (median of interleaved rounds)",
+            t[0] * 1e3,
+            t[1] * 1e3,
+            r(0, 1)
+        );
+    }
+
     /// Runs the closures in turn, round after round, until `budget` (at least 15 rounds);
     /// returns their median times and the median over rounds of the ratio of two of them
     /// (`ratio(a, b)`: time of a / time of b in the same round).
@@ -403,6 +432,16 @@ fn wrapper(kepler: &Kepler, initial: &InitialState, peer: Peer) -> SampledRun {
     let run = run_peer(kepler, initial, peer, INTERVAL, divisor, SAMPLES).expect("run_peer");
     assert!(run.failure.is_none(), "{:?}", run.failure);
     run
+}
+
+/// The fastest Galerkin configuration at 1e-9 on this problem in the work–precision study:
+/// Legendre n = 13, h = 0.4 (five steps per sample), 13 Gauss points.
+fn fastest_galerkin() -> Peer {
+    Peer::Galerkin {
+        basis: galerkin_vi::basis::BasisKind::Legendre,
+        n: 13,
+        points: galerkin_vi_lab::studies::peers::QuadPoints::Compact,
+    }
 }
 
 /// A peer: its label, the study's wrapper, and the bare loop.
@@ -505,6 +544,8 @@ fn peers(c: &mut Criterion) {
     }
     #[cfg(feature = "dop853")]
     dop::compare(&kepler, &initial);
+    #[cfg(feature = "dop853")]
+    dop::fastest_at_1e9(&initial);
     let mut group = c.benchmark_group("peers");
     group
         .sample_size(10)
@@ -517,6 +558,18 @@ fn peers(c: &mut Criterion) {
         });
         group.bench_function(format!("{label}/bare"), |b| b.iter(|| (case.bare)()));
     }
+    group.bench_function("kepler-1e-9/galerkin-legendre-n13-h0.4-m13", |b| {
+        b.iter(|| {
+            run_peer(
+                &kepler,
+                &initial,
+                black_box(fastest_galerkin()),
+                INTERVAL,
+                5,
+                SAMPLES,
+            )
+        })
+    });
     #[cfg(feature = "dop853")]
     for tolerance in dop::TOLERANCES {
         let peer = Peer::Dop853 { tolerance };

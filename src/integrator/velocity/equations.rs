@@ -88,7 +88,144 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
 
     /// F(c) at the iterate: the curve at the nodes into `ws.stage.qj`, the forces into
     /// `ws.stage.lq`, −F into the state's `delta`; returns max |F|.
+    ///
+    /// For D ≤ 4 (Kepler-like problems, where the general machinery around a few hundred
+    /// multiply–adds dominated a step: issue 35's profile) the same arithmetic runs with the
+    /// coordinates as a static array, in the same order, so the two give the same bits (up to
+    /// the sign of an exactly zero entry).
     pub(super) fn velocity_residual<L: Lagrangian>(
+        &self,
+        lag: &L,
+        ws: &mut Workspace,
+        vt: &VelocityTables,
+        p_k: &[f64],
+    ) -> f64 {
+        match ws.d {
+            1 => self.velocity_residual_small::<1, L>(lag, ws, vt, p_k),
+            2 => self.velocity_residual_small::<2, L>(lag, ws, vt, p_k),
+            3 => self.velocity_residual_small::<3, L>(lag, ws, vt, p_k),
+            4 => self.velocity_residual_small::<4, L>(lag, ws, vt, p_k),
+            _ => self.velocity_residual_general(lag, ws, vt, p_k),
+        }
+    }
+
+    /// [`Self::velocity_residual`] with D a constant: the curve at node j summed over the
+    /// modes in order (as the few-column product of `gemm` does), the forces in one batch,
+    /// then one pass over the nodes for the projections Σ_j ψ_jb (h b_j f_j) (each summed over
+    /// j in order from zero, as `gemm_transposed` does, which skips zero coefficients: adding
+    /// their zero products changes at most the sign of an exactly zero sum) and the
+    /// double-double momentum row.
+    fn velocity_residual_small<const D: usize, L: Lagrangian>(
+        &self,
+        lag: &L,
+        ws: &mut Workspace,
+        vt: &VelocityTables,
+        p_k: &[f64],
+    ) -> f64 {
+        let t = self.tables();
+        let (m, k, h) = (t.m, vt.k, self.step_size());
+        let (Some(vs), Some(sep)) = (ws.velocity.as_mut(), ws.separable.as_ref()) else {
+            return f64::NAN;
+        };
+        let arr = |x: &[f64]| -> [f64; D] { std::array::from_fn(|r| x[r]) };
+        let (origin, origin_lo) = (arr(ws.iterate.origin()), arr(ws.iterate.origin_lo()));
+        let c0_lo = arr(&vs.c0_lo);
+        // q_j = q_k + (δq_k + h ι_j0 c_0,lo + h Σ_a ι_ja c_a).
+        for (qj, iota) in ws
+            .stage
+            .qj
+            .chunks_exact_mut(D)
+            .zip(vt.iota.chunks_exact(k))
+            .take(m)
+        {
+            let mut acc = [0.0f64; D];
+            for (&x, c) in iota.iter().zip(vs.c.chunks_exact(D)) {
+                for r in 0..D {
+                    acc[r] += x * c[r];
+                }
+            }
+            let w = h * iota[0];
+            for r in 0..D {
+                let small = origin_lo[r] + w * c0_lo[r];
+                qj[r] = (h * acc[r] + small) + origin[r];
+            }
+        }
+        lag.force_at_points(&ws.stage.qj, &mut ws.stage.lq);
+        // Momentum row: M c_0 − p_k in double-double (exact products by FMA, TwoSum), then
+        // the force terms; see the general form for why.
+        let mut hi = [0.0f64; D];
+        let mut lo = [0.0f64; D];
+        for r in 0..D {
+            let (mut h0, mut l0) = (0.0, 0.0);
+            match sep.mass_diagonal() {
+                Some(diag) => {
+                    dd_acc(&mut h0, &mut l0, diag[r], vs.c[r]);
+                    l0 += diag[r] * vs.c0_lo[r];
+                }
+                None => {
+                    for s in 0..D {
+                        dd_acc(&mut h0, &mut l0, sep.mass()[r * D + s], vs.c[s]);
+                        l0 += sep.mass()[r * D + s] * vs.c0_lo[s];
+                    }
+                }
+            }
+            let (s, e) = two_sum(h0, -p_k[r]);
+            hi[r] = s;
+            lo[r] = l0 + (e - ws.iterate.momentum_lo()[r]);
+        }
+        vs.delta.iter_mut().for_each(|x| *x = 0.0);
+        for (j, ((f, sc), psi)) in ws
+            .stage
+            .lq
+            .chunks_exact(D)
+            .zip(ws.stage.scaled.chunks_exact_mut(D))
+            .zip(vt.psi.chunks_exact(k))
+            .take(m)
+            .enumerate()
+        {
+            let w = t.weights[j] * h;
+            let g: [f64; D] = std::array::from_fn(|r| w * f[r]);
+            sc.copy_from_slice(&g);
+            for (&x, delta) in psi.iter().zip(vs.delta.chunks_exact_mut(D)) {
+                for r in 0..D {
+                    delta[r] += x * g[r];
+                }
+            }
+            let psi0 = psi[0];
+            for r in 0..D {
+                dd_acc(&mut hi[r], &mut lo[r], psi0, g[r]);
+                lo[r] += psi0 * w.mul_add(f[r], -g[r]);
+            }
+        }
+        let mut norm = 0.0f64;
+        for (b, (delta, c)) in vs
+            .delta
+            .chunks_exact_mut(D)
+            .zip(vs.c.chunks_exact(D))
+            .enumerate()
+        {
+            for r in 0..D {
+                let f = if b == 0 {
+                    hi[r] + lo[r]
+                } else {
+                    let mc = match sep.mass_diagonal() {
+                        Some(diag) => diag[r] * c[r],
+                        None => (0..D).map(|s| sep.mass()[r * D + s] * c[s]).sum(),
+                    };
+                    mc + delta[r]
+                };
+                delta[r] = -f;
+                norm = norm.max(f.abs());
+                if !f.is_finite() {
+                    norm = f64::INFINITY;
+                }
+            }
+        }
+        norm
+    }
+
+    /// [`Self::velocity_residual`] for any D, through the strided products.
+    fn velocity_residual_general<L: Lagrangian>(
         &self,
         lag: &L,
         ws: &mut Workspace,

@@ -19,8 +19,11 @@
 //! O(n D³) per factorisation, instead of O((nD)³). The Schur form, not an eigendecomposition,
 //! is used so that an ill-conditioned eigenvector basis of the non-symmetric C never enters.
 
+mod small;
+
 use crate::error::{GviError, Result};
 use crate::linalg::{Lu, Strided, gemm};
+use small::{SMALL_MAX_D, SmallSolve};
 
 use super::Tables;
 use super::self_blocks::SelfBlocks;
@@ -198,6 +201,9 @@ pub(crate) struct KroneckerWork {
     acc: Vec<f64>,
     /// Exact self-blocks of the fast coordinate blocks ([`super::self_blocks`]).
     pub(crate) exact: SelfBlocks,
+    /// The same solve with D a constant, for few coordinates ([`small`]; full frozen
+    /// Hessian, D ≤ [`SMALL_MAX_D`]).
+    small: Option<SmallSolve>,
 }
 
 impl KroneckerWork {
@@ -265,6 +271,7 @@ impl KroneckerWork {
             zeta: vec![0.0; k * d],
             acc: vec![0.0; 2 * d],
             exact: SelfBlocks::new(k, nodes, d, block, self_block_rate),
+            small: (block == d && d <= SMALL_MAX_D).then(|| SmallSolve::new(kt, d)),
         })
     }
 
@@ -458,6 +465,12 @@ impl KroneckerWork {
     /// Solve J̃ x = r in place (`rhs` holds k×D values, block-row-major).
     pub(crate) fn solve(&mut self, kt: &KroneckerTables, h: f64, rhs: &mut [f64]) {
         let (d, k) = (self.d, kt.k);
+        if let Some(small) = self.small.as_mut() {
+            // Few coordinates (no self-blocks: those need b < D): the same operations below,
+            // in the same order, with D a constant.
+            small.solve(kt, h, &self.v, &self.mu, &self.inv, d, rhs);
+            return;
+        }
         self.exact.save(d, rhs);
         let (rd, rk) = (Strided::rows(0, d), Strided::rows(0, k));
         gemm(k, k, d, 1.0, &kt.r, rk, rhs, rd, 0.0, &mut self.y, rd);
