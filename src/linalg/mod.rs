@@ -12,7 +12,9 @@
 //! the integrator's buffers; a singular factorisation is a [`Singular`] value, never a panic.
 
 mod gemm;
+mod panel;
 pub use gemm::{Strided, gemm, gemm_transposed};
+pub(crate) use panel::{PANEL, panel_product};
 
 /// Σ x_i y_i, summed in four interleaved lanes (then (l0 + l1) + (l2 + l3)), so that the
 /// additions do not wait on each other; serially below eight terms.

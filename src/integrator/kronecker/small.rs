@@ -11,6 +11,13 @@
 //! (R and U are stored by columns once), and the back-substitution's coupling sums are
 //! contiguous dot products per coordinate.
 
+use crate::linalg::{PANEL, panel_product};
+
+/// The column stride of the stored R and U: [`PANEL`] when the panel kernel applies.
+fn column_stride(k: usize) -> usize {
+    if k <= PANEL { PANEL } else { k }
+}
+
 /// Largest D served by this kernel; N-body systems keep the general route (which vectorises
 /// along the coordinates).
 pub(crate) const SMALL_MAX_D: usize = 4;
@@ -19,7 +26,8 @@ pub(crate) const SMALL_MAX_D: usize = 4;
 #[derive(Debug, Clone)]
 pub(crate) struct SmallSolve {
     k: usize,
-    /// R and U by columns: column a at `[a·k ..][..k]`.
+    /// R and U by columns: column a at `[a·w ..][..k]`, w = [`PANEL`] for k ≤ [`PANEL`] (the
+    /// rows beyond k zero) and w = k otherwise.
     r_cols: Vec<f64>,
     u_cols: Vec<f64>,
     /// R r, (R r) V, ζ and ζ Vᵀ (k×D each, by rows, as the right-hand side).
@@ -33,11 +41,12 @@ impl SmallSolve {
     /// Buffers for the Schur tables `kt` and D ≤ [`SMALL_MAX_D`] coordinates.
     pub(crate) fn new(kt: &super::KroneckerTables, d: usize) -> Self {
         let k = kt.k;
+        let w = column_stride(k);
         let by_columns = |m: &[f64]| {
-            let mut out = vec![0.0; k * k];
+            let mut out = vec![0.0; k * w];
             for i in 0..k {
                 for a in 0..k {
-                    out[a * k + i] = m[i * k + a];
+                    out[a * w + i] = m[i * k + a];
                 }
             }
             out
@@ -89,12 +98,21 @@ impl SmallSolve {
         // y = R r: each entry summed over a in order from zero (the general route's
         // few-column product), by columns of R, the D coordinates of a row side by side.
         let y = &mut self.y[..k * D];
-        y.iter_mut().for_each(|x| *x = 0.0);
-        for (col, row) in self.r_cols.chunks_exact(k).zip(rhs.chunks_exact(D)) {
-            let x: [f64; D] = std::array::from_fn(|s| row[s]);
-            for (y, &c) in y.chunks_exact_mut(D).zip(col) {
+        if k <= PANEL {
+            let acc = panel_product::<D>(&self.r_cols, rhs, k);
+            for (i, y) in y.chunks_exact_mut(D).enumerate() {
                 for s in 0..D {
-                    y[s] += c * x[s];
+                    y[s] = acc[s][i];
+                }
+            }
+        } else {
+            y.iter_mut().for_each(|x| *x = 0.0);
+            for (col, row) in self.r_cols.chunks_exact(k).zip(rhs.chunks_exact(D)) {
+                let x: [f64; D] = std::array::from_fn(|s| row[s]);
+                for (y, &c) in y.chunks_exact_mut(D).zip(col) {
+                    for s in 0..D {
+                        y[s] += c * x[s];
+                    }
                 }
             }
         }
@@ -151,12 +169,21 @@ impl SmallSolve {
         }
         // x = U (ζ Vᵀ), by columns of U, c in order from zero, into the right-hand side.
         let x = &mut rhs[..k * D];
-        x.iter_mut().for_each(|x| *x = 0.0);
-        for (col, b) in self.u_cols.chunks_exact(k).zip(self.back.chunks_exact(D)) {
-            let b: [f64; D] = std::array::from_fn(|s| b[s]);
-            for (x, &u) in x.chunks_exact_mut(D).zip(col) {
+        if k <= PANEL {
+            let acc = panel_product::<D>(&self.u_cols, &self.back, k);
+            for (i, x) in x.chunks_exact_mut(D).enumerate() {
                 for s in 0..D {
-                    x[s] += u * b[s];
+                    x[s] = acc[s][i];
+                }
+            }
+        } else {
+            x.iter_mut().for_each(|x| *x = 0.0);
+            for (col, b) in self.u_cols.chunks_exact(k).zip(self.back.chunks_exact(D)) {
+                let b: [f64; D] = std::array::from_fn(|s| b[s]);
+                for (x, &u) in x.chunks_exact_mut(D).zip(col) {
+                    for s in 0..D {
+                        x[s] += u * b[s];
+                    }
                 }
             }
         }

@@ -8,7 +8,7 @@ use crate::basis::Basis;
 use crate::integrator::dd::{dd_acc, dd_acc_columns, two_sum};
 use crate::integrator::{GalerkinIntegrator, InitialGuess, Workspace};
 use crate::lagrangian::Lagrangian;
-use crate::linalg::{Lu, Strided, gemm, gemm_transposed};
+use crate::linalg::{Lu, Strided, gemm, gemm_transposed, panel_product};
 use crate::quadrature::Quadrature;
 
 /// The dense exact Newton matrix of the velocity form and its factorisation.
@@ -131,23 +131,34 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let (origin, origin_lo) = (arr(ws.iterate.origin()), arr(ws.iterate.origin_lo()));
         let c0_lo = arr(&vs.c0_lo);
         // q_j = q_k + (δq_k + h ι_j0 c_0,lo + h Σ_a ι_ja c_a).
-        for (qj, iota) in ws
-            .stage
-            .qj
-            .chunks_exact_mut(D)
-            .zip(vt.iota.chunks_exact(k))
-            .take(m)
-        {
-            let mut acc = [0.0f64; D];
-            for (&x, c) in iota.iter().zip(vs.c.chunks_exact(D)) {
+        let small = |w: f64, r: usize| origin_lo[r] + w * c0_lo[r];
+        if vt.iota_cols.is_empty() {
+            for (qj, iota) in ws
+                .stage
+                .qj
+                .chunks_exact_mut(D)
+                .zip(vt.iota.chunks_exact(k))
+                .take(m)
+            {
+                let mut acc = [0.0f64; D];
+                for (&x, c) in iota.iter().zip(vs.c.chunks_exact(D)) {
+                    for r in 0..D {
+                        acc[r] += x * c[r];
+                    }
+                }
+                let w = h * iota[0];
                 for r in 0..D {
-                    acc[r] += x * c[r];
+                    qj[r] = (h * acc[r] + small(w, r)) + origin[r];
                 }
             }
-            let w = h * iota[0];
-            for r in 0..D {
-                let small = origin_lo[r] + w * c0_lo[r];
-                qj[r] = (h * acc[r] + small) + origin[r];
+        } else {
+            // m ≤ PANEL nodes: the same sums as one register panel.
+            let acc = panel_product::<D>(&vt.iota_cols, &vs.c, k);
+            for (j, qj) in ws.stage.qj.chunks_exact_mut(D).take(m).enumerate() {
+                let w = h * vt.iota[j * k];
+                for r in 0..D {
+                    qj[r] = (h * acc[r][j] + small(w, r)) + origin[r];
+                }
             }
         }
         lag.force_at_points(&ws.stage.qj, &mut ws.stage.lq);
@@ -173,7 +184,10 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             hi[r] = s;
             lo[r] = l0 + (e - ws.iterate.momentum_lo()[r]);
         }
-        vs.delta.iter_mut().for_each(|x| *x = 0.0);
+        let panel = !vt.psi_rows.is_empty();
+        if !panel {
+            vs.delta.iter_mut().for_each(|x| *x = 0.0);
+        }
         for (j, ((f, sc), psi)) in ws
             .stage
             .lq
@@ -186,15 +200,26 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             let w = t.weights[j] * h;
             let g: [f64; D] = std::array::from_fn(|r| w * f[r]);
             sc.copy_from_slice(&g);
-            for (&x, delta) in psi.iter().zip(vs.delta.chunks_exact_mut(D)) {
-                for r in 0..D {
-                    delta[r] += x * g[r];
+            if !panel {
+                for (&x, delta) in psi.iter().zip(vs.delta.chunks_exact_mut(D)) {
+                    for r in 0..D {
+                        delta[r] += x * g[r];
+                    }
                 }
             }
             let psi0 = psi[0];
             for r in 0..D {
                 dd_acc(&mut hi[r], &mut lo[r], psi0, g[r]);
                 lo[r] += psi0 * w.mul_add(f[r], -g[r]);
+            }
+        }
+        if panel {
+            // k ≤ PANEL modes: Σ_j ψ_jb g_j, the same sums, as one register panel.
+            let acc = panel_product::<D>(&vt.psi_rows, &ws.stage.scaled, m);
+            for (b, delta) in vs.delta.chunks_exact_mut(D).take(k).enumerate() {
+                for r in 0..D {
+                    delta[r] = acc[r][b];
+                }
             }
         }
         let mut norm = 0.0f64;

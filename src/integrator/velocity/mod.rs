@@ -42,6 +42,7 @@ pub(crate) use solve::VelocityState;
 
 use crate::integrator::Tables;
 use crate::integrator::kronecker::KroneckerTables;
+use crate::linalg::PANEL;
 use crate::quadrature::QuadratureRule;
 
 /// The largest deviation from the identity of the quadrature's Gram matrix of the velocity
@@ -59,6 +60,12 @@ pub(crate) struct VelocityTables {
     pub iota: Vec<f64>,
     /// ψ_jb, m×k: ι_jb for b ≥ 1, ι_j0 − 1 (exact) for b = 0.
     pub psi: Vec<f64>,
+    /// The columns of ι padded to [`PANEL`] nodes (k×PANEL) when m ≤ PANEL, else empty: the
+    /// curve at the nodes as one register panel (`velocity_residual`, D ≤ 4).
+    pub iota_cols: Vec<f64>,
+    /// The rows of ψ padded to [`PANEL`] modes (m×PANEL) when k ≤ PANEL, else empty: the
+    /// projections as one register panel.
+    pub psi_rows: Vec<f64>,
     /// Extrapolation of the velocity to the next step, k×k: c_next = E c (the previous
     /// step's q̇(τ + 1) projected on the modes, exact for polynomials).
     pub extrapolate: Vec<f64>,
@@ -214,8 +221,26 @@ impl VelocityTables {
         if !finite {
             return None;
         }
+        let mut iota_cols = Vec::new();
+        if m <= PANEL {
+            iota_cols = vec![0.0; k * PANEL];
+            for j in 0..m {
+                for a in 0..k {
+                    iota_cols[a * PANEL + j] = it[j * k + a];
+                }
+            }
+        }
+        let mut psi_rows = Vec::new();
+        if k <= PANEL {
+            psi_rows = vec![0.0; m * PANEL];
+            for j in 0..m {
+                psi_rows[j * PANEL..j * PANEL + k].copy_from_slice(&psi[j * k..(j + 1) * k]);
+            }
+        }
         Some(VelocityTables {
             k,
+            iota_cols,
+            psi_rows,
             kron: KroneckerTables::from_pencil(&c, &identity, k),
             iota: it,
             psi,
