@@ -109,14 +109,27 @@ fn overrides_of(options: &Bound<'_, PyDict>) -> PyResult<(Overrides, Extra)> {
                 }
             }
             "alpha" => {
-                o.time_alpha = Some(finite("alpha", value.extract().map_err(|_| bad("a number"))?)?)
+                o.time_alpha = Some(finite(
+                    "alpha",
+                    value.extract().map_err(|_| bad("a number"))?,
+                )?)
             }
             "energy_level" => {
                 let e = value.extract().map_err(|_| bad("a number"))?;
                 o.time_energy = Some(finite("energy_level", e)?)
             }
-            "t_end" => o.t_end = Some(finite("t_end", value.extract().map_err(|_| bad("a number"))?)?),
-            "every" => o.every = Some(finite("every", value.extract().map_err(|_| bad("a number"))?)?),
+            "t_end" => {
+                o.t_end = Some(finite(
+                    "t_end",
+                    value.extract().map_err(|_| bad("a number"))?,
+                )?)
+            }
+            "every" => {
+                o.every = Some(finite(
+                    "every",
+                    value.extract().map_err(|_| bad("a number"))?,
+                )?)
+            }
             "p0" => o.p0 = Some(vector(&value, "p0", None)?),
             other => {
                 return Err(InvalidInputError::new_err(format!(

@@ -107,7 +107,9 @@ pub fn spec_of(value: &Bound<'_, PyAny>) -> PyResult<TimeTransformSpec> {
         return Ok(tt.get().spec.clone());
     }
     match value.extract::<String>() {
-        Ok(name) => Ok(TimeTransformSpec::new(name.parse::<MonitorKind>().py_err()?)),
+        Ok(name) => Ok(TimeTransformSpec::new(
+            name.parse::<MonitorKind>().py_err()?,
+        )),
         Err(_) => Err(InvalidInputError::new_err(format!(
             "time_transform: expected a TimeTransform or a monitor name ({}), got {value}",
             MonitorKind::NAMES.join(", ")
@@ -166,13 +168,19 @@ impl TimeTransformedTrajectory {
     /// Physical times of the rows.
     #[getter]
     fn t<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        self.column("t").unwrap_or_default().into_pyarray(py).into_any()
+        self.column("t")
+            .unwrap_or_default()
+            .into_pyarray(py)
+            .into_any()
     }
 
     /// Fictitious times s of the rows.
     #[getter]
     fn s<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        self.column("s").unwrap_or_default().into_pyarray(py).into_any()
+        self.column("s")
+            .unwrap_or_default()
+            .into_pyarray(py)
+            .into_any()
     }
 
     /// The physical length of the fictitious step that ends at (or holds) each row (0 for

@@ -8,8 +8,8 @@ use crate::plot::{Chart, Series};
 use crate::scene::{BuiltScene, BuiltSystem};
 use galerkin_vi::GviError;
 use galerkin_vi::events::EventOptions;
-use galerkin_vi::systems::{AnySystem, System};
 use galerkin_vi::method::{InitialState, MethodSpec};
+use galerkin_vi::systems::{AnySystem, System};
 use galerkin_vi::time_transform::{
     Monitor, TimeTransformOptions, TimeTransformSpec, TimeTransformed, TimeTransformedRun,
     integrate_time_transformed_until,
