@@ -36,7 +36,7 @@ def tables(text):
                 err, sec = float(error), float(seconds)
             except ValueError:
                 continue  # a failed run
-            family = re.sub(r"(, \d+ steps/orbit| tol = \S+| epsilon = \S+)$", "", method)
+            family = re.sub(r"(, \d+ steps/orbit| tol = \S+| ε = \S+)$", "", method)
             rows.append((family, method, err, sec))
         out[e] = rows
     return out

@@ -2,8 +2,9 @@
 """REBOUND's IAS15 on the problems of docs/guide/time-transformations.md, for its tables.
 
 - Kepler e = 0.9 and e = 0.99 (a = 1, mu = 1, period 2 pi) from periapsis over 100 orbits: the
-  max-norm position error against the exact solution (Kepler's equation, solved by Newton
-  here) at the guide's sample times t = k 2 pi / 16, k = 0 ... 1600;
+  max-norm position error against the exact solution of the initial state (its elements as the
+  crate's KeplerOrbit::from_state computes them, Kepler's equation solved by Newton) at the
+  guide's sample times t = k 2 pi / 16, k = 0 ... 1600;
 - the Pythagorean three-body problem (masses 3, 4, 5 at rest at (1, 3), (-2, -1), (1, -1),
   G = 1) to T = 70, sampled at t = 0.1 k: the max relative energy error over the samples, and
   how long the positions agree (max norm, to 1e-6 and to 1e-2) with the guide's tight DOP853
@@ -20,7 +21,8 @@ mass mu at the origin and a test particle, the position the particle's relative 
 Kepler problem exactly). Steps are REBOUND's steps_done; force evaluations are not reported
 by REBOUND.
 
-    /tmp/venv-rebound/bin/python scripts/rebound/time_transform.py --reference target/pythagorean-dop853.csv
+    gvi run pythagorean --every 0.1 --output target/pythagorean-galerkin.csv
+    /tmp/venv-rebound/bin/python scripts/rebound/time_transform.py --reference target/pythagorean-dop853.csv --galerkin target/pythagorean-galerkin.csv
 
 prints Markdown rows for the guide's tables and the load average before and after.
 """
@@ -45,25 +47,57 @@ def _integrate(sim, t):
         raise RuntimeError(f"REBOUND stopped with status {ret}")
 
 
-def kepler_exact(t, e):
-    """Position at time t of the orbit a = 1, mu = 1 with periapsis on +x at t = 0, moving
-    towards +y: E - e sin E = M by Newton from E = pi (monotone for every e < 1)."""
-    m = math.fmod(t, 2.0 * math.pi)
-    ecc = math.pi
-    for _ in range(100):
-        step = (ecc - e * math.sin(ecc) - m) / (1.0 - e * math.cos(ecc))
-        ecc -= step
-        if abs(step) < 1e-17:
-            break
-    return math.cos(ecc) - e, math.sqrt(1.0 - e * e) * math.sin(ecc)
+class KeplerOrbit:
+    """The exact orbit of a state (mu = 1), with the elements computed from the floating-point
+    state as galerkin_vi::systems::kepler_orbit::KeplerOrbit::from_state computes them (the
+    guide's exact solution): at e = 0.99 the rounding of the state's energy moves the period by
+    ~1e-14, 5e-10 in position at periapsis after 100 orbits, so an orbit with a = 1 and e
+    exactly would put that floor under every error."""
+
+    def __init__(self, q, v):
+        r = math.hypot(q[0], q[1])
+        v2 = v[0] * v[0] + v[1] * v[1]
+        energy = 0.5 * v2 - 1.0 / r
+        self.a = -0.5 / energy
+        e_cos = r * v2 - 1.0
+        e_sin = (q[0] * v[0] + q[1] * v[1]) / math.sqrt(self.a)
+        self.e = math.hypot(e_cos, e_sin)
+        ecc = math.atan2(e_sin, e_cos)
+        self.m0 = ecc - self.e * math.sin(ecc)
+        self.n = math.sqrt(1.0 / self.a) / self.a
+        self.sense = math.copysign(1.0, q[0] * v[1] - q[1] * v[0])
+        x, y = self.perifocal(ecc)
+        self.w = math.atan2(q[1], q[0]) - math.atan2(y, x)
+
+    def perifocal(self, ecc):
+        e, a = self.e, self.a
+        return a * (math.cos(ecc) - e), self.sense * a * math.sqrt(1.0 - e * e) * math.sin(ecc)
+
+    def position(self, t):
+        """E - e sin E = M by Newton from E = pi (monotone for every e < 1)."""
+        m = math.fmod(self.m0 + self.n * t, 2.0 * math.pi)
+        ecc = math.pi
+        for _ in range(100):
+            step = (ecc - self.e * math.sin(ecc) - m) / (1.0 - self.e * math.cos(ecc))
+            ecc -= step
+            if abs(step) < 1e-17:
+                break
+        x, y = self.perifocal(ecc)
+        c, s = math.cos(self.w), math.sin(self.w)
+        return c * x - s * y, s * x + c * y
+
+
+def kepler_at_periapsis(e):
+    """The guide's initial state (tests/common/kepler_periapsis.rs): a = 1, mu = 1."""
+    return (1.0 - e, 0.0), (0.0, math.sqrt((1.0 + e) / (1.0 - e)))
 
 
 def kepler_sim(e, epsilon):
     sim = rebound.Simulation()
     sim.G = 1.0
     sim.add(m=1.0)
-    # Periapsis r_p = 1 - e, speed sqrt((1 + e) / (1 - e)) (a = 1, mu = 1).
-    sim.add(m=0.0, x=1.0 - e, vy=math.sqrt((1.0 + e) / (1.0 - e)))
+    q, v = kepler_at_periapsis(e)
+    sim.add(m=0.0, x=q[0], y=q[1], vx=v[0], vy=v[1])
     sim.integrator = "ias15"
     sim.integrator.epsilon = epsilon
     sim.exact_finish_time = c_int(1)
@@ -83,9 +117,10 @@ def run_kepler(e, epsilon, repeats):
             out.append((ps[1].x - ps[0].x, ps[1].y - ps[0].y))
         best.append(time.perf_counter() - start)
         sim.process_messages()
+    orbit = KeplerOrbit(*kepler_at_periapsis(e))
     err = 0.0
     for t, (x, y) in zip(times[1:], out):
-        xe, ye = kepler_exact(t, e)
+        xe, ye = orbit.position(t)
         err = max(err, abs(x - xe), abs(y - ye))
     return sim.steps_done, err, statistics.median(best)
 
@@ -142,6 +177,17 @@ def read_reference(path):
     return rows
 
 
+def read_galerkin(path):
+    """The positions q0 ... q5 of `gvi run pythagorean --every 0.1`'s CSV (701 rows)."""
+    import csv
+
+    with open(path, newline="") as f:
+        rows = [[float(r[f"q{i}"]) for i in range(6)] for r in csv.DictReader(f)]
+    if len(rows) != 701:
+        raise SystemExit(f"{path}: expected 701 rows (t = 0, 0.1, ..., 70), got {len(rows)}")
+    return rows
+
+
 def agree_until(a, b, tol):
     """The first sample time at which the positions differ by more than tol (max norm), as
     agree_until in lab/tests/timetransform_study.rs."""
@@ -155,6 +201,10 @@ def agree_until(a, b, tol):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--reference", help="the DOP853 1e-15 reference CSV (Pythagorean)")
+    parser.add_argument(
+        "--galerkin",
+        help="the time-transformed Galerkin run at t = 0, 0.1, ..., 70 "
+             "(gvi run pythagorean --every 0.1 --output FILE): agreement with it too")
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument(
         "--kepler-epsilons", default="1e-6,1e-7,1e-8,1e-9,1e-10,1e-11",
@@ -174,15 +224,22 @@ def main():
     if args.reference:
         reference = read_reference(args.reference)
         print("\nPythagorean problem to t = 70 (samples every 0.1)")
+        galerkin = read_galerkin(args.galerkin) if args.galerkin else None
+        extra = " | agrees with the Galerkin run to 1e-6 until | to 1e-2 until" if galerkin else ""
         print("| run | steps | max relative energy error | seconds "
-              "| agrees with DOP853 1e-15 to 1e-6 until | to 1e-2 until |")
-        print("|---|---|---|---|---|---|")
+              f"| agrees with DOP853 1e-15 to 1e-6 until | to 1e-2 until{extra} |")
+        print("|---|---|---|---|---|---|" + ("---|---|" if galerkin else ""))
         for eps in [float(x) for x in args.pythagorean_epsilons.split(",")]:
             steps, energy, seconds, out = run_pythagorean(eps, args.repeats)
-            print(
-                f"| IAS15 epsilon = {eps:g} | {steps} | {energy:.1e} | {seconds:.3f} "
-                f"| {agree_until(out, reference, 1e-6):.1f} | {agree_until(out, reference, 1e-2):.1f} |"
-            )
+            cells = [agree_until(out, reference, 1e-6), agree_until(out, reference, 1e-2)]
+            if galerkin:
+                cells += [agree_until(out, galerkin, 1e-6), agree_until(out, galerkin, 1e-2)]
+            print(f"| IAS15 epsilon = {eps:g} | {steps} | {energy:.1e} | {seconds:.3f} | "
+                  + " | ".join(f"{c:.1f}" for c in cells) + " |")
+        if galerkin:
+            print(f"Galerkin run against DOP853 1e-15: to 1e-6 until "
+                  f"{agree_until(galerkin, reference, 1e-6):.1f}, to 1e-2 until "
+                  f"{agree_until(galerkin, reference, 1e-2):.1f}")
     print(f"\nload average after: {os.getloadavg()}")
 
 
