@@ -233,8 +233,8 @@ fn refuse_unused_time_options(scene: &BuiltScene, o: &Overrides) -> PyResult<()>
 /// every (with a time transformation only). Returns a `Trajectory`, a
 /// `TimeTransformedTrajectory` (rows in physical time) for a time-transformed run
 /// (`kepler-e099`, `pythagorean`, or `time_transform=`), or a `RigidBodyTrajectory` for a
-/// rigid-body scene (run on SO(3) by the Lie group integrator). Bad options raise `InvalidInputError` or one of its subclasses, naming
-/// the option; options `gvi run` refuses together (n with tol, control without tol,
+/// rigid-body scene (run on SO(3) by the Lie group integrator). Bad options raise
+/// `InvalidInputError` or one of its subclasses, naming the option; options `gvi run` refuses together (n with tol, control without tol,
 /// retraction outside rigid bodies, solver on them) are refused the same way. The sanity
 /// warnings of `gvi run` (an energy or position error above 1 %, an unresolved close
 /// encounter) are issued as `RuntimeWarning`s. A run whose estimated memory is above the

@@ -336,6 +336,23 @@ pub fn run_scene(
         })
     })?
     .py_err()?;
+    // As for the other scenes: a relative energy error above `gvi run --strict`'s threshold
+    // is a `RuntimeWarning`, so that a run that returns is not silently trusted.
+    let rel = result.summary.max_relative_energy_error;
+    if rel > galerkin_vi_lab::run::SANITY_THRESHOLD {
+        let message = std::ffi::CString::new(format!(
+            "run_scene('{}'): relative energy error {rel:.3e} above {:e}",
+            scene.name,
+            galerkin_vi_lab::run::SANITY_THRESHOLD
+        ))
+        .unwrap_or_default();
+        PyErr::warn(
+            py,
+            &py.get_type::<pyo3::exceptions::PyRuntimeWarning>(),
+            &message,
+            1,
+        )?;
+    }
     TimeTransformedTrajectory::from_result(result, dim)
 }
 
