@@ -187,6 +187,13 @@ QUOTES: list = [
            out=r"Galerkin curves: error ≈ ([0-9.]+)e3·"),
     Number("docs/guide/studies.md", r"round-off floor ≈ ([0-9.e-]+)\)`", REFINE_GUIDE,
            out=r"round-off floor ≈ ([0-9.e-]+)\)"),
+    # Time transformations: the summaries of `gvi run kepler-e099` and `gvi run pythagorean`
+    # (about 1 s and 20 s); the chart path differs from the guide's command, the summary not.
+    Block("docs/guide/time-transformations.md", "`gvi run kepler-e099 --output e099.csv` prints",
+          "gvi run kepler-e099 --output e099.csv"),
+    Block("docs/guide/time-transformations.md", "prints (release binary",
+          "gvi run pythagorean --output pythagorean.csv --plot out/pythagorean-steps.svg",
+          drop=[r"^created directory ", r"^chart written to "]),
     # Bases and quadratures: the three polynomial bases' map error at n = 64, the kinetic
     # condition numbers, and the README's summary of them.
     *[
@@ -433,6 +440,8 @@ def self_test(runner: Runner) -> list:
         ("a README command", "README.md", "gvi check kepler --n 12", "gvi check kepler --n 12 --nonsense"),
         ("a guide number", "docs/guide/studies.md", "Galerkin curves: error ≈ 1.", "Galerkin curves: error ≈ 2."),
         ("the figure", "docs/figures/kepler-orbit.svg", "<svg ", "<svg data-x=\"1\" "),
+        ("the Kepler e = 0.99 summary", "docs/guide/time-transformations.md",
+         "  max position error: ", "  max position error: 9"),
     ]
     failures = []
     files = {q.file for q in QUOTES} | {"examples/quickstart.rs", "docs/figures/kepler-orbit.svg"}

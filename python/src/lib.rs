@@ -10,6 +10,7 @@ mod guard;
 mod interrupt;
 mod rigid;
 mod systems;
+mod time_transform;
 mod trajectory;
 
 use convert::{finite, matrix, vector};
@@ -26,14 +27,17 @@ use trajectory::{Integrator, Trajectory};
 
 /// The keyword options of `run_scene`, the method and initial-state flags of `gvi run`.
 const RUN_OPTIONS: &str = "n, h, steps, basis, quadrature, quad_points, economical, compact, \
-                           solver, retraction, tol, control, ladder, auto_h, q0 or p0";
+                           solver, retraction, tol, control, ladder, auto_h, q0, p0, \
+                           time_transform, alpha, energy_level, t_end or every";
 
 /// The options of `run_scene` beyond the lab's [`Overrides`]: `tol=None` (which `Overrides`
-/// cannot say: it turns a scene's own tolerance off) and `compact`.
+/// cannot say: it turns a scene's own tolerance off), `compact`, and a whole
+/// `TimeTransform` (`Overrides` names only the monitor).
 #[derive(Default)]
 struct Extra {
     tol: Option<Option<f64>>,
     compact: bool,
+    time_transform: Option<galerkin_vi::time_transform::TimeTransformSpec>,
 }
 
 /// `run_scene`'s keyword options as the lab's [`Overrides`] (what `gvi run`'s flags become)
@@ -95,6 +99,37 @@ fn overrides_of(options: &Bound<'_, PyDict>) -> PyResult<(Overrides, Extra)> {
                 )
             }
             "q0" => o.q0 = Some(vector(&value, "q0", None)?),
+            "time_transform" => {
+                // A name overrides the scene's monitor only (as `gvi run --time-transform`);
+                // a `TimeTransform` replaces the scene's whole transformation.
+                if let Ok(name) = value.extract::<String>() {
+                    o.time_transform = Some(parsed(name)?);
+                } else {
+                    extra.time_transform = Some(time_transform::spec_of(&value)?);
+                }
+            }
+            "alpha" => {
+                o.time_alpha = Some(finite(
+                    "alpha",
+                    value.extract().map_err(|_| bad("a number"))?,
+                )?)
+            }
+            "energy_level" => {
+                let e = value.extract().map_err(|_| bad("a number"))?;
+                o.time_energy = Some(finite("energy_level", e)?)
+            }
+            "t_end" => {
+                o.t_end = Some(finite(
+                    "t_end",
+                    value.extract().map_err(|_| bad("a number"))?,
+                )?)
+            }
+            "every" => {
+                o.every = Some(finite(
+                    "every",
+                    value.extract().map_err(|_| bad("a number"))?,
+                )?)
+            }
             "p0" => o.p0 = Some(vector(&value, "p0", None)?),
             other => {
                 return Err(InvalidInputError::new_err(format!(
@@ -162,16 +197,44 @@ fn refuse_unused(scene: &BuiltScene, o: &Overrides) -> PyResult<()> {
     Ok(())
 }
 
+/// Refuse the time-transformation options on a scene run without a time transformation (they
+/// would be ignored) and `tol` with one (its steps are fixed in fictitious time), as `gvi run`
+/// does.
+fn refuse_unused_time_options(scene: &BuiltScene, o: &Overrides) -> PyResult<()> {
+    if scene.method.time_transform.is_none() {
+        for (name, given) in [
+            ("alpha", o.time_alpha.is_some()),
+            ("energy_level", o.time_energy.is_some()),
+            ("t_end", o.t_end.is_some()),
+            ("every", o.every.is_some()),
+        ] {
+            if given {
+                return Err(time_transform::only_with_transform(name));
+            }
+        }
+    } else if o.tol.is_some() {
+        return Err(InvalidInputError::new_err(
+            "tol: a time-transformed run takes fixed fictitious steps at a fixed n; tol would \
+             be ignored",
+        ));
+    }
+    Ok(())
+}
+
 /// Run a scene (a built-in name such as "kepler", or the path of a TOML scene file) with
 /// optional keyword options, the method and initial-state flags of `gvi run`: n, h, steps,
 /// basis, quadrature, quad_points (an explicit number of quadrature points), economical
 /// (True: the quadrature's economical number of points for n, ⌈3n/2⌉ Gauss–Legendre points),
 /// compact (True: the compact rule, n Gauss–Legendre points; `gvi run --quad-points n`),
 /// solver, retraction (rigid bodies: "exp" or "cayley"), tol (choose n per step; None turns a
-/// scene's own tol off), control, ladder and auto_h (with tol), q0, p0. Returns a
-/// `Trajectory`, or a `RigidBodyTrajectory` for a rigid-body scene (run on SO(3) by the Lie
-/// group integrator). Bad options raise `InvalidInputError` or one of its subclasses, naming
-/// the option; options `gvi run` refuses together (n with tol, control without tol,
+/// scene's own tol off), control, ladder and auto_h (with tol), q0, p0; and the Poincaré
+/// time transformation: time_transform (a monitor name, replacing the scene's monitor, or a
+/// `TimeTransform`, replacing its whole transformation), alpha, energy_level, t_end and
+/// every (with a time transformation only). Returns a `Trajectory`, a
+/// `TimeTransformedTrajectory` (rows in physical time) for a time-transformed run
+/// (`kepler-e099`, `pythagorean`, or `time_transform=`), or a `RigidBodyTrajectory` for a
+/// rigid-body scene (run on SO(3) by the Lie group integrator). Bad options raise
+/// `InvalidInputError` or one of its subclasses, naming the option; options `gvi run` refuses together (n with tol, control without tol,
 /// retraction outside rigid bodies, solver on them) are refused the same way. The sanity
 /// warnings of `gvi run` (an energy or position error above 1 %, an unresolved close
 /// encounter) are issued as `RuntimeWarning`s. A run whose estimated memory is above the
@@ -214,6 +277,10 @@ fn run_scene<'py>(
             }
         }
     }
+    let mut loaded = loaded;
+    if let Some(spec) = extra.time_transform.clone() {
+        loaded.method.time_transform = Some(spec);
+    }
     let mut scene = loaded.with_overrides(&overrides);
     if let Some(tol) = extra.tol {
         scene.method.tol = tol;
@@ -224,6 +291,7 @@ fn run_scene<'py>(
     }
     let scene = scene.build().py_err()?;
     refuse_unused(&scene, &overrides)?;
+    refuse_unused_time_options(&scene, &overrides)?;
     // The estimate `gvi run` holds a run kept in memory to (it counts the output text, which
     // the Python arrays returned later stand for).
     let (_, estimate) = galerkin_vi_lab::run::in_memory_bytes(&scene, false);
@@ -239,6 +307,10 @@ fn run_scene<'py>(
     .py_err()?;
     if let BuiltSystem::RigidBody(body) = &scene.system {
         let traj = rigid::run(py, body, &scene)?;
+        return Ok(Bound::new(py, traj)?.into_any());
+    }
+    if scene.method.time_transform.is_some() {
+        let traj = time_transform::run_scene(py, &scene)?;
         return Ok(Bound::new(py, traj)?.into_any());
     }
     let kind = std::sync::Arc::new(systems::system_of(&scene)?);
@@ -301,6 +373,12 @@ fn integrate_many(
         Some(i) => i.get().method.clone(),
         None => galerkin_vi::method::MethodSpec::spectral(16, 1.0, 1),
     };
+    if method.time_transform.is_some() {
+        return Err(errors::UnsupportedError::new_err(
+            "integrate_many: a time-transformed Integrator ends each member at its own number \
+             of fictitious steps; integrate the members one by one (Integrator.integrate)",
+        ));
+    }
     guard::ensure_steps(steps)?;
     guard::ensure_runs_fit(q0s.len(), steps, method.n, d)?;
     for (i, (q, p)) in q0s.iter().zip(&p0s).enumerate() {
@@ -329,6 +407,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Integrator>()?;
     m.add_class::<Trajectory>()?;
     m.add_class::<rigid::RigidBodyTrajectory>()?;
+    m.add_class::<time_transform::TimeTransform>()?;
+    m.add_class::<time_transform::TimeTransformedTrajectory>()?;
     m.add_function(wrap_pyfunction!(run_scene, m)?)?;
     m.add_function(wrap_pyfunction!(integrate_many, m)?)?;
     Ok(())

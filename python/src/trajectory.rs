@@ -25,7 +25,11 @@ use std::sync::Arc;
 /// n − 1 − 2·harmonics plus sin/cos of ωh. `quad_points` is an explicit number of quadrature points;
 /// `economical=True` takes the quadrature's economical number for n (⌈3n/2⌉ Gauss–Legendre
 /// points, as `gvi run --economical`), `compact=True` its compact rule (n Gauss–Legendre
-/// points); at most one of the three.
+/// points); at most one of the three. `time_transform` (a `TimeTransform` or a monitor name)
+/// makes `h` the fictitious step of a Poincaré time transformation: `integrate` then takes at
+/// most `steps` fictitious steps (to the transformation's `t_end`, if it has one) and returns
+/// a `TimeTransformedTrajectory` in physical time; only exact Newton applies (`solver` "auto"
+/// or "exact": the transformed Lagrangian is not separable).
 #[pyclass(frozen, module = "galerkin_vi")]
 pub struct Integrator {
     pub(crate) method: MethodSpec,
@@ -63,7 +67,8 @@ impl Integrator {
     #[new]
     #[pyo3(signature = (basis = "chebyshev", n = 16, quadrature = "gauss-legendre", h = 1.0,
                         solver = "auto", quad_points = None, economical = false,
-                        compact = false, omega = None, harmonics = None))]
+                        compact = false, omega = None, harmonics = None,
+                        time_transform = None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         basis: &str,
@@ -76,6 +81,7 @@ impl Integrator {
         compact: bool,
         omega: Option<f64>,
         harmonics: Option<usize>,
+        time_transform: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let mut method = MethodSpec::spectral(n, finite("h", h)?, 1);
         method.basis = basis.parse::<galerkin_vi::basis::BasisKind>().py_err()?;
@@ -98,6 +104,9 @@ impl Integrator {
                 ));
             }
         };
+        method.time_transform = time_transform
+            .map(crate::time_transform::spec_of)
+            .transpose()?;
         // Build once now so that a bad n, h or quadrature is an error here, not later.
         method.integrator().py_err()?;
         Ok(Integrator { method })
@@ -105,15 +114,19 @@ impl Integrator {
 
     /// Integrate `steps` steps of `system` from (q0, p0) at t = 0. Refused before any work:
     /// a start `gvi run` refuses, and work whose estimated memory is above the limit
-    /// (`MemoryLimitError`). Ctrl-C stops the run within a step (`KeyboardInterrupt`).
-    fn integrate(
+    /// (`MemoryLimitError`). Ctrl-C stops the run within a step (`KeyboardInterrupt`). With a
+    /// time transformation: a `TimeTransformedTrajectory` of at most `steps` fictitious
+    /// steps; a monitor that does not fit the system (radius on N bodies), is not finite and
+    /// positive at q0 (r^alpha at r = 0), or a system that is not separable is refused
+    /// before any step.
+    fn integrate<'py>(
         &self,
-        py: Python<'_>,
-        system: &Bound<'_, System>,
-        q0: &Bound<'_, PyAny>,
-        p0: &Bound<'_, PyAny>,
+        py: Python<'py>,
+        system: &Bound<'py, System>,
+        q0: &Bound<'py, PyAny>,
+        p0: &Bound<'py, PyAny>,
         steps: usize,
-    ) -> PyResult<Trajectory> {
+    ) -> PyResult<Bound<'py, PyAny>> {
         let kind = system.get().kind.clone();
         let d = kind.dim();
         let q0 = vector(q0, "q0", Some(d))?;
@@ -121,12 +134,25 @@ impl Integrator {
         guard::ensure_steps(steps)?;
         guard::ensure_runs_fit(1, steps, self.method.n, d)?;
         guard::check_start(&kind, &q0, &p0).py_err()?;
+        if self.method.time_transform.is_some() {
+            let traj = crate::time_transform::integrate(py, &self.method, &kind, &q0, &p0, steps)?;
+            return Ok(Bound::new(py, traj)?.into_any());
+        }
         let method = self.method.clone();
         let traj = interruptible(py, |stop| {
             Integrator::run(&method, &kind, &q0, &p0, steps, stop)
         })?
         .py_err()?;
-        Ok(Trajectory::new(traj, kind, method))
+        Ok(Bound::new(py, Trajectory::new(traj, kind, method))?.into_any())
+    }
+
+    /// The time transformation, or None.
+    #[getter]
+    fn time_transform(&self) -> Option<crate::time_transform::TimeTransform> {
+        self.method
+            .time_transform
+            .clone()
+            .map(|spec| crate::time_transform::TimeTransform { spec })
     }
 
     /// Number of basis functions n.

@@ -113,6 +113,12 @@ LONG_CALLS = {
     "run_scene": "gv.run_scene('kepler', steps=2 * 10**6)",
     # Hours of Lie group steps (within the memory limit): stopped between chunks of 16 steps.
     "run_scene_rigid_body": "gv.run_scene('rigid-body', steps=2 * 10**6)",
+    # Time-transformed: the Pythagorean problem to t = 70 (about 10 s), and 10^6 fictitious
+    # Kepler steps; both stopped before the next fictitious step.
+    "run_scene_time_transformed": "gv.run_scene('pythagorean')",
+    "integrate_time_transformed": (
+        "gv.Integrator(n=12, h=1e-4, time_transform='radius').integrate(k, [0.4, 0], [0, 2], 10**6)"
+    ),
 }
 
 CHILD = """

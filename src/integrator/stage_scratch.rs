@@ -48,6 +48,16 @@ pub(crate) struct StageScratch {
     pub node_hessians: Vec<f64>,
     /// Four D-vectors of scratch for those products (empty for separable Lagrangians).
     pub jvp_scratch: Vec<f64>,
+    /// Non-separable Lagrangians: the Newton matrix's weighted node blocks (m × 4 × D²), one
+    /// column coordinate's row side Z_sᵀ (2m × (n−1)D), the node table Ψᵀ ((n−1) × 2m) and
+    /// the product Ψᵀ Z_sᵀ ((n−1) × (n−1)D) of `stage::general_blocks`; empty otherwise.
+    pub jac_nodes: Vec<f64>,
+    /// See `jac_nodes`.
+    pub jac_rows: Vec<f64>,
+    /// See `jac_nodes`.
+    pub jac_psi: Vec<f64>,
+    /// See `jac_nodes`.
+    pub jac_block: Vec<f64>,
     /// L_qq, L_qv, L_vv at one node (D×D each).
     pub hqq: Vec<f64>,
     /// See `hqq`.
@@ -165,6 +175,7 @@ impl StageScratch {
     /// Buffers for n basis functions, m nodes, D coordinates; `general`: the Lagrangian is not
     /// separable (node Hessians are kept); `block_entries`: size of `hblocks` (0: unused).
     pub(crate) fn new(n: usize, m: usize, d: usize, general: bool, block_entries: usize) -> Self {
+        let general_buffer = |len: usize| if general { vec![0.0; len] } else { Vec::new() };
         StageScratch {
             qj: vec![0.0; m * d],
             vj: vec![0.0; m * d],
@@ -189,6 +200,10 @@ impl StageScratch {
             } else {
                 Vec::new()
             },
+            jac_nodes: general_buffer(4 * m * d * d),
+            jac_rows: general_buffer(n.saturating_sub(1) * d * 2 * m),
+            jac_psi: general_buffer(2 * m * n.saturating_sub(1)),
+            jac_block: general_buffer(n.saturating_sub(1) * d * n.saturating_sub(1)),
             hqq: vec![0.0; d * d],
             hqv: vec![0.0; d * d],
             hvv: vec![0.0; d * d],

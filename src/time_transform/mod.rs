@@ -64,7 +64,7 @@ pub use clock::TimeStepper;
 pub use monitor::{CentralDistance, Combine, Monitor, PairDistances, SOFTMIN_BETA};
 pub use run::{
     OutputState, TimeTransformFailure, TimeTransformOptions, TimeTransformedRun,
-    integrate_time_transformed,
+    integrate_time_transformed, integrate_time_transformed_until,
 };
 pub use spec::{AnyMonitor, MonitorKind, TimeTransformSpec};
 

@@ -279,7 +279,6 @@ fn illinois(
 /// before t₀, an event with a map; the monitor not finite and positive at q₀; a step's solver
 /// failure; a physical step not finite and positive; `max_steps` reached before t_end
 /// ([`GviError::InvalidStepCount`]); an event's g not finite.
-#[allow(clippy::too_many_arguments)]
 pub fn integrate_time_transformed<B: Basis, Q: Quadrature, S: Lagrangian, M: Monitor>(
     gvi: &GalerkinIntegrator<B, Q>,
     tt: &TimeTransformed<S, M>,
@@ -288,6 +287,24 @@ pub fn integrate_time_transformed<B: Basis, Q: Quadrature, S: Lagrangian, M: Mon
     p0: &[f64],
     events: &mut [Event<'_>],
     options: &TimeTransformOptions,
+) -> std::result::Result<TimeTransformedRun, TimeTransformFailure> {
+    integrate_time_transformed_until(gvi, tt, t0, q0, p0, events, options, &|| false)
+}
+
+/// [`integrate_time_transformed`] that asks `stop` before every fictitious step (Ctrl-C in
+/// the Python bindings, a deadline): a `true` ends the run with [`GviError::Interrupted`] and
+/// the run so far in `partial`. With a `stop` that never says yes the run is
+/// [`integrate_time_transformed`]'s bit for bit.
+#[allow(clippy::too_many_arguments)]
+pub fn integrate_time_transformed_until<B: Basis, Q: Quadrature, S: Lagrangian, M: Monitor>(
+    gvi: &GalerkinIntegrator<B, Q>,
+    tt: &TimeTransformed<S, M>,
+    t0: f64,
+    q0: &[f64],
+    p0: &[f64],
+    events: &mut [Event<'_>],
+    options: &TimeTransformOptions,
+    stop: &dyn Fn() -> bool,
 ) -> std::result::Result<TimeTransformedRun, TimeTransformFailure> {
     options.events.validate()?;
     if options.max_steps == 0 || options.max_steps > MAX_STEPS {
@@ -398,6 +415,13 @@ pub fn integrate_time_transformed<B: Basis, Q: Quadrature, S: Lagrangian, M: Mon
                 return Err(fail(error, run));
             }
             return Ok(run);
+        }
+        if stop() {
+            let error = GviError::Interrupted {
+                step: stepper.steps(),
+                t: stepper.time(),
+            };
+            return Err(fail(error, run));
         }
         let stats = match stepper.step() {
             Ok(s) => s,

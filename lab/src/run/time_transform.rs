@@ -8,10 +8,11 @@ use crate::plot::{Chart, Series};
 use crate::scene::{BuiltScene, BuiltSystem};
 use galerkin_vi::GviError;
 use galerkin_vi::events::EventOptions;
+use galerkin_vi::method::{InitialState, MethodSpec};
 use galerkin_vi::systems::{AnySystem, System};
 use galerkin_vi::time_transform::{
     Monitor, TimeTransformOptions, TimeTransformSpec, TimeTransformed, TimeTransformedRun,
-    integrate_time_transformed,
+    integrate_time_transformed_until,
 };
 use serde::Serialize;
 use std::time::Instant;
@@ -134,37 +135,66 @@ impl TimeTransformResult {
 /// not positive at the initial state, E₀ or the times not finite — before any step. A
 /// solver failure after the first step is `Ok` with [`TimeTransformResult::failure`] set.
 pub fn run_time_transformed(scene: &BuiltScene, chart: bool) -> Result<TimeTransformResult> {
-    let Some(spec) = &scene.method.time_transform else {
-        return Err(GviError::Unsupported("the scene has no time transformation".into()).into());
-    };
+    run_time_transformed_until(scene, chart, &|| false)
+}
+
+/// [`run_time_transformed`] that asks `stop` before every fictitious step (Ctrl-C in the
+/// Python bindings): a `true` ends the run with [`TimeTransformResult::failure`] set to
+/// [`GviError::Interrupted`] and the rows before it kept.
+pub fn run_time_transformed_until(
+    scene: &BuiltScene,
+    chart: bool,
+    stop: &dyn Fn() -> bool,
+) -> Result<TimeTransformResult> {
     let BuiltSystem::Euclidean(system) = &scene.system else {
         return Err(GviError::Unsupported(
             "a time transformation needs a system on R^D, not a rigid body on SO(3)".into(),
         )
         .into());
     };
-    if scene.method.chooses_n() {
+    let (mut result, run) = run_system(system, &scene.method, &scene.initial, stop)?;
+    if chart {
+        result.chart = Some(step_chart(scene, &run));
+    }
+    Ok(result)
+}
+
+/// Run `system` from `initial` with `method`, which has a time transformation (the Python
+/// bindings' `Integrator(time_transform=...)`); `stop` as in [`run_time_transformed_until`].
+/// No chart.
+///
+/// Errors: those of [`run_time_transformed`].
+pub fn run_time_transformed_system(
+    system: &AnySystem,
+    method: &MethodSpec,
+    initial: &InitialState,
+    stop: &dyn Fn() -> bool,
+) -> Result<TimeTransformResult> {
+    run_system(system, method, initial, stop).map(|(result, _)| result)
+}
+
+/// The run and, for the chart, its step ends.
+fn run_system(
+    system: &AnySystem,
+    method: &MethodSpec,
+    init: &InitialState,
+    stop: &dyn Fn() -> bool,
+) -> Result<(TimeTransformResult, TimeTransformedRun)> {
+    let Some(spec) = &method.time_transform else {
+        return Err(GviError::Unsupported("the method has no time transformation".into()).into());
+    };
+    if method.chooses_n() {
         return Err(GviError::Unsupported(
             "a time-transformed run takes a fixed n (tol chooses n per step)".into(),
         )
         .into());
     }
-    run_system(system, scene, spec, chart)
-}
-
-fn run_system(
-    system: &AnySystem,
-    scene: &BuiltScene,
-    spec: &TimeTransformSpec,
-    chart: bool,
-) -> Result<TimeTransformResult> {
-    let init = &scene.initial;
     let monitor = spec.monitor_for(system)?;
     let tt = TimeTransformed::new(system.clone(), monitor, &init.q, &init.p, spec.energy)?;
-    let gvi = scene.method.integrator()?;
+    let gvi = method.integrator()?;
     let options = TimeTransformOptions {
         t_end: spec.t_end,
-        max_steps: scene.method.steps,
+        max_steps: method.steps,
         every: spec.every,
         // The step ends are kept for the summary (energy, step range) and the chart even
         // when the rows are at output times.
@@ -174,14 +204,23 @@ fn run_system(
     };
     let exact = system.exact_solution(init.t0, &init.q, &init.p)?;
     let start = Instant::now();
-    let (run, failure) =
-        match integrate_time_transformed(&gvi, &tt, init.t0, &init.q, &init.p, &mut [], &options) {
-            Ok(run) => (run, None),
-            Err(f) => match f.partial {
-                Some(p) => (*p, Some(LabError::from(f.error))),
-                None => return Err(f.error.into()),
-            },
-        };
+    let integrated = integrate_time_transformed_until(
+        &gvi,
+        &tt,
+        init.t0,
+        &init.q,
+        &init.p,
+        &mut [],
+        &options,
+        stop,
+    );
+    let (run, failure) = match integrated {
+        Ok(run) => (run, None),
+        Err(f) => match f.partial {
+            Some(p) => (*p, Some(LabError::from(f.error))),
+            None => return Err(f.error.into()),
+        },
+    };
     let seconds = start.elapsed().as_secs_f64();
 
     let names = system.invariant_names();
@@ -231,7 +270,7 @@ fn run_system(
         system: system.name().to_string(),
         method: format!(
             "{} n = {}, Δs = {}, monitor {} (normalised to 1 at the start)",
-            scene.method.basis.as_str(),
+            method.basis.as_str(),
             gvi.n(),
             gvi.step_size(),
             tt.monitor().name()
@@ -248,14 +287,14 @@ fn run_system(
         force_evaluations: run.gradient_evaluations,
         seconds,
     };
-    let chart = chart.then(|| step_chart(scene, &run));
-    Ok(TimeTransformResult {
+    let result = TimeTransformResult {
         columns,
         rows,
         summary,
         failure,
-        chart,
-    })
+        chart: None,
+    };
+    Ok((result, run))
 }
 
 /// The smallest and largest physical step of the run (from the step ends).

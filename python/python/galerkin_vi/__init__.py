@@ -8,6 +8,11 @@ The numerics are the Rust crate galerkin-vi; this package is a thin layer over i
   body, run on SO(3) by the Lie group integrator);
 - ``Integrator(basis=..., n=..., quadrature=..., h=..., solver=...).integrate(system, q0, p0,
   steps)`` integrates a system of :mod:`galerkin_vi.systems`;
+- ``TimeTransform(monitor="sundman", alpha=1.5, energy_level=None, t_end=None, every=None)``
+  is a Poincaré time transformation (variable physical steps that stay symplectic), given as
+  ``Integrator(time_transform=...)`` or ``run_scene(..., time_transform=...)``; such runs
+  (and the scenes "kepler-e099" and "pythagorean") return a
+  :class:`TimeTransformedTrajectory` in physical time;
 - ``integrate_many(system, q0s, p0s, steps)`` integrates many initial states in parallel
   (all cores, the GIL released);
 - ``systems.from_function(L, coordinates)`` compiles a Python function ``L(q, v)`` written
@@ -38,6 +43,8 @@ from ._native import (
     SceneError,
     ShapeError,
     SolverError,
+    TimeTransform,
+    TimeTransformedTrajectory,
     Trajectory,
     UnsupportedError,
     integrate_many,
@@ -63,6 +70,8 @@ __all__ = [
     "SceneError",
     "ShapeError",
     "SolverError",
+    "TimeTransform",
+    "TimeTransformedTrajectory",
     "Trajectory",
     "UnsupportedError",
     "atan2",
