@@ -24,8 +24,8 @@ fn fpu_scene_runs_with_the_enriched_basis() {
         .build()
         .unwrap();
     assert_eq!(
-        (scene.method.basis, scene.method.omega, scene.method.n),
-        (BasisKind::Enriched, Some(50.0), 7)
+        (scene.method.basis, scene.method.omega.clone(), scene.method.n),
+        (BasisKind::Enriched, Some(vec![50.0]), 7)
     );
     let BuiltSystem::Euclidean(system) = &scene.system else {
         panic!("fpu is Euclidean");
@@ -54,7 +54,7 @@ fn enriched_by_name_and_its_errors() {
     };
     let enriched = |omega: Option<f64>, n: usize| Overrides {
         basis: Some(BasisKind::Enriched),
-        omega,
+        omega: omega.map(|w| vec![w]),
         n: Some(n),
         ..Overrides::default()
     };
@@ -82,7 +82,7 @@ fn enriched_by_name_and_its_errors() {
     let e = core(with(
         "kepler",
         Overrides {
-            omega: Some(1.0),
+            omega: Some(vec![1.0]),
             ..Overrides::default()
         },
     ));

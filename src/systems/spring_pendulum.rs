@@ -144,7 +144,7 @@ mod tests {
     #[test]
     fn derivatives_match_ad_and_the_rest_state() {
         let sp = SpringPendulum::new(50.0, 1.0, 1.0).unwrap();
-        for q in [[0.3, -0.9], [-1.2, 0.4], [0.0, -1.0004], [0.7, 0.8]] {
+        for q in [[0.3, -0.9], [-1.2, 0.4], [0.0, -1.03], [0.7, 0.8]] {
             crate::systems::derivative_tests::check_against_ad(&sp, &q);
         }
         // The hanging rest state is an equilibrium: ∇V = 0 there.
