@@ -4,7 +4,7 @@
 
 use crate::common::cli::gvi;
 use galerkin_vi::GviError;
-use galerkin_vi::basis::BasisKind;
+use galerkin_vi::basis::{Basis, BasisKind};
 use galerkin_vi::solve::solve;
 use galerkin_vi::systems::System;
 use galerkin_vi_lab::error::LabError;
@@ -173,9 +173,9 @@ fn several_frequencies_by_name_and_their_errors() {
         system.invariants(q, p, &mut inv);
         m.max((inv[0] - h0).abs())
     });
-    // A symplectic map at ωh = 5 and 2: the energy error stays bounded and small (measured
-    // 5e-6 over T = 4.8 at h = 0.1).
-    assert!(worst < 1e-4, "energy error {worst}");
+    // A symplectic map at ωh = 5 and 2: the energy error stays at round-off level (measured
+    // 3.6e-12 over the scene's 200 steps, `gvi run fpu-two-frequency`).
+    assert!(worst < 1e-9, "energy error {worst}");
 
     let (code, out, err) = gvi(&["run", "fpu-two-frequency", "--steps", "10"]);
     assert_eq!(code, 0, "{err}");
@@ -194,7 +194,8 @@ fn several_frequencies_by_name_and_their_errors() {
             vec!["run", "fpu", "--omega", "50,x", "--n", "9"],
             "not a number",
         ),
-        (vec!["run", "fpu", "--omega", "50,20", "--n", "6"], "n ≥ 7"),
+        // Two frequencies take 4 functions: n = 5 leaves no polynomial degree ≥ 1.
+        (vec!["run", "fpu", "--omega", "50,20", "--n", "5"], "n ≥ 6"),
     ] {
         let (code, out, err) = gvi(&args);
         assert_ne!(code, 0, "{args:?}: {err}");
@@ -245,6 +246,9 @@ fn spring_pendulum_scene_runs_with_the_enriched_basis() {
     println!("spring pendulum: |ΔH| {worst_h:.1e}, |ΔI| {worst_i:.1e}, I(0) {i0:.4}, max ω_fast {top:.3}");
     assert!((i0 - 0.5).abs() < 0.01, "I(0) = {i0}");
     assert!(worst_h < 1e-8, "energy error {worst_h}");
-    assert!(worst_i < 0.05, "oscillatory energy moved by {worst_i}");
+    // Measured 0.042 over T = 20: the flow's own O(1/ω)-type wobble of I about its mean as the
+    // swing modulates the fast frequency (the energy error is 5.7e-12).
+    assert!(worst_i < 0.06, "oscillatory energy moved by {worst_i}");
+    // Measured 50.035 (√(50² + 3φ̇²) with φ̇ ≤ 1.02 at the bottom).
     assert!(top > 50.0 && top < 50.1, "fast frequency {top}");
 }
