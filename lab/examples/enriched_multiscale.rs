@@ -11,9 +11,9 @@ use galerkin_vi::GalerkinIntegrator;
 use galerkin_vi::Lagrangian;
 use galerkin_vi::Result;
 use galerkin_vi::baselines::{GalerkinMethod, OneStepMethod, integrate_one_step};
-use galerkin_vi::basis::{ChebyshevLagrange, Enriched};
+use galerkin_vi::basis::{Basis, ChebyshevLagrange, Enriched};
 use galerkin_vi::quadrature::GaussLegendre;
-use galerkin_vi::systems::{Fpu, SpringPendulum, System};
+use galerkin_vi::systems::{Fpu, SpringPendulum};
 use galerkin_vi_lab::dop853::Dop853Baseline;
 use galerkin_vi_lab::plot::{Chart, Series};
 
@@ -60,7 +60,7 @@ fn max_error(run: Result<States>, h: f64, reference: &States, every: f64) -> f64
 
 fn galerkin<B, L>(gvi: Result<GalerkinIntegrator<B, GaussLegendre>>, sys: &L, q0: &[f64], p0: &[f64], t: f64) -> Result<States>
 where
-    B: galerkin_vi::basis::Basis,
+    B: Basis,
     L: Lagrangian,
 {
     let gvi = gvi?;
