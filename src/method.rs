@@ -105,12 +105,9 @@ impl MethodSpec {
     > {
         let gvi =
             if self.basis.is_parametrised() || self.omega.is_some() || self.harmonics.is_some() {
-                let basis = self.basis.build_with(
-                    self.n,
-                    self.h,
-                    self.omega.as_deref(),
-                    self.harmonics,
-                )?;
+                let basis =
+                    self.basis
+                        .build_with(self.n, self.h, self.omega.as_deref(), self.harmonics)?;
                 // The enriched basis needs its products resolved: at least its own Gauss count
                 // (unless the points are given, when a weak rule is a typed error).
                 let points = match (&basis, self.quad_points) {

@@ -46,7 +46,11 @@ fn max_error<B: Basis, Q: galerkin_vi::quadrature::Quadrature, L: Lagrangian>(
     match gvi.integrate(system, 0.0, q0, p0, steps) {
         Ok(t) => t.q.iter().enumerate().fold(0.0f64, |m, (k, q)| {
             let r = reference(k as f64 * h);
-            m.max(q.iter().zip(&r).fold(0.0f64, |m, (a, b)| m.max((a - b).abs())))
+            m.max(
+                q.iter()
+                    .zip(&r)
+                    .fold(0.0f64, |m, (a, b)| m.max((a - b).abs())),
+            )
         }),
         Err(_) => f64::INFINITY,
     }
@@ -164,11 +168,17 @@ fn two_frequencies_beat_either_one_at_large_omega_h() {
              Chebyshev n = 9 {poly:.2e}"
         );
         // Never worse than the best single-frequency basis beyond round-off (3e-16 at h = 0.05).
-        assert!(both <= fast.max(1e-15) * 1.5, "h = {h}: {both:e} vs {fast:e}");
+        assert!(
+            both <= fast.max(1e-15) * 1.5,
+            "h = {h}: {both:e} vs {fast:e}"
+        );
         if h >= 0.2 {
             // Measured ratios to the ω = 50 basis 0.068, 0.011, 0.0037; to the others < 1e-3.
             let want = if h >= 0.3 { 0.03 } else { 0.2 };
-            assert!(both < want * fast, "h = {h}: {both:e} vs ω = 50 only {fast:e}");
+            assert!(
+                both < want * fast,
+                "h = {h}: {both:e} vs ω = 50 only {fast:e}"
+            );
             assert!(both < 1e-3 * slow.min(poly), "h = {h}: {both:e}");
         }
     }

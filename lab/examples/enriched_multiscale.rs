@@ -52,13 +52,17 @@ fn max_error(run: Result<States>, h: f64, reference: &States, every: f64) -> f64
         .enumerate()
         .filter_map(|(k, qr)| q.get(k * stride).map(|qk| (qk, qr)))
         .fold(0.0f64, |m, (a, b)| {
-            a.iter()
-                .zip(b)
-                .fold(m, |m, (x, y)| m.max((x - y).abs()))
+            a.iter().zip(b).fold(m, |m, (x, y)| m.max((x - y).abs()))
         })
 }
 
-fn galerkin<B, L>(gvi: Result<GalerkinIntegrator<B, GaussLegendre>>, sys: &L, q0: &[f64], p0: &[f64], t: f64) -> Result<States>
+fn galerkin<B, L>(
+    gvi: Result<GalerkinIntegrator<B, GaussLegendre>>,
+    sys: &L,
+    q0: &[f64],
+    p0: &[f64],
+    t: f64,
+) -> Result<States>
 where
     B: Basis,
     L: Lagrangian,
@@ -67,7 +71,13 @@ where
     states(GalerkinMethod::new(&gvi, sys)?, q0, p0, t)
 }
 
-fn log_chart(title: &str, x: &str, y: &str, series: Vec<Series>, path: &str) -> std::result::Result<(), Failure> {
+fn log_chart(
+    title: &str,
+    x: &str,
+    y: &str,
+    series: Vec<Series>,
+    path: &str,
+) -> std::result::Result<(), Failure> {
     let mut chart = Chart::new(title, x, y).log_x().log_y().size(900, 480);
     for s in series {
         chart.push(s);
@@ -90,12 +100,19 @@ fn two_frequency_fpu() -> std::result::Result<(), Failure> {
     let (q0, p0) = fpu.excited_initial_state(&[2]);
     let (horizon, every) = (20.0, 0.4);
     let reference = states(Dop853Baseline::new(&fpu, every, 1e-13)?, &q0, &p0, horizon)?;
-    println!("two-frequency FPU (ω = 50, 20), T = {horizon}, n = 9, max position error at t = 0.4k:");
+    println!(
+        "two-frequency FPU (ω = 50, 20), T = {horizon}, n = 9, max position error at t = 0.4k:"
+    );
     println!(
         "{:>5} {:>8} {:>12} {:>12} {:>12} {:>12}",
         "h", "20h", "ω = 50, 20", "ω = 50", "ω = 20", "Chebyshev"
     );
-    let labels = ["enriched ω = 50, 20 (p = 4)", "enriched ω = 50 (p = 6)", "enriched ω = 20 (p = 6)", "Chebyshev n = 9"];
+    let labels = [
+        "enriched ω = 50, 20 (p = 4)",
+        "enriched ω = 50 (p = 6)",
+        "enriched ω = 20 (p = 6)",
+        "Chebyshev n = 9",
+    ];
     let mut curves: Vec<Vec<(f64, f64)>> = vec![Vec::new(); 4];
     for h in [0.05, 0.1, 0.2, 0.4] {
         let run = |i: usize| match i {
@@ -104,10 +121,16 @@ fn two_frequency_fpu() -> std::result::Result<(), Failure> {
             2 => galerkin(enriched(6, &[20.0], h), &fpu, &q0, &p0, horizon),
             _ => galerkin(chebyshev(9, h), &fpu, &q0, &p0, horizon),
         };
-        let e: Vec<f64> = (0..4).map(|i| max_error(run(i), h, &reference, every)).collect();
+        let e: Vec<f64> = (0..4)
+            .map(|i| max_error(run(i), h, &reference, every))
+            .collect();
         println!(
             "{h:>5} {:>8} {:>12.2e} {:>12.2e} {:>12.2e} {:>12.2e}",
-            20.0 * h, e[0], e[1], e[2], e[3]
+            20.0 * h,
+            e[0],
+            e[1],
+            e[2],
+            e[3]
         );
         for (c, e) in curves.iter_mut().zip(&e) {
             if e.is_finite() {
@@ -139,11 +162,24 @@ fn spring_pendulum() -> std::result::Result<(), Failure> {
     let (q0, p0) = sp.initial_state(1.0 / omega, 1.0);
     let reference = states(Dop853Baseline::new(&sp, every, 1e-13)?, &q0, &p0, horizon)?;
     println!("spring pendulum, spin 1, T = {horizon}, n = 7, max position error at t = 0.32k:");
-    println!("{:>6} {:>6} {:>12} {:>12}", "h", "ωh", "enriched", "Chebyshev");
+    println!(
+        "{:>6} {:>6} {:>12} {:>12}",
+        "h", "ωh", "enriched", "Chebyshev"
+    );
     let (mut e_curve, mut c_curve) = (Vec::new(), Vec::new());
     for h in [0.01, 0.02, 0.04, 0.08, 0.16, 0.32] {
-        let e = max_error(galerkin(enriched(4, &[omega], h), &sp, &q0, &p0, horizon), h, &reference, every);
-        let c = max_error(galerkin(chebyshev(7, h), &sp, &q0, &p0, horizon), h, &reference, every);
+        let e = max_error(
+            galerkin(enriched(4, &[omega], h), &sp, &q0, &p0, horizon),
+            h,
+            &reference,
+            every,
+        );
+        let c = max_error(
+            galerkin(chebyshev(7, h), &sp, &q0, &p0, horizon),
+            h,
+            &reference,
+            every,
+        );
         println!("{h:>6} {:>6} {e:>12.2e} {c:>12.2e}", omega * h);
         if e.is_finite() {
             e_curve.push((omega * h, e.max(1e-16)));
@@ -178,10 +214,22 @@ fn spring_pendulum() -> std::result::Result<(), Failure> {
             .iter()
             .zip(&reference.1)
             .map(|(q, p)| sp.fast_frequency(q, p))
-            .fold((f64::INFINITY, 0.0f64), |(lo, hi), w| (lo.min(w), hi.max(w)));
+            .fold((f64::INFINITY, 0.0f64), |(lo, hi), w| {
+                (lo.min(w), hi.max(w))
+            });
         for (curve, h) in ratio_curves.iter_mut().zip([0.04, 0.08]) {
-            let e = max_error(galerkin(enriched(4, &[omega], h), &sp, &q0, &p0, horizon), h, &reference, every);
-            let c = max_error(galerkin(chebyshev(7, h), &sp, &q0, &p0, horizon), h, &reference, every);
+            let e = max_error(
+                galerkin(enriched(4, &[omega], h), &sp, &q0, &p0, horizon),
+                h,
+                &reference,
+                every,
+            );
+            let c = max_error(
+                galerkin(chebyshev(7, h), &sp, &q0, &p0, horizon),
+                h,
+                &reference,
+                every,
+            );
             println!(
                 "{spin:>5} {lo:>7.2}–{hi:<8.2} {:>6} {e:>12.2e} {c:>12.2e} {:>10.2e}",
                 omega * h,

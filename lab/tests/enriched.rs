@@ -24,7 +24,11 @@ fn fpu_scene_runs_with_the_enriched_basis() {
         .build()
         .unwrap();
     assert_eq!(
-        (scene.method.basis, scene.method.omega.clone(), scene.method.n),
+        (
+            scene.method.basis,
+            scene.method.omega.clone(),
+            scene.method.n
+        ),
         (BasisKind::Enriched, Some(vec![50.0]), 7)
     );
     let BuiltSystem::Euclidean(system) = &scene.system else {
@@ -243,7 +247,9 @@ fn spring_pendulum_scene_runs_with_the_enriched_basis() {
         worst_i = worst_i.max((inv[1] - i0).abs());
         top = top.max(inv[2]);
     }
-    println!("spring pendulum: |ΔH| {worst_h:.1e}, |ΔI| {worst_i:.1e}, I(0) {i0:.4}, max ω_fast {top:.3}");
+    println!(
+        "spring pendulum: |ΔH| {worst_h:.1e}, |ΔI| {worst_i:.1e}, I(0) {i0:.4}, max ω_fast {top:.3}"
+    );
     assert!((i0 - 0.5).abs() < 0.01, "I(0) = {i0}");
     assert!(worst_h < 1e-8, "energy error {worst_h}");
     // Measured 0.042 over T = 20: the flow's own O(1/ω)-type wobble of I about its mean as the

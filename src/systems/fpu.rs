@@ -125,11 +125,7 @@ impl Fpu {
             ]);
         }
         springs.push([(x0(m), 1.0), (x1(m), 1.0), (0, 0.0), (0, 0.0)]);
-        Ok(Fpu {
-            m,
-            omegas,
-            springs,
-        })
+        Ok(Fpu { m, omegas, springs })
     }
 
     /// The book's chain: m = 3, ω = 50.
@@ -336,6 +332,9 @@ mod tests {
         let mut inv = [0.0; 6];
         two.invariants(&q, &p, &mut inv);
         assert_eq!(inv[1..], [2.0, 1.0, 0.0, 1.0, 0.0]);
-        assert_eq!(two.shortest_time_scale(&q, &p), Some(std::f64::consts::TAU / 50.0));
+        assert_eq!(
+            two.shortest_time_scale(&q, &p),
+            Some(std::f64::consts::TAU / 50.0)
+        );
     }
 }

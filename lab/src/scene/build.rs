@@ -12,9 +12,7 @@ use super::{Scene, SystemSpec};
 use crate::error::{GviError, LabError, Result};
 use galerkin_vi::lie::body::{FreeRigidBody, HeavyTop};
 use galerkin_vi::method::{InitialState, MethodSpec};
-use galerkin_vi::systems::{
-    AnySystem, Fpu, HarmonicOscillator, Kepler, Pendulum, SpringPendulum,
-};
+use galerkin_vi::systems::{AnySystem, Fpu, HarmonicOscillator, Kepler, Pendulum, SpringPendulum};
 
 /// The rigid body a scene names (run on SO(3) by [`galerkin_vi::lie`]).
 #[derive(Debug, Clone)]

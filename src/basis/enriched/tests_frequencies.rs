@@ -57,7 +57,10 @@ fn contract_over_frequency_sets() {
                 assert_eq!(b.len(), p + 1 + 2 * harmonics * set.len());
                 assert_eq!(b.omega(), set[0]);
                 let fd = check_contract(&b);
-                assert!(fd < 1e-6, "p = {p}, {set:?}, K = {harmonics}: FD mismatch {fd}");
+                assert!(
+                    fd < 1e-6,
+                    "p = {p}, {set:?}, K = {harmonics}: FD mismatch {fd}"
+                );
             }
         }
     }
@@ -71,7 +74,8 @@ fn the_span_holds_every_frequency() {
         let b = Enriched::with_frequencies(4, 1, &[t1, t2], 1.0).unwrap();
         let fit = CurveFit::new(&b).unwrap();
         let f = |t: f64| {
-            0.3 - t + 0.7 * (t1 * t).sin() - 0.2 * (t1 * t).cos() + 0.4 * (t2 * t).sin()
+            0.3 - t + 0.7 * (t1 * t).sin() - 0.2 * (t1 * t).cos()
+                + 0.4 * (t2 * t).sin()
                 + 0.9 * (t2 * t).cos()
                 + t.powi(4)
         };
@@ -105,7 +109,10 @@ fn frequencies_that_cannot_be_told_apart_are_refused() {
     // δ = 1e-2 and refused from δ = 1e-3 (the Gram reciprocal condition falls like 2e-6·δ²:
     // most of δ·τ cos θτ lies in P_p). The kinetic condition number grows like 1/δ² on the
     // way: 2.1e7 at δ = 0.1 and 2.2e9 at δ = 1e-2, against the well separated pair's below.
-    let separated = kinetic_condition(&Enriched::with_frequencies(4, 1, &[5.0, 2.0], 1.0).unwrap(), 40);
+    let separated = kinetic_condition(
+        &Enriched::with_frequencies(4, 1, &[5.0, 2.0], 1.0).unwrap(),
+        40,
+    );
     eprintln!("θ = (5, 2): kinetic condition {separated:.2e}");
     let mut last_accepted = f64::NAN;
     for delta in [1e-1, 1e-2, 1e-3, 1e-4, 3e-5, 1e-5, 1e-6] {
@@ -124,7 +131,10 @@ fn frequencies_that_cannot_be_told_apart_are_refused() {
     );
     // Well separated frequencies are not refused at the evidence's step sizes.
     for h in [0.02, 0.05, 0.1, 0.2] {
-        assert!(Enriched::with_frequencies(4, 1, &[50.0, 20.0], h).is_ok(), "h = {h}");
+        assert!(
+            Enriched::with_frequencies(4, 1, &[50.0, 20.0], h).is_ok(),
+            "h = {h}"
+        );
     }
 }
 
