@@ -451,6 +451,8 @@ def self_test(runner: Runner) -> list:
         ("the quickstart", "README.md", "spectral(16, 1.0)", "spectral(17, 1.0)"),
         ("a README command", "README.md", "gvi check kepler --n 12", "gvi check kepler --n 12 --nonsense"),
         ("a guide number", "docs/guide/studies.md", "Galerkin curves: error ≈ 1.", "Galerkin curves: error ≈ 2."),
+        ("an enriched-bases number", "docs/guide/enriched-bases.md",
+         "`gvi run spring-pendulum` keeps the energy to 5.", "`gvi run spring-pendulum` keeps the energy to 6."),
         ("the figure", "docs/figures/kepler-orbit.svg", "<svg ", "<svg data-x=\"1\" "),
     ]
     failures = []
