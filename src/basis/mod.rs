@@ -251,15 +251,15 @@ impl BasisKind {
         };
         let k = harmonics.unwrap_or(1);
         // r = 0 (an empty list) is refused by the constructor, with `omega` named.
-        let trig = 2 * k * omega.len().max(1);
-        if n < trig + 2 {
+        let trig = k.saturating_mul(2).saturating_mul(omega.len().max(1));
+        if n < trig.saturating_add(2) {
             return Err(GviError::InvalidBasisSize {
                 n,
                 basis: "enriched".into(),
                 reason: format!(
                     "n = p + 1 + 2rK needs n ≥ {} for polynomial degree p ≥ 1 with K = {k} and \
                      r = {} frequencies",
-                    trig + 2,
+                    trig.saturating_add(2),
                     omega.len()
                 ),
             });

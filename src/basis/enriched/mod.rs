@@ -176,7 +176,9 @@ impl Enriched {
         h: f64,
     ) -> Result<Self> {
         let r = frequencies.len();
-        let n = degree + 1 + 2 * harmonics * r;
+        let n = degree
+            .saturating_add(1)
+            .saturating_add(harmonics.saturating_mul(2).saturating_mul(r));
         if degree == 0 || degree > Self::MAX_DEGREE || harmonics == 0 {
             return Err(GviError::InvalidBasisSize {
                 n,
@@ -207,7 +209,7 @@ impl Enriched {
         if !(h.is_finite() && h > 0.0) {
             return Err(GviError::InvalidStepSize { h });
         }
-        let mut trig = Vec::with_capacity(2 * harmonics * r);
+        // All frequencies in range before anything is allocated (K may be absurdly large).
         for &omega in frequencies {
             let theta = omega * h;
             if theta * harmonics as f64 > Self::MAX_FREQUENCY {
@@ -221,6 +223,10 @@ impl Enriched {
                     ),
                 });
             }
+        }
+        let mut trig = Vec::with_capacity(2 * harmonics * r);
+        for &omega in frequencies {
+            let theta = omega * h;
             let start = trig.len();
             for k in 1..=harmonics {
                 for cosine in [false, true] {

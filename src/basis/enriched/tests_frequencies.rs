@@ -159,6 +159,15 @@ fn bad_frequency_lists_are_typed_errors() {
         Enriched::with_frequencies(4, 1, &[50.0, 1e5], 0.1),
         Err(GviError::InvalidParameter { name, .. }) if name == "omega"
     ));
+    // An absurd number of harmonics is refused before anything is sized by it (no overflow).
+    assert!(matches!(
+        Enriched::with_frequencies(4, usize::MAX, &[1.0, 2.0], 1.0),
+        Err(GviError::InvalidParameter { name, .. }) if name == "omega"
+    ));
+    assert!(matches!(
+        crate::basis::BasisKind::Enriched.build_with(9, 1.0, Some(&[1.0, 2.0]), Some(usize::MAX)),
+        Err(GviError::InvalidBasisSize { .. })
+    ));
 }
 
 #[test]
