@@ -127,6 +127,8 @@ def csv_field(path: str, basis: str, quadrature: str, n: int, column: str) -> Ca
 
 
 COMPARE_BASES = "gvi compare-bases kepler --range 4:64:4"
+SPRING = "gvi run spring-pendulum --output out/spring-pendulum.csv"
+FPU2 = "gvi run fpu-two-frequency --output out/fpu-two-frequency.csv"
 BASES_CSV = "out/compare-bases/compare-bases.csv"
 
 QUOTES: list = [
@@ -235,12 +237,29 @@ QUOTES: list = [
     ],
 ]
 
+# Enriched bases: the runs of the multiscale scenes (each well under a second).
+QUOTES += [
+    Number("docs/guide/enriched-bases.md", r"`gvi run spring-pendulum` keeps the energy to ([0-9.e-]+)",
+           SPRING, out=r"max energy error: ([0-9.e-]+)"),
+    Number("docs/guide/enriched-bases.md", r"oscillatory energy within ([0-9.e-]+) of its initial 1/2",
+           SPRING, out=r"max oscillatory_energy error: ([0-9.e-]+)"),
+    Number("docs/guide/enriched-bases.md", r"`gvi run fpu-two-frequency` keeps the energy to ([0-9.e-]+)",
+           FPU2, out=r"max energy error: ([0-9.e-]+)"),
+    Number("docs/guide/enriched-bases.md", r"its total oscillatory energy I within ([0-9.e-]+) of I\(0\) = 2",
+           FPU2, out=r"max oscillatory_energy error: ([0-9.e-]+)"),
+]
+
 # Quoted from commands too slow for CI (minutes to hours, or benches): regenerate by hand.
 SLOW = [
     ("README.md / docs/guide/speed.md", "2.61 linear solves per step", "cargo bench --bench step"),
     ("README.md, peers table", "every ratio", "scripts/work-precision-all.sh (15 minutes)"),
     ("docs/guide/tolerance-driven-n.md", "0.68–0.79×, 0.22–0.27×", "gvi tolerance-study … (see the page)"),
     ("docs/guide/geometric-guarantees.md", "the property-test table", "cargo test --release --test geometry -- --nocapture"),
+    ("docs/guide/enriched-bases.md", "two-frequency table, nearly-equal threshold, property-test rows",
+     "cargo test --test integration enriched_frequencies:: -- --nocapture; "
+     "cargo test -p galerkin-vi --lib basis::enriched -- --nocapture"),
+    ("docs/guide/enriched-bases.md", "spring-pendulum tables and charts, two-frequency chart",
+     "cargo run --release -p galerkin-vi-lab --example enriched_multiscale"),
     ("docs/guide/reproducing-the-paper.md", "oscillator and h-refinement rows",
      "cargo test --release --test paper_core -- --nocapture"),
 ]
@@ -439,6 +458,8 @@ def self_test(runner: Runner) -> list:
         ("the quickstart", "README.md", "spectral(16, 1.0)", "spectral(17, 1.0)"),
         ("a README command", "README.md", "gvi check kepler --n 12", "gvi check kepler --n 12 --nonsense"),
         ("a guide number", "docs/guide/studies.md", "Galerkin curves: error ≈ 1.", "Galerkin curves: error ≈ 2."),
+        ("an enriched-bases number", "docs/guide/enriched-bases.md",
+         "`gvi run spring-pendulum` keeps the energy to 5.", "`gvi run spring-pendulum` keeps the energy to 6."),
         ("the figure", "docs/figures/kepler-orbit.svg", "<svg ", "<svg data-x=\"1\" "),
         ("the Kepler e = 0.99 summary", "docs/guide/time-transformations.md",
          "  max position error: ", "  max position error: 9"),

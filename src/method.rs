@@ -66,10 +66,18 @@ pub struct MethodSpec {
     /// round-off.
     #[serde(default)]
     pub solver: crate::integrator::StageSolver,
-    /// The enrichment frequency ω of the `enriched` basis (required by it, refused by the
-    /// others): n = p + 1 + 2K functions, polynomial degree p plus sin(kωhτ), cos(kωhτ).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub omega: Option<f64>,
+    /// The enrichment frequencies of the `enriched` basis (required by it, refused by the
+    /// others): one ω (`omega = 50.0` in a scene) or a set (`omega = [50.0, 20.0]`), n =
+    /// p + 1 + 2rK functions, polynomial degree p plus sin(kω_jhτ), cos(kω_jhτ) for each of the
+    /// r frequencies ([`Enriched::with_frequencies`](crate::basis::Enriched::with_frequencies)).
+    /// A single frequency is written back as a number.
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "frequencies::deserialize",
+        serialize_with = "frequencies::serialize"
+    )]
+    pub omega: Option<Vec<f64>>,
     /// The number K of harmonics of the `enriched` basis (default 1).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub harmonics: Option<usize>,
@@ -97,9 +105,9 @@ impl MethodSpec {
     > {
         let gvi =
             if self.basis.is_parametrised() || self.omega.is_some() || self.harmonics.is_some() {
-                let basis = self
-                    .basis
-                    .build_with(self.n, self.h, self.omega, self.harmonics)?;
+                let basis =
+                    self.basis
+                        .build_with(self.n, self.h, self.omega.as_deref(), self.harmonics)?;
                 // The enriched basis needs its products resolved: at least its own Gauss count
                 // (unless the points are given, when a weak rule is a typed error).
                 let points = match (&basis, self.quad_points) {
@@ -279,6 +287,61 @@ impl MethodSpec {
             retraction: None,
             time_transform: None,
         }
+    }
+}
+
+/// Serde helpers for a frequency field written as a number or a list of numbers (`omega = 50.0`
+/// or `omega = [50.0, 20.0]` in a scene): read as `Option<Vec<f64>>`, a list of one written
+/// back as a number so that single-frequency scenes round-trip unchanged. Used by
+/// [`MethodSpec::omega`] and by the lab's `fpu` system table, with
+/// `#[serde(default, deserialize_with = "…::deserialize", serialize_with = "…::serialize")]`.
+pub mod frequencies {
+    use serde::de::{self, SeqAccess, Visitor};
+    use serde::{Deserializer, Serializer};
+
+    /// Write `Some([ω])` as ω, `Some([ω₁, …])` as a list (skip `None` with
+    /// `skip_serializing_if`).
+    pub fn serialize<S: Serializer>(
+        value: &Option<Vec<f64>>,
+        serializer: S,
+    ) -> Result<S::Ok, S::Error> {
+        match value.as_deref() {
+            Some([one]) => serializer.serialize_f64(*one),
+            Some(many) => serializer.collect_seq(many),
+            None => serializer.serialize_none(),
+        }
+    }
+
+    struct OneOrMany;
+
+    impl<'de> Visitor<'de> for OneOrMany {
+        type Value = Vec<f64>;
+        fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+            f.write_str("a frequency or a list of frequencies (omega = 50.0 or [50.0, 20.0])")
+        }
+        fn visit_f64<E: de::Error>(self, v: f64) -> Result<Vec<f64>, E> {
+            Ok(vec![v])
+        }
+        fn visit_i64<E: de::Error>(self, v: i64) -> Result<Vec<f64>, E> {
+            Ok(vec![v as f64])
+        }
+        fn visit_u64<E: de::Error>(self, v: u64) -> Result<Vec<f64>, E> {
+            Ok(vec![v as f64])
+        }
+        fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Vec<f64>, A::Error> {
+            let mut out = Vec::with_capacity(seq.size_hint().unwrap_or(2));
+            while let Some(w) = seq.next_element::<f64>()? {
+                out.push(w);
+            }
+            Ok(out)
+        }
+    }
+
+    /// Read a number or a list of numbers as `Some(list)`.
+    pub fn deserialize<'de, D: Deserializer<'de>>(
+        deserializer: D,
+    ) -> Result<Option<Vec<f64>>, D::Error> {
+        deserializer.deserialize_any(OneOrMany).map(Some)
     }
 }
 

@@ -144,7 +144,7 @@ fn small_omega_h_reaches_the_polynomial_limit() {
         );
         assert!(diff < 1e-11, "ωh = {theta}: {diff:e}");
     }
-    let naive = GalerkinIntegrator::new(NaiveEnriched { p: 4, theta: 1e-5 }, rule(), h);
+    let naive = GalerkinIntegrator::new(NaiveEnriched::new(4, 1e-5), rule(), h);
     match naive {
         Err(e) => {
             println!("naive enrichment at ωh = 1e-5 refused: {e}");
@@ -266,38 +266,13 @@ fn fpu_oscillatory_energy_is_near_constant() {
     assert!((rk4_i - i0).abs() > 0.5, "RK4 should lose I: {rk4_i}");
 }
 
-/// The textbook enrichment (negative control of the conditioning tests).
-#[derive(Debug)]
-struct NaiveEnriched {
-    p: usize,
-    theta: f64,
+/// The textbook enrichment (the negative control of the conditioning tests), one copy shared
+/// with the library's unit tests (src/basis/enriched/tests.rs).
+mod naive {
+    use galerkin_vi::basis::{Basis, Legendre};
+    include!("common/naive_enriched.rs");
 }
-
-impl Basis for NaiveEnriched {
-    fn len(&self) -> usize {
-        self.p + 3
-    }
-    fn name(&self) -> &'static str {
-        "naive-enriched"
-    }
-    fn eval(&self, tau: f64, values: &mut [f64], derivatives: &mut [f64]) {
-        let (p, th) = (self.p, self.theta);
-        if let Ok(l) = Legendre::new(p + 1) {
-            l.eval(tau, &mut values[..=p], &mut derivatives[..=p]);
-        }
-        values[p + 2] = values[p];
-        derivatives[p + 2] = derivatives[p];
-        let (s, c) = (th * tau).sin_cos();
-        let (s1, c1) = th.sin_cos();
-        values[p] = s - tau * s1;
-        derivatives[p] = th * c - s1;
-        values[p + 1] = c - (1.0 - tau) - tau * c1;
-        derivatives[p + 1] = -th * s + 1.0 - c1;
-    }
-    fn polynomial_degree(&self) -> Option<usize> {
-        None
-    }
-}
+use naive::NaiveEnriched;
 
 /// Typed errors through the integrator: a step size other than the basis's, and a rule too
 /// weak for its products at large ωh.

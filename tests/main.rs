@@ -10,6 +10,7 @@ mod kepler_periapsis;
 mod counts;
 mod dependencies;
 mod enriched;
+mod enriched_frequencies;
 mod expression_proptest;
 mod extension;
 mod paper_objects;

@@ -18,11 +18,20 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::sync::Arc;
 
+/// `omega` of [`Integrator`]: a number or a sequence of numbers.
+#[derive(FromPyObject)]
+pub(crate) enum Frequencies {
+    One(f64),
+    Many(Vec<f64>),
+}
+
 /// A Galerkin variational integrator: `Integrator(basis="chebyshev", n=16,
 /// quadrature="gauss-legendre", h=1.0, solver="auto", quad_points=None, economical=False,
 /// compact=False, omega=None, harmonics=None)`. `basis="enriched"` takes the enrichment
 /// frequency `omega` (and optionally `harmonics`, default 1): polynomials of degree
-/// n − 1 − 2·harmonics plus sin/cos of ωh. `quad_points` is an explicit number of quadrature points;
+/// n − 1 − 2·harmonics plus sin/cos of ωh; `omega` may be a list (`omega=[50.0, 20.0]`),
+/// with sin/cos of each frequency in the space (degree n − 1 − 2·harmonics·len(omega)).
+/// `quad_points` is an explicit number of quadrature points;
 /// `economical=True` takes the quadrature's economical number for n (⌈3n/2⌉ Gauss–Legendre
 /// points, as `gvi run --economical`), `compact=True` its compact rule (n Gauss–Legendre
 /// points); at most one of the three. `time_transform` (a `TimeTransform` or a monitor name)
@@ -79,7 +88,7 @@ impl Integrator {
         quad_points: Option<usize>,
         economical: bool,
         compact: bool,
-        omega: Option<f64>,
+        omega: Option<Frequencies>,
         harmonics: Option<usize>,
         time_transform: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
@@ -88,7 +97,15 @@ impl Integrator {
         method.quadrature = quadrature
             .parse::<galerkin_vi::quadrature::QuadratureKind>()
             .py_err()?;
-        method.omega = omega.map(|w| finite("omega", w)).transpose()?;
+        method.omega = match omega {
+            None => None,
+            Some(Frequencies::One(w)) => Some(vec![finite("omega", w)?]),
+            Some(Frequencies::Many(ws)) => Some(
+                ws.into_iter()
+                    .map(|w| finite("omega", w))
+                    .collect::<PyResult<Vec<f64>>>()?,
+            ),
+        };
         method.harmonics = harmonics;
         method.solver = solver
             .parse::<galerkin_vi::integrator::StageSolver>()

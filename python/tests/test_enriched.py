@@ -46,3 +46,20 @@ def test_bad_omega_is_a_typed_error(omega):
 def test_enriched_without_omega_is_a_typed_error():
     with pytest.raises(gv.GalerkinError):
         gv.Integrator(basis="enriched", n=7, h=0.025)
+
+
+def test_several_frequencies_from_a_list():
+    # omega=[50, 20]: sin/cos of both in the space (n = 9 is p = 4). On the book's chain at
+    # h = 0.025 both bases resolve the motion: the two-frequency map is the fine polynomial map
+    # (same tolerance as the single-frequency test above).
+    fpu = gv.systems.Fpu(springs=3, omega=OMEGA)
+    two = gv.Integrator(basis="enriched", n=9, h=0.025, omega=[OMEGA, 20.0]).integrate(fpu, Q0, P0, 40)
+    fine = gv.Integrator(basis="legendre", n=20, h=0.025).integrate(fpu, Q0, P0, 40)
+    assert np.abs(two.q - fine.q).max() < 1e-12
+
+
+@pytest.mark.parametrize("omega", [[], [OMEGA, OMEGA], [OMEGA, float("nan")], [OMEGA, -20.0]])
+def test_bad_frequency_lists_are_typed_errors(omega):
+    # Empty, equal (nearly degenerate: refused, not merged), not finite, not positive.
+    with pytest.raises(gv.GalerkinError):
+        gv.Integrator(basis="enriched", n=9, h=0.025, omega=omega)

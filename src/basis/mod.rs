@@ -216,11 +216,11 @@ impl BasisKind {
         })
     }
 
-    /// Build the basis with n functions for step size h, with the enrichment frequency
-    /// `omega` and number of `harmonics` (default 1) of the enriched basis: n = p + 1 + 2K
-    /// functions, polynomial degree p = n − 1 − 2K.
+    /// Build the basis with n functions for step size h, with the enrichment frequencies
+    /// `omega` (one or several) and number of `harmonics` (default 1) of the enriched basis:
+    /// n = p + 1 + 2rK functions for r frequencies, polynomial degree p = n − 1 − 2rK.
     ///
-    /// Errors: those of [`build`](Self::build) and [`Enriched::with_harmonics`];
+    /// Errors: those of [`build`](Self::build) and [`Enriched::with_frequencies`];
     /// [`GviError::InvalidInput`] named `omega` (or `harmonics`) when given to another basis,
     /// or `omega` missing for the enriched one; [`GviError::InvalidBasisSize`] when n leaves
     /// no room for polynomial degree ≥ 1.
@@ -228,7 +228,7 @@ impl BasisKind {
         self,
         n: usize,
         h: f64,
-        omega: Option<f64>,
+        omega: Option<&[f64]>,
         harmonics: Option<usize>,
     ) -> Result<AnyBasis> {
         if self != BasisKind::Enriched {
@@ -250,18 +250,22 @@ impl BasisKind {
             return self.build(n);
         };
         let k = harmonics.unwrap_or(1);
-        if n < 2 * k + 2 {
+        // r = 0 (an empty list) is refused by the constructor, with `omega` named.
+        let trig = k.saturating_mul(2).saturating_mul(omega.len().max(1));
+        if n < trig.saturating_add(2) {
             return Err(GviError::InvalidBasisSize {
                 n,
                 basis: "enriched".into(),
                 reason: format!(
-                    "n = p + 1 + 2K needs n ≥ {} for polynomial degree p ≥ 1 with K = {k}",
-                    2 * k + 2
+                    "n = p + 1 + 2rK needs n ≥ {} for polynomial degree p ≥ 1 with K = {k} and \
+                     r = {} frequencies",
+                    trig.saturating_add(2),
+                    omega.len()
                 ),
             });
         }
-        Ok(AnyBasis::Enriched(Enriched::with_harmonics(
-            n - 1 - 2 * k,
+        Ok(AnyBasis::Enriched(Enriched::with_frequencies(
+            n - 1 - trig,
             k,
             omega,
             h,

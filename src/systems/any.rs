@@ -19,7 +19,8 @@
 //! separable.
 
 use super::{
-    ExactSolution, ExpressionLagrangian, Fpu, HarmonicOscillator, Kepler, NBody, Pendulum, System,
+    ExactSolution, ExpressionLagrangian, Fpu, HarmonicOscillator, Kepler, NBody, Pendulum,
+    SpringPendulum, System,
 };
 use crate::error::Result;
 use crate::lagrangian::Lagrangian;
@@ -68,6 +69,8 @@ pub enum AnySystem {
     Expression(ExpressionLagrangian),
     /// See [`Fpu`].
     Fpu(Fpu),
+    /// See [`SpringPendulum`].
+    SpringPendulum(SpringPendulum),
 }
 
 macro_rules! dispatch {
@@ -79,6 +82,7 @@ macro_rules! dispatch {
             AnySystem::NBody($s) => $e,
             AnySystem::Expression($s) => $e,
             AnySystem::Fpu($s) => $e,
+            AnySystem::SpringPendulum($s) => $e,
         }
     };
 }
@@ -128,6 +132,12 @@ impl From<NBody> for AnySystem {
 impl From<Fpu> for AnySystem {
     fn from(s: Fpu) -> Self {
         AnySystem::Fpu(s)
+    }
+}
+
+impl From<SpringPendulum> for AnySystem {
+    fn from(s: SpringPendulum) -> Self {
+        AnySystem::SpringPendulum(s)
     }
 }
 
@@ -410,6 +420,10 @@ mod tests {
         check_identical(&Kepler::new(1.0).unwrap(), StageSolver::Auto);
         check_identical(&Pendulum::new(1.2, 9.8, 0.5).unwrap(), StageSolver::Auto);
         check_identical(&Fpu::new(2, 5.0).unwrap(), StageSolver::Auto);
+        check_identical(
+            &SpringPendulum::new(5.0, 1.0, 1.0).unwrap(),
+            StageSolver::Auto,
+        );
         let nbody = NBody::new(vec![1.0, 1e-3, 2e-3, 1e-4], 1.0, 3)
             .unwrap()
             .with_names(vec!["S".into(), "A".into(), "B".into(), "C".into()])

@@ -17,6 +17,13 @@
 //! I_j = ½ (y_{1,j}² + ω² x_{1,j}²), exchange energy on the slow time scale ω, while their
 //! sum I = I₁ + … + I_m is an adiabatic invariant: I(t) − I(0) = O(1/ω) for times
 //! exponentially long in ω (GNI §XIII.2 and Theorem XIII.6.2 for numerical methods).
+//!
+//! [`Fpu::with_frequencies`] gives each stiff spring its own frequency ω_j (stiffness ω_j²):
+//! the same chain with fast coordinate blocks that oscillate at different frequencies, the test
+//! case of an enriched basis with several frequencies (docs/guide/enriched-bases.md). Springs of
+//! equal frequency exchange energy as above; between different frequencies the exchange is
+//! off-resonance, and the oscillatory energy of each group of equal frequency stays near its
+//! initial value.
 
 use super::{System, positive};
 use crate::error::{GviError, Result};
@@ -24,7 +31,8 @@ use crate::lagrangian::Mechanical;
 use nalgebra::DMatrix;
 use num_dual::DualNum;
 
-/// The Fermi–Pasta–Ulam chain of m stiff springs with stiffness ω² (D = 2m).
+/// The Fermi–Pasta–Ulam chain of m stiff springs with stiffness ω² — or ω_j², one frequency
+/// per spring ([`with_frequencies`](Fpu::with_frequencies)) — (D = 2m).
 ///
 /// ```
 /// use galerkin_vi::systems::{Fpu, System};
@@ -39,7 +47,8 @@ use num_dual::DualNum;
 #[derive(Debug, Clone, PartialEq)]
 pub struct Fpu {
     m: usize,
-    omega: f64,
+    /// The stiff frequencies ω_1 … ω_m.
+    omegas: Vec<f64>,
     /// The soft springs' elongations d_k = c_k · x, k = 0 … m, as (index, coefficient) pairs.
     springs: Vec<[(usize, f64); 4]>,
 }
@@ -75,6 +84,33 @@ impl Fpu {
             });
         }
         let omega = positive("omega", omega)?;
+        Self::with_frequencies(&vec![omega; m])
+    }
+
+    /// m = `omegas.len()` stiff springs (1 ≤ m ≤ [`MAX_SPRINGS`](Self::MAX_SPRINGS)), spring j
+    /// of frequency ω_j > 0 (stiffness ω_j²).
+    ///
+    /// ```
+    /// use galerkin_vi::systems::Fpu;
+    /// // Two blocks of two springs, ω = 50 and ω = 20 (scene fpu-two-frequency).
+    /// let fpu = Fpu::with_frequencies(&[50.0, 50.0, 20.0, 20.0]).unwrap();
+    /// assert_eq!((fpu.springs(), fpu.omega()), (4, 50.0));
+    /// ```
+    ///
+    /// Errors: as [`new`](Self::new).
+    pub fn with_frequencies(omegas: &[f64]) -> Result<Self> {
+        let m = omegas.len();
+        if !(1..=Self::MAX_SPRINGS).contains(&m) {
+            return Err(GviError::InvalidParameter {
+                name: "springs".into(),
+                value: m as f64,
+                reason: format!("need 1 ≤ m ≤ {}", Self::MAX_SPRINGS),
+            });
+        }
+        let omegas = omegas
+            .iter()
+            .map(|&w| positive("omega", w))
+            .collect::<Result<Vec<f64>>>()?;
         // d_0 = x_{0,1} − x_{1,1}; d_i = x_{0,i+1} − x_{1,i+1} − x_{0,i} − x_{1,i};
         // d_m = x_{0,m} + x_{1,m}. Unused slots carry coefficient 0.
         let (x0, x1) = (|i: usize| i - 1, |i: usize| m + i - 1);
@@ -89,7 +125,7 @@ impl Fpu {
             ]);
         }
         springs.push([(x0(m), 1.0), (x1(m), 1.0), (0, 0.0), (0, 0.0)]);
-        Ok(Fpu { m, omega, springs })
+        Ok(Fpu { m, omegas, springs })
     }
 
     /// The book's chain: m = 3, ω = 50.
@@ -105,27 +141,46 @@ impl Fpu {
         self.m
     }
 
-    /// The stiff frequency ω.
+    /// The stiff frequency ω (the largest of the springs' frequencies).
     pub fn omega(&self) -> f64 {
-        self.omega
+        self.omegas.iter().fold(0.0f64, |m, &w| m.max(w))
     }
 
-    /// The initial value of GNI Fig. I.5.2: x_{0,1} = 1, y_{0,1} = 1, x_{1,1} = 1/ω,
+    /// The stiff frequencies ω_1 … ω_m, one per spring.
+    pub fn frequencies(&self) -> &[f64] {
+        &self.omegas
+    }
+
+    /// The initial value of GNI Fig. I.5.2: x_{0,1} = 1, y_{0,1} = 1, x_{1,1} = 1/ω₁,
     /// y_{1,1} = 1, all else 0 (q₁, p₁, q₄, p₄ for m = 3).
     pub fn hlw_initial_state(&self) -> (Vec<f64>, Vec<f64>) {
         let d = 2 * self.m;
         let (mut q, mut p) = (vec![0.0; d], vec![0.0; d]);
         q[0] = 1.0;
         p[0] = 1.0;
-        q[self.m] = 1.0 / self.omega;
+        q[self.m] = 1.0 / self.omegas[0];
         p[self.m] = 1.0;
         (q, p)
     }
 
-    /// The stiff-spring energies I_j = ½ (y_{1,j}² + ω² x_{1,j}²), j = 1 … m, into `out`.
+    /// The book's initial value with stiff spring j also excited, for each j in `springs`
+    /// (0-based): x_{1,j} = 1/ω_j, y_{1,j} = 1, so I_j = 1. Spring 0 is always excited; the
+    /// scene fpu-two-frequency excites the first spring of each block so that both frequencies
+    /// carry energy (with the book's value alone, a block of another frequency is reached only
+    /// off-resonance and stays nearly at rest). Indices ≥ m are ignored.
+    pub fn excited_initial_state(&self, springs: &[usize]) -> (Vec<f64>, Vec<f64>) {
+        let (mut q, mut p) = self.hlw_initial_state();
+        for &j in springs.iter().filter(|&&j| j < self.m) {
+            q[self.m + j] = 1.0 / self.omegas[j];
+            p[self.m + j] = 1.0;
+        }
+        (q, p)
+    }
+
+    /// The stiff-spring energies I_j = ½ (y_{1,j}² + ω_j² x_{1,j}²), j = 1 … m, into `out`.
     pub fn oscillatory_energies(&self, q: &[f64], p: &[f64], out: &mut [f64]) {
-        let w2 = self.omega * self.omega;
         for (j, o) in out.iter_mut().enumerate().take(self.m) {
+            let w2 = self.omegas[j] * self.omegas[j];
             let (x, y) = (q[self.m + j], p[self.m + j]);
             *o = 0.5 * (y * y + w2 * x * x);
         }
@@ -147,10 +202,10 @@ impl Mechanical for Fpu {
         DMatrix::identity(2 * self.m, 2 * self.m)
     }
     fn potential<T: DualNum<Primitive = f64> + Copy>(&self, q: &[T]) -> T {
-        let w2 = 0.5 * self.omega * self.omega;
         let stiff = q[self.m..]
             .iter()
-            .fold(T::zero(), |acc, &x| acc + x * x * w2);
+            .zip(&self.omegas)
+            .fold(T::zero(), |acc, (&x, &w)| acc + x * x * (0.5 * w * w));
         let soft = self.springs.iter().fold(T::zero(), |acc, s| {
             let d = Self::elongation(s, q);
             let d2 = d * d;
@@ -158,12 +213,11 @@ impl Mechanical for Fpu {
         });
         stiff + soft
     }
-    /// ∇V = ω² x₁ (stiff) + Σ_k d_k³ c_k (soft).
+    /// ∇V = ω_j² x_{1,j} (stiff) + Σ_k d_k³ c_k (soft).
     fn potential_gradient(&self, q: &[f64], out: &mut [f64]) {
-        let w2 = self.omega * self.omega;
         out.iter_mut().for_each(|o| *o = 0.0);
-        for (o, &x) in out[self.m..].iter_mut().zip(&q[self.m..]) {
-            *o = w2 * x;
+        for ((o, &x), &w) in out[self.m..].iter_mut().zip(&q[self.m..]).zip(&self.omegas) {
+            *o = w * w * x;
         }
         for s in &self.springs {
             let d: f64 = s.iter().map(|&(i, c)| c * q[i]).sum();
@@ -173,13 +227,12 @@ impl Mechanical for Fpu {
             }
         }
     }
-    /// ∇²V = ω² on the x₁ diagonal + Σ_k 3 d_k² c_k c_kᵀ.
+    /// ∇²V = ω_j² on the x₁ diagonal + Σ_k 3 d_k² c_k c_kᵀ.
     fn potential_hessian(&self, q: &[f64], out: &mut [f64]) {
         let d = 2 * self.m;
-        let w2 = self.omega * self.omega;
         out.iter_mut().for_each(|o| *o = 0.0);
-        for i in self.m..d {
-            out[i * d + i] = w2;
+        for (i, &w) in (self.m..d).zip(&self.omegas) {
+            out[i * d + i] = w * w;
         }
         for s in &self.springs {
             let e: f64 = s.iter().map(|&(i, c)| c * q[i]).sum();
@@ -207,9 +260,9 @@ impl System for Fpu {
         self.oscillatory_energies(q, p, &mut out[2..2 + self.m]);
         out[1] = out[2..2 + self.m].iter().sum();
     }
-    /// The stiff period 2π/ω.
+    /// The stiff period 2π/ω (the largest ω_j).
     fn shortest_time_scale(&self, _q: &[f64], _p: &[f64]) -> Option<f64> {
-        Some(std::f64::consts::TAU / self.omega)
+        Some(std::f64::consts::TAU / self.omega())
     }
 }
 
@@ -262,5 +315,26 @@ mod tests {
         assert_eq!(inv[1..], [1.0, 1.0, 0.0, 0.0]);
         assert!(Fpu::new(0, 50.0).is_err() && Fpu::new(9, 50.0).is_err());
         assert!(Fpu::new(3, 0.0).is_err() && Fpu::new(3, f64::NAN).is_err());
+        assert!(Fpu::with_frequencies(&[]).is_err());
+        assert!(Fpu::with_frequencies(&[50.0, -1.0]).is_err());
+    }
+
+    #[test]
+    fn frequencies_per_spring() {
+        let two = Fpu::with_frequencies(&[50.0, 50.0, 20.0, 20.0]).unwrap();
+        let q = [0.3, -0.7, 0.4, 0.1, 0.02, -0.01, 0.03, 0.05];
+        crate::systems::derivative_tests::check_against_ad(&two, &q);
+        // Equal frequencies are the single-frequency chain, bit for bit.
+        assert_eq!(Fpu::with_frequencies(&[50.0; 3]).unwrap(), Fpu::hlw());
+        let (q, p) = two.excited_initial_state(&[2]);
+        assert_eq!(q, vec![1.0, 0.0, 0.0, 0.0, 0.02, 0.0, 0.05, 0.0]);
+        assert_eq!(p, vec![1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0]);
+        let mut inv = [0.0; 6];
+        two.invariants(&q, &p, &mut inv);
+        assert_eq!(inv[1..], [2.0, 1.0, 0.0, 1.0, 0.0]);
+        assert_eq!(
+            two.shortest_time_scale(&q, &p),
+            Some(std::f64::consts::TAU / 50.0)
+        );
     }
 }

@@ -1,7 +1,8 @@
 //! Built-in mechanical systems: the harmonic oscillator and the planar Kepler problem of the
 //! paper's §5 (with exact solutions), the gravitational N-body problem of its §5.2.2, and the
-//! simple pendulum, and the Fermi–Pasta–Ulam chain of stiff and soft springs ([`Fpu`], Hairer,
-//! Lubich and Wanner's multiscale test problem).
+//! simple pendulum, the Fermi–Pasta–Ulam chain of stiff and soft springs ([`Fpu`], Hairer,
+//! Lubich and Wanner's multiscale test problem), and the stiff spring pendulum
+//! ([`SpringPendulum`], a fast frequency that depends on the state).
 //!
 //! Each implements [`Mechanical`](crate::Mechanical) with hand-written gradient and Hessian
 //! (the AD defaults are checked against them in tests) and [`System`], which adds the
@@ -22,6 +23,7 @@ mod kepler;
 pub mod kepler_orbit;
 mod nbody;
 mod pendulum;
+mod spring_pendulum;
 
 pub use any::AnySystem;
 pub use expression::ExpressionLagrangian;
@@ -30,6 +32,7 @@ pub use harmonic::HarmonicOscillator;
 pub use kepler::Kepler;
 pub use nbody::NBody;
 pub use pendulum::Pendulum;
+pub use spring_pendulum::SpringPendulum;
 
 use crate::error::Result;
 use crate::lagrangian::Lagrangian;

@@ -22,12 +22,13 @@ pub struct SceneArgs {
     /// Built-in scene name (see `gvi scenes`) or path to a TOML scene file.
     pub scene: String,
     /// Basis: chebyshev (default), legendre, hermite, fourier, or enriched (polynomials plus
-    /// sin/cos of --omega; n = degree + 1 + 2·harmonics).
+    /// sin/cos of --omega; n = degree + 1 + 2·harmonics·frequencies).
     #[arg(long)]
     pub basis: Option<String>,
-    /// Enrichment frequency ω of the enriched basis (finite, > 0).
-    #[arg(long, allow_hyphen_values = true)]
-    pub omega: Option<f64>,
+    /// Enrichment frequency ω of the enriched basis (finite, > 0), or several separated by
+    /// commas (--omega 50,20: sin/cos of each in the space).
+    #[arg(long, allow_hyphen_values = true, value_delimiter = ',', value_parser = values::number)]
+    pub omega: Option<Vec<f64>>,
     /// Number of harmonics of the enriched basis (default 1).
     #[arg(long)]
     pub harmonics: Option<usize>,
@@ -144,7 +145,7 @@ impl SceneArgs {
             retraction: self.retraction.as_deref().map(str::parse).transpose()?,
             q0: self.q0.clone(),
             p0: self.p0.clone(),
-            omega: self.omega,
+            omega: self.omega.clone(),
             harmonics: self.harmonics,
             ..Overrides::default()
         })

@@ -12,7 +12,7 @@ use super::{Scene, SystemSpec};
 use crate::error::{GviError, LabError, Result};
 use galerkin_vi::lie::body::{FreeRigidBody, HeavyTop};
 use galerkin_vi::method::{InitialState, MethodSpec};
-use galerkin_vi::systems::{AnySystem, Fpu, HarmonicOscillator, Kepler, Pendulum};
+use galerkin_vi::systems::{AnySystem, Fpu, HarmonicOscillator, Kepler, Pendulum, SpringPendulum};
 
 /// The rigid body a scene names (run on SO(3) by [`galerkin_vi::lie`]).
 #[derive(Debug, Clone)]
@@ -113,9 +113,28 @@ impl Scene {
                 gravity,
                 mass,
             } => AnySystem::from(Pendulum::new(*length, *gravity, *mass)?).into(),
-            SystemSpec::Fpu { springs, omega } => {
-                AnySystem::from(Fpu::new(*springs, *omega)?).into()
-            }
+            SystemSpec::SpringPendulum {
+                omega,
+                length,
+                gravity,
+            } => AnySystem::from(SpringPendulum::new(*omega, *length, *gravity)?).into(),
+            SystemSpec::Fpu { springs, omega } => match omega.as_deref() {
+                None => AnySystem::from(Fpu::new(*springs, 50.0)?).into(),
+                Some([w]) => AnySystem::from(Fpu::new(*springs, *w)?).into(),
+                Some(ws) if ws.len() == *springs => {
+                    AnySystem::from(Fpu::with_frequencies(ws)?).into()
+                }
+                Some(ws) => {
+                    return Err(LabError::Scene {
+                        source_name: self.name.clone(),
+                        reason: format!(
+                            "[system] omega lists {} frequencies for springs = {springs}: give \
+                             one frequency, or one per spring",
+                            ws.len()
+                        ),
+                    });
+                }
+            },
             SystemSpec::NBody {
                 dim,
                 g,

@@ -42,7 +42,7 @@ pub use build::{AnyRigidBody, BuiltScene, BuiltSystem};
 pub use overrides::Overrides;
 
 /// The built-in scenes: (name, TOML text).
-pub const BUILTIN_SCENES: [(&str, &str); 21] = [
+pub const BUILTIN_SCENES: [(&str, &str); 23] = [
     ("harmonic", include_str!("../../../scenes/harmonic.toml")),
     ("kepler", include_str!("../../../scenes/kepler.toml")),
     ("pendulum", include_str!("../../../scenes/pendulum.toml")),
@@ -102,6 +102,14 @@ pub const BUILTIN_SCENES: [(&str, &str); 21] = [
     (
         "varying-frequency",
         include_str!("../../../scenes/varying-frequency.toml"),
+    ),
+    (
+        "fpu-two-frequency",
+        include_str!("../../../scenes/fpu-two-frequency.toml"),
+    ),
+    (
+        "spring-pendulum",
+        include_str!("../../../scenes/spring-pendulum.toml"),
     ),
 ];
 
@@ -236,14 +244,33 @@ pub enum SystemSpec {
         mass: f64,
     },
     /// [`Fpu`](galerkin_vi::systems::Fpu): the Fermi–Pasta–Ulam chain of m stiff springs of
-    /// frequency ω (Hairer–Lubich–Wanner's form; D = 2m).
+    /// frequency ω (Hairer–Lubich–Wanner's form; D = 2m), or one frequency per spring.
     Fpu {
         /// Number m of stiff springs (default 3).
         #[serde(default = "three")]
         springs: usize,
-        /// Stiff frequency ω (default 50).
+        /// Stiff frequency ω (default 50), or a list of m frequencies, one per spring
+        /// (`omega = [50.0, 50.0, 20.0, 20.0]`; `springs` must then be m).
+        #[serde(
+            default,
+            skip_serializing_if = "Option::is_none",
+            deserialize_with = "galerkin_vi::method::frequencies::deserialize",
+            serialize_with = "galerkin_vi::method::frequencies::serialize"
+        )]
+        omega: Option<Vec<f64>>,
+    },
+    /// [`SpringPendulum`](galerkin_vi::systems::SpringPendulum): a unit mass on a stiff spring
+    /// in the plane under gravity (D = 2), a fast frequency that depends on the state.
+    SpringPendulum {
+        /// Spring frequency ω = √(k/m) (default 50).
         #[serde(default = "fifty")]
         omega: f64,
+        /// Rest length l (default 1).
+        #[serde(default = "one")]
+        length: f64,
+        /// Gravity g (default 1).
+        #[serde(default = "one")]
+        gravity: f64,
     },
     /// [`FreeRigidBody`](galerkin_vi::lie::FreeRigidBody) on SO(3) (Lie group integrator;
     /// `[initial] q` is the rotation vector of R₀, `p` the body momentum).
@@ -288,6 +315,7 @@ pub fn system_type(system: &SystemSpec) -> &'static str {
         SystemSpec::Lagrangian(_) => "lagrangian",
         SystemSpec::Pendulum { .. } => "pendulum",
         SystemSpec::Fpu { .. } => "fpu",
+        SystemSpec::SpringPendulum { .. } => "spring-pendulum",
         SystemSpec::RigidBody { .. } => "rigid-body",
         SystemSpec::HeavyTop { .. } => "heavy-top",
     }

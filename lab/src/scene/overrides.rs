@@ -54,8 +54,8 @@ pub struct Overrides {
     pub ladder: Option<Vec<usize>>,
     /// Choose h from the tolerance.
     pub auto_h: bool,
-    /// Enrichment frequency ω of the enriched basis.
-    pub omega: Option<f64>,
+    /// Enrichment frequencies of the enriched basis (one ω or several).
+    pub omega: Option<Vec<f64>>,
     /// Number of harmonics of the enriched basis.
     pub harmonics: Option<usize>,
     /// A Poincaré time transformation with this monitor (replacing the scene's monitor, or
@@ -86,7 +86,7 @@ impl Scene {
             m.basis = b;
         }
         if o.omega.is_some() {
-            m.omega = o.omega;
+            m.omega = o.omega.clone();
         }
         if o.harmonics.is_some() {
             m.harmonics = o.harmonics;

@@ -47,24 +47,41 @@
 //! where 2θ is small against p and the polynomials already resolve the harmonics. Use K = 1
 //! there.
 //!
-//! # One frequency for every coordinate
+//! # Several fast frequencies
 //!
-//! [`Basis::eval`] returns one value per function, shared by all D coordinates (q(τ) =
-//! Σ Q_i φ_i(τ), Q_i ∈ ℝ^D). A frequency per coordinate block would need functions that
-//! differ per coordinate — a block-diagonal basis, `eval(τ, block, …)`, and stage tables per
-//! block — which the trait does not express. With one frequency per problem (the
-//! Fermi–Pasta–Ulam problem) it is not needed; for several fast frequencies, give them all as
-//! harmonics of a common ω or accept that every coordinate carries every frequency.
+//! [`Enriched::with_frequencies`] takes a set {ω₁, …, ω_r}: the space is
+//! P_p ⊕ span{sin(kω_jhτ), cos(kω_jhτ) : k = 1 … K, j = 1 … r}, n = p + 1 + 2rK, each
+//! trigonometric function built as above. [`Basis::eval`] returns one value per function,
+//! shared by all D coordinates (q(τ) = Σ Q_i φ_i(τ), Q_i ∈ ℝ^D), so every coordinate carries
+//! every frequency: a system whose coordinate blocks oscillate at ω₁ and ω₂ gets each block's
+//! own frequency in its space, at the price of 2K functions per block that the block does not
+//! need. True per-block functions (only sin/cos ω₁ for block 1, only ω₂ for block 2) would
+//! save those — n = p + 1 + 2K per coordinate instead of p + 1 + 2rK — but need functions that
+//! differ per coordinate: a block-diagonal basis, `eval(τ, block, …)` and stage tables per
+//! block, which the trait does not express.
+//!
+//! Nearly equal frequencies make the space nearly degenerate: sin(x₂τ) − sin(x₁τ) ≈
+//! (x₂ − x₁) τ cos(x₁τ), so the two functions differ by a function of size |x₂ − x₁|. The
+//! constructor measures the dependence of all the trigonometric functions together (the Gram
+//! test above, after each frequency's own harmonics have passed it) and refuses a set that
+//! fails it with [`GviError::InvalidParameter`] named `omega`, naming the closest pair; a
+//! frequency equal to another one's harmonic (ω₂ = 2ω₁ with K = 2) is refused the same way.
+//! It does not merge them: the span would change silently. The same test refuses distinct
+//! frequencies at so small an ωh that the polynomials resolve them all (as for harmonics).
 
+mod dependence;
 mod jacobi_anger;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_frequencies;
 
 use super::{Basis, Legendre};
 use crate::error::{GviError, Result};
 use crate::quadrature::{GaussLegendre, Quadrature, QuadratureRule};
 
-/// Polynomials of degree p enriched with sin(kωhτ), cos(kωhτ), k = 1 … K (module docs).
+/// Polynomials of degree p enriched with sin(kωhτ), cos(kωhτ), k = 1 … K, for one frequency
+/// ω or a set of them (module docs).
 ///
 /// The basis is made for one step size h: the trigonometric functions have frequency ωh in
 /// the reference variable τ, so an integrator must use the same h
@@ -86,7 +103,8 @@ use crate::quadrature::{GaussLegendre, Quadrature, QuadratureRule};
 pub struct Enriched {
     degree: usize,
     harmonics: usize,
-    omega: f64,
+    /// ω₁ … ω_r, in the order given; the trigonometric functions are grouped by frequency.
+    frequencies: Vec<f64>,
     h: f64,
     polynomial: Legendre,
     trig: Vec<Trig>,
@@ -111,6 +129,8 @@ impl Enriched {
     /// The largest K·ωh accepted: far beyond what a Gauss rule of a few hundred points
     /// resolves.
     pub const MAX_FREQUENCY: f64 = 1000.0;
+    /// The most frequencies accepted by [`with_frequencies`](Self::with_frequencies).
+    pub const MAX_FREQUENCIES: usize = 16;
 
     /// Degree p ≥ 1 polynomials plus sin(ωhτ), cos(ωhτ): n = p + 3 functions.
     ///
@@ -121,14 +141,44 @@ impl Enriched {
 
     /// Degree p ≥ 1 polynomials plus sin(kωhτ), cos(kωhτ), k = 1 … K: n = p + 1 + 2K.
     ///
+    /// Errors: as [`with_frequencies`](Enriched::with_frequencies).
+    pub fn with_harmonics(degree: usize, harmonics: usize, omega: f64, h: f64) -> Result<Self> {
+        Self::with_frequencies(degree, harmonics, &[omega], h)
+    }
+
+    /// Degree p ≥ 1 polynomials plus sin(kω_jhτ), cos(kω_jhτ), k = 1 … K, for each of the r
+    /// frequencies ω_j: n = p + 1 + 2rK (module docs, "Several fast frequencies"). With one
+    /// frequency this is [`with_harmonics`](Enriched::with_harmonics), function for function.
+    ///
+    /// ```
+    /// use galerkin_vi::basis::{Basis, Enriched};
+    /// // Two stiff blocks at ω = 50 and ω = 20, h = 0.1: θ = 5 and 2.
+    /// let b = Enriched::with_frequencies(4, 1, &[50.0, 20.0], 0.1).unwrap();
+    /// assert_eq!((b.len(), b.frequencies()), (9, &[50.0, 20.0][..]));
+    /// // Nearly equal frequencies make the space nearly degenerate: refused, not merged.
+    /// assert!(Enriched::with_frequencies(4, 1, &[50.0, 50.0 + 1e-9], 0.1).is_err());
+    /// ```
+    ///
     /// Errors: [`GviError::InvalidBasisSize`] for p = 0, p > [`MAX_DEGREE`](Self::MAX_DEGREE)
     /// or K = 0 (too few functions: with no trigonometric function use a polynomial basis);
-    /// [`GviError::InvalidParameter`] for ω not finite and positive (`omega`), K·ωh above
+    /// [`GviError::InvalidInput`] named `omega` for no frequency or more than
+    /// [`MAX_FREQUENCIES`](Self::MAX_FREQUENCIES); [`GviError::InvalidParameter`] for a
+    /// frequency not finite and positive (`omega`), K·ω_jh above
     /// [`MAX_FREQUENCY`](Self::MAX_FREQUENCY) or so small that the trigonometric part
-    /// underflows (`omega`), or harmonics that cannot be told apart at this ωh (`harmonics`,
-    /// module docs); [`GviError::InvalidStepSize`] for h not finite and positive.
-    pub fn with_harmonics(degree: usize, harmonics: usize, omega: f64, h: f64) -> Result<Self> {
-        let n = degree + 1 + 2 * harmonics;
+    /// underflows (`omega`), harmonics that cannot be told apart at this ωh (`harmonics`), or
+    /// frequencies that cannot be told apart — nearly equal, one a harmonic of another, or all
+    /// resolved by the polynomials at this h (`omega`, module docs);
+    /// [`GviError::InvalidStepSize`] for h not finite and positive.
+    pub fn with_frequencies(
+        degree: usize,
+        harmonics: usize,
+        frequencies: &[f64],
+        h: f64,
+    ) -> Result<Self> {
+        let r = frequencies.len();
+        let n = degree
+            .saturating_add(1)
+            .saturating_add(harmonics.saturating_mul(2).saturating_mul(r));
         if degree == 0 || degree > Self::MAX_DEGREE || harmonics == 0 {
             return Err(GviError::InvalidBasisSize {
                 n,
@@ -140,7 +190,16 @@ impl Enriched {
                 ),
             });
         }
-        if !(omega.is_finite() && omega > 0.0) {
+        if r == 0 || r > Self::MAX_FREQUENCIES {
+            return Err(GviError::InvalidInput {
+                name: "omega".into(),
+                reason: format!(
+                    "the enriched basis needs 1 to {} frequencies (got {r})",
+                    Self::MAX_FREQUENCIES
+                ),
+            });
+        }
+        if let Some(&omega) = frequencies.iter().find(|w| !(w.is_finite() && **w > 0.0)) {
             return Err(GviError::InvalidParameter {
                 name: "omega".into(),
                 value: omega,
@@ -150,29 +209,40 @@ impl Enriched {
         if !(h.is_finite() && h > 0.0) {
             return Err(GviError::InvalidStepSize { h });
         }
-        let theta = omega * h;
-        if theta * harmonics as f64 > Self::MAX_FREQUENCY {
-            return Err(GviError::InvalidParameter {
-                name: "omega".into(),
-                value: omega,
-                reason: format!(
-                    "K·ωh = {:.3e} exceeds {} (no practical Gauss rule resolves it)",
-                    theta * harmonics as f64,
-                    Self::MAX_FREQUENCY
-                ),
-            });
-        }
-        let mut trig = Vec::with_capacity(2 * harmonics);
-        for k in 1..=harmonics {
-            for cosine in [false, true] {
-                trig.push(Trig::new(k as f64 * theta, cosine, degree, omega)?);
+        // All frequencies in range before anything is allocated (K may be absurdly large).
+        for &omega in frequencies {
+            let theta = omega * h;
+            if theta * harmonics as f64 > Self::MAX_FREQUENCY {
+                return Err(GviError::InvalidParameter {
+                    name: "omega".into(),
+                    value: omega,
+                    reason: format!(
+                        "K·ωh = {:.3e} exceeds {} (no practical Gauss rule resolves it)",
+                        theta * harmonics as f64,
+                        Self::MAX_FREQUENCY
+                    ),
+                });
             }
         }
-        check_harmonics(&trig, degree, theta)?;
+        let mut trig = Vec::with_capacity(2 * harmonics * r);
+        for &omega in frequencies {
+            let theta = omega * h;
+            let start = trig.len();
+            for k in 1..=harmonics {
+                for cosine in [false, true] {
+                    trig.push(Trig::new(k as f64 * theta, cosine, degree, omega)?);
+                }
+            }
+            // Each frequency's own harmonics first, so that a failure is blamed on K.
+            dependence::check_harmonics(&trig[start..], degree, theta)?;
+        }
+        if r > 1 {
+            dependence::check_frequencies(&trig, degree, harmonics, frequencies, h)?;
+        }
         Ok(Enriched {
             degree,
             harmonics,
-            omega,
+            frequencies: frequencies.to_vec(),
             h,
             polynomial: Legendre::new(degree + 1)?,
             trig,
@@ -189,18 +259,28 @@ impl Enriched {
         self.harmonics
     }
 
-    /// The enrichment frequency ω.
+    /// The enrichment frequency ω (the first, ω₁, of a set: [`frequencies`](Self::frequencies)).
     pub fn omega(&self) -> f64 {
-        self.omega
+        self.frequencies[0]
     }
 
-    /// ωh, the frequency in the reference variable τ (radians per step).
+    /// The enrichment frequencies ω₁ … ω_r, in the order given.
+    pub fn frequencies(&self) -> &[f64] {
+        &self.frequencies
+    }
+
+    /// ωh, the frequency in the reference variable τ (radians per step; ω₁h for a set).
     pub fn theta(&self) -> f64 {
-        self.omega * self.h
+        self.omega() * self.h
+    }
+
+    /// The largest frequency in τ of the trigonometric functions, K·max_j ω_jh.
+    fn highest(&self) -> f64 {
+        self.trig.iter().fold(0.0f64, |m, t| m.max(t.x))
     }
 
     /// The fewest Gauss–Legendre points that integrate the basis's mass and kinetic products
-    /// (Σ_j b_j φ_aφ_b and Σ_j b_j φ_a'φ_b', frequencies up to 2Kωh and degree 2p) to a
+    /// (Σ_j b_j φ_aφ_b and Σ_j b_j φ_a'φ_b', frequencies up to 2K·max ω_jh and degree 2p) to a
     /// relative 1e-13, the threshold [`Basis::check_quadrature`] applies. A nonlinear
     /// potential adds higher frequencies to the integrand (a quartic one up to 4Kωh), which
     /// this count resolves only approximately; docs/guide/enriched-bases.md measures what
@@ -223,8 +303,7 @@ impl Enriched {
     /// with many more points (max over entries, relative to the largest entry).
     fn product_error(&self, rule: &QuadratureRule) -> f64 {
         let reference_points =
-            (rule.len() + 40 + (2.0 * self.harmonics as f64 * self.theta()).ceil() as usize)
-                .min(MAX_POINTS + 80);
+            (rule.len() + 40 + (2.0 * self.highest()).ceil() as usize).min(MAX_POINTS + 80);
         let Ok(reference) = GaussLegendre::new(reference_points).and_then(|g| g.rule()) else {
             return f64::INFINITY;
         };
@@ -345,53 +424,9 @@ impl Trig {
     }
 }
 
-/// Refuse harmonics that are numerically dependent at this θ: the Gram matrix of the
-/// trigonometric functions' normalised tail coefficients must have a reciprocal condition
-/// number ≥ 1e-10 (the coefficient matrix's ≥ 1e-5). With one harmonic it stays near
-/// 1/(2p + 4)² for every θ (the sine and cosine tend to different combinations of T_{p+1}
-/// and T_{p+2}).
-fn check_harmonics(trig: &[Trig], degree: usize, theta: f64) -> Result<()> {
-    let m = trig.len();
-    let len = trig.iter().map(|t| t.coefficients.len()).max().unwrap_or(0);
-    let unit: Vec<Vec<f64>> = trig
-        .iter()
-        .map(|t| {
-            let mut v = vec![0.0; len];
-            v[..t.coefficients.len()].copy_from_slice(&t.coefficients);
-            v[..=degree].iter_mut().for_each(|x| *x = 0.0);
-            // Scale by the largest entry first: at tiny ωh the squares would underflow.
-            let largest = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-            v.iter_mut().for_each(|x| *x /= largest);
-            let norm = v.iter().map(|x| x * x).sum::<f64>().sqrt();
-            v.iter_mut().for_each(|x| *x /= norm);
-            v
-        })
-        .collect();
-    let gram: Vec<f64> = unit
-        .iter()
-        .flat_map(|a| {
-            unit.iter()
-                .map(move |b| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>())
-        })
-        .collect();
-    let rcond = crate::linalg::reciprocal_condition(&gram, m);
-    if rcond.is_nan() || rcond < 1e-10 {
-        return Err(GviError::InvalidParameter {
-            name: "harmonics".into(),
-            value: (m / 2) as f64,
-            reason: format!(
-                "at ωh = {theta:.3e} the {} harmonics are numerically dependent (Gram \
-                 reciprocal condition {rcond:.1e} < 1e-10); use one harmonic or a larger h",
-                m / 2
-            ),
-        });
-    }
-    Ok(())
-}
-
 impl Basis for Enriched {
     fn len(&self) -> usize {
-        self.degree + 1 + 2 * self.harmonics
+        self.degree + 1 + self.trig.len()
     }
 
     fn name(&self) -> &'static str {
@@ -429,13 +464,17 @@ impl Basis for Enriched {
         Err(GviError::InvalidQuadrature {
             reason: format!(
                 "{} with {} points integrates the products of the enriched basis (p = {}, \
-                 {} harmonic(s), ωh = {:.3}) only to a relative {error:.1e} (> {PRODUCT_TOLERANCE:.0e}); \
+                 {} harmonic(s), ωh = {}) only to a relative {error:.1e} (> {PRODUCT_TOLERANCE:.0e}); \
                  use at least {} Gauss–Legendre points",
                 rule.family,
                 rule.len(),
                 self.degree,
                 self.harmonics,
-                self.theta(),
+                self.frequencies
+                    .iter()
+                    .map(|w| format!("{:.3}", w * self.h))
+                    .collect::<Vec<_>>()
+                    .join(", "),
                 self.gauss_points()
             ),
         })

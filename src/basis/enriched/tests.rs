@@ -5,7 +5,7 @@ use crate::error::GviError;
 
 /// The 2-norm condition number of the stage block of the kinetic matrix under `points`
 /// Gauss–Legendre points (what `GalerkinIntegrator::kinetic_condition_number` reports).
-fn kinetic_condition<B: Basis>(b: &B, points: usize) -> f64 {
+pub(super) fn kinetic_condition<B: Basis>(b: &B, points: usize) -> f64 {
     let n = b.len();
     let rule = GaussLegendre::new(points).unwrap().rule().unwrap();
     let (mut v, mut d) = (vec![0.0; n], vec![0.0; n]);
@@ -26,39 +26,13 @@ fn kinetic_condition<B: Basis>(b: &B, points: usize) -> f64 {
     1.0 / crate::linalg::reciprocal_condition(&block, m)
 }
 
-/// The textbook enrichment, sin(θτ) − τ sin θ and cos(θτ) − (1 − τ) − τ cos θ beside the
-/// Legendre functions: the negative control of the conditioning tests.
-#[derive(Debug)]
-struct Naive {
-    legendre: Legendre,
-    p: usize,
-    theta: f64,
+/// The textbook enrichment (the negative control of the conditioning tests), one copy shared
+/// with tests/enriched.rs.
+mod naive {
+    use crate::basis::{Basis, Legendre};
+    include!("../../../tests/common/naive_enriched.rs");
 }
-
-impl Basis for Naive {
-    fn len(&self) -> usize {
-        self.p + 3
-    }
-    fn name(&self) -> &'static str {
-        "naive-enriched"
-    }
-    fn eval(&self, tau: f64, values: &mut [f64], derivatives: &mut [f64]) {
-        let (p, th) = (self.p, self.theta);
-        self.legendre
-            .eval(tau, &mut values[..=p], &mut derivatives[..=p]);
-        values[p + 2] = values[p];
-        derivatives[p + 2] = derivatives[p];
-        let (s, c) = (th * tau).sin_cos();
-        let (s1, c1) = th.sin_cos();
-        values[p] = s - tau * s1;
-        derivatives[p] = th * c - s1;
-        values[p + 1] = c - (1.0 - tau) - tau * c1;
-        derivatives[p + 1] = -th * s + 1.0 - c1;
-    }
-    fn polynomial_degree(&self) -> Option<usize> {
-        None
-    }
-}
+use naive::NaiveEnriched;
 
 #[test]
 fn contract_and_derivatives_over_the_frequency_range() {
@@ -141,11 +115,7 @@ fn conditioning_stays_bounded_as_omega_h_goes_to_zero() {
         let b = Enriched::new(p, theta, 1.0).unwrap();
         let cond = kinetic_condition(&b, 40 + (2.0 * theta) as usize);
         worst = worst.max(cond);
-        let naive = Naive {
-            legendre: Legendre::new(p + 1).unwrap(),
-            p,
-            theta,
-        };
+        let naive = NaiveEnriched::new(p, theta);
         let naive_cond = kinetic_condition(&naive, 40 + (2.0 * theta) as usize);
         eprintln!(
             "θ = {theta:e}: enriched {cond:.2e}, naive {naive_cond:.2e}, P_(p+2) {legendre:.2e}"
