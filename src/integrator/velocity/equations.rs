@@ -6,6 +6,7 @@
 use super::VelocityTables;
 use crate::basis::Basis;
 use crate::integrator::dd::{dd_acc, dd_acc_columns, two_sum};
+use crate::integrator::separable::Separable;
 use crate::integrator::{GalerkinIntegrator, InitialGuess, Workspace};
 use crate::lagrangian::Lagrangian;
 use crate::linalg::{Lu, Strided, gemm, gemm_transposed, panel_product};
@@ -162,27 +163,11 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             }
         }
         lag.force_at_points(&ws.stage.qj, &mut ws.stage.lq);
-        // Momentum row: M c_0 − p_k in double-double (exact products by FMA, TwoSum), then
-        // the force terms; see the general form for why.
+        // Row 0, the momentum condition, in double-double (`momentum_row`), then the forces.
         let mut hi = [0.0f64; D];
         let mut lo = [0.0f64; D];
         for r in 0..D {
-            let (mut h0, mut l0) = (0.0, 0.0);
-            match sep.mass_diagonal() {
-                Some(diag) => {
-                    dd_acc(&mut h0, &mut l0, diag[r], vs.c[r]);
-                    l0 += diag[r] * vs.c0_lo[r];
-                }
-                None => {
-                    for s in 0..D {
-                        dd_acc(&mut h0, &mut l0, sep.mass()[r * D + s], vs.c[s]);
-                        l0 += sep.mass()[r * D + s] * vs.c0_lo[s];
-                    }
-                }
-            }
-            let (s, e) = two_sum(h0, -p_k[r]);
-            hi[r] = s;
-            lo[r] = l0 + (e - ws.iterate.momentum_lo()[r]);
+            (hi[r], lo[r]) = momentum_row(sep, &vs.c, &vs.c0_lo, p_k, ws.iterate.momentum_lo(), r);
         }
         let panel = !vt.psi_rows.is_empty();
         if !panel {
@@ -222,31 +207,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 }
             }
         }
-        let mut norm = 0.0f64;
-        for (b, (delta, c)) in vs
-            .delta
-            .chunks_exact_mut(D)
-            .zip(vs.c.chunks_exact(D))
-            .enumerate()
-        {
-            for r in 0..D {
-                let f = if b == 0 {
-                    hi[r] + lo[r]
-                } else {
-                    let mc = match sep.mass_diagonal() {
-                        Some(diag) => diag[r] * c[r],
-                        None => (0..D).map(|s| sep.mass()[r * D + s] * c[s]).sum(),
-                    };
-                    mc + delta[r]
-                };
-                delta[r] = -f;
-                norm = norm.max(f.abs());
-                if !f.is_finite() {
-                    norm = f64::INFINITY;
-                }
-            }
-        }
-        norm
+        close_rows(sep, &vs.c, &mut vs.delta, |r| hi[r] + lo[r], D)
     }
 
     /// [`Self::velocity_residual`] for any D, through the strided products.
@@ -287,27 +248,10 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         self.weighted_forces(lag, &mut ws.stage);
         // Σ_j ψ_jb (h b_j f_j).
         gemm_transposed(k, m, d, &vt.psi, &ws.stage.scaled, 0.0, &mut vs.delta);
-        // Row 0, the momentum condition that fixes q_{k+1} = q_k + h c_0, in double-double
-        // (exact products by FMA, TwoSum): M c_0 − p_k cancels to the size of the force term,
-        // and a rounded sum leaves a one-signed error in every step's increment (the nodal
-        // Legendre-transform row is summed the same way, `legendre_transform`).
+        // Row 0, the momentum condition, in double-double (`momentum_row`).
         for r in 0..d {
-            let (mut hi, mut lo) = (0.0, 0.0);
-            match sep.mass_diagonal() {
-                Some(diag) => {
-                    dd_acc(&mut hi, &mut lo, diag[r], vs.c[r]);
-                    lo += diag[r] * vs.c0_lo[r];
-                }
-                None => {
-                    for s in 0..d {
-                        dd_acc(&mut hi, &mut lo, sep.mass()[r * d + s], vs.c[s]);
-                        lo += sep.mass()[r * d + s] * vs.c0_lo[s];
-                    }
-                }
-            }
-            let (s, e) = two_sum(hi, -p_k[r]);
-            ws.stage.dd_hi[r] = s;
-            ws.stage.dd_lo[r] = lo + (e - ws.iterate.momentum_lo()[r]);
+            (ws.stage.dd_hi[r], ws.stage.dd_lo[r]) =
+                momentum_row(sep, &vs.c, &vs.c0_lo, p_k, ws.iterate.momentum_lo(), r);
         }
         // The force terms, eight coordinates side by side with their (hi, lo) pairs in
         // registers: each sum runs over j in order (the same bits as one coordinate at a time),
@@ -330,29 +274,8 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             ws.stage.dd_hi[r0..r0 + w_lanes].copy_from_slice(&hi[..w_lanes]);
             ws.stage.dd_lo[r0..r0 + w_lanes].copy_from_slice(&lo[..w_lanes]);
         }
-        let mut norm = 0.0f64;
-        for b in 0..k {
-            for r in 0..d {
-                let i = b * d + r;
-                let f = if b == 0 {
-                    ws.stage.dd_hi[r] + ws.stage.dd_lo[r]
-                } else {
-                    let mc = match sep.mass_diagonal() {
-                        Some(diag) => diag[r] * vs.c[i],
-                        None => (0..d)
-                            .map(|s| sep.mass()[r * d + s] * vs.c[b * d + s])
-                            .sum(),
-                    };
-                    mc + vs.delta[i]
-                };
-                vs.delta[i] = -f;
-                norm = norm.max(f.abs());
-                if !f.is_finite() {
-                    norm = f64::INFINITY;
-                }
-            }
-        }
-        norm
+        let (dd_hi, dd_lo) = (&ws.stage.dd_hi, &ws.stage.dd_lo);
+        close_rows(sep, &vs.c, &mut vs.delta, |r| dd_hi[r] + dd_lo[r], d)
     }
 
     /// The converged modes as the nodal solve leaves its result: increments ΔQ_i = h Σ_a B_ia
@@ -400,6 +323,69 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             (impulse[r], impulse_lo[r]) = two_sum(ws.stage.dd_hi[r], ws.stage.dd_lo[r]);
         }
     }
+}
+
+/// The start of the momentum row for coordinate r (the condition that fixes q_{k+1} = q_k +
+/// h c_0): M c_0 − p_k in double-double (exact products by FMA, TwoSum), with c_0's low part
+/// and the momentum's own low part; the force terms are added to it by the caller. M c_0 − p_k
+/// cancels to the size of the force term, and a rounded sum would leave a one-signed error in
+/// every step's increment (the nodal Legendre-transform row is summed the same way,
+/// `legendre_transform`).
+fn momentum_row(
+    sep: &Separable,
+    c: &[f64],
+    c0_lo: &[f64],
+    p_k: &[f64],
+    momentum_lo: &[f64],
+    r: usize,
+) -> (f64, f64) {
+    let d = c0_lo.len();
+    let (mut hi, mut lo) = (0.0, 0.0);
+    match sep.mass_diagonal() {
+        Some(diag) => {
+            dd_acc(&mut hi, &mut lo, diag[r], c[r]);
+            lo += diag[r] * c0_lo[r];
+        }
+        None => {
+            for s in 0..d {
+                dd_acc(&mut hi, &mut lo, sep.mass()[r * d + s], c[s]);
+                lo += sep.mass()[r * d + s] * c0_lo[s];
+            }
+        }
+    }
+    let (s, e) = two_sum(hi, -p_k[r]);
+    (s, lo + (e - momentum_lo[r]))
+}
+
+/// −F into `delta` (k×D): row 0 the momentum row `row0(r)`, rows b ≥ 1 M c_b plus the
+/// projections already in `delta`; returns max |F| (∞ if an entry is not finite).
+fn close_rows(
+    sep: &Separable,
+    c: &[f64],
+    delta: &mut [f64],
+    row0: impl Fn(usize) -> f64,
+    d: usize,
+) -> f64 {
+    let mut norm = 0.0f64;
+    for (b, (delta, c)) in delta.chunks_exact_mut(d).zip(c.chunks_exact(d)).enumerate() {
+        for r in 0..d {
+            let f = if b == 0 {
+                row0(r)
+            } else {
+                let mc = match sep.mass_diagonal() {
+                    Some(diag) => diag[r] * c[r],
+                    None => (0..d).map(|s| sep.mass()[r * d + s] * c[s]).sum(),
+                };
+                mc + delta[r]
+            };
+            delta[r] = -f;
+            norm = norm.max(f.abs());
+            if !f.is_finite() {
+                norm = f64::INFINITY;
+            }
+        }
+    }
+    norm
 }
 
 /// The exact Newton matrix of the velocity form, J = I ⊗ M + h² Σ_j b_j ψ_j ι_jᵀ ⊗ H_j, from the
