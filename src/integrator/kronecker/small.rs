@@ -18,6 +18,31 @@ fn column_stride(k: usize) -> usize {
     if k <= PANEL { PANEL } else { k }
 }
 
+/// out (k×D, by rows) = C x for the k×k matrix C stored by columns (stride
+/// [`column_stride`]) and x (k×D, by rows): each entry summed over the columns in order from
+/// zero, as one register panel for k ≤ [`PANEL`] and the plain loop otherwise (the same
+/// bits).
+fn columns_times<const D: usize>(cols: &[f64], x: &[f64], k: usize, out: &mut [f64]) {
+    if k <= PANEL {
+        let acc = panel_product::<D>(cols, x, k);
+        for (i, o) in out.chunks_exact_mut(D).enumerate() {
+            for s in 0..D {
+                o[s] = acc[s][i];
+            }
+        }
+        return;
+    }
+    out.iter_mut().for_each(|v| *v = 0.0);
+    for (col, row) in cols.chunks_exact(k).zip(x.chunks_exact(D)) {
+        let xr: [f64; D] = std::array::from_fn(|s| row[s]);
+        for (o, &c) in out.chunks_exact_mut(D).zip(col) {
+            for s in 0..D {
+                o[s] += c * xr[s];
+            }
+        }
+    }
+}
+
 /// Largest D served by this kernel; N-body systems keep the general route (which vectorises
 /// along the coordinates).
 pub(crate) const SMALL_MAX_D: usize = 4;
@@ -98,24 +123,7 @@ impl SmallSolve {
         // y = R r: each entry summed over a in order from zero (the general route's
         // few-column product), by columns of R, the D coordinates of a row side by side.
         let y = &mut self.y[..k * D];
-        if k <= PANEL {
-            let acc = panel_product::<D>(&self.r_cols, rhs, k);
-            for (i, y) in y.chunks_exact_mut(D).enumerate() {
-                for s in 0..D {
-                    y[s] = acc[s][i];
-                }
-            }
-        } else {
-            y.iter_mut().for_each(|x| *x = 0.0);
-            for (col, row) in self.r_cols.chunks_exact(k).zip(rhs.chunks_exact(D)) {
-                let x: [f64; D] = std::array::from_fn(|s| row[s]);
-                for (y, &c) in y.chunks_exact_mut(D).zip(col) {
-                    for s in 0..D {
-                        y[s] += c * x[s];
-                    }
-                }
-            }
-        }
+        columns_times::<D>(&self.r_cols, rhs, k, y);
         // ŷ = y V: ŷ_ar = Σ_s y_as V[s][r], s in order from zero.
         for (yh, y) in self.yh.chunks_exact_mut(D).zip(y.chunks_exact(D)) {
             for (r, o) in yh.iter_mut().enumerate() {
@@ -168,24 +176,6 @@ impl SmallSolve {
             }
         }
         // x = U (ζ Vᵀ), by columns of U, c in order from zero, into the right-hand side.
-        let x = &mut rhs[..k * D];
-        if k <= PANEL {
-            let acc = panel_product::<D>(&self.u_cols, &self.back, k);
-            for (i, x) in x.chunks_exact_mut(D).enumerate() {
-                for s in 0..D {
-                    x[s] = acc[s][i];
-                }
-            }
-        } else {
-            x.iter_mut().for_each(|x| *x = 0.0);
-            for (col, b) in self.u_cols.chunks_exact(k).zip(self.back.chunks_exact(D)) {
-                let b: [f64; D] = std::array::from_fn(|s| b[s]);
-                for (x, &u) in x.chunks_exact_mut(D).zip(col) {
-                    for s in 0..D {
-                        x[s] += u * b[s];
-                    }
-                }
-            }
-        }
+        columns_times::<D>(&self.u_cols, &self.back, k, &mut rhs[..k * D]);
     }
 }
