@@ -6,10 +6,10 @@
 //! `cargo test --test integration enriched:: -- --nocapture` and are what docs/guide/enriched-bases.md
 //! reports.
 
+use crate::enriched_checks;
 use galerkin_vi::GalerkinIntegrator;
-use galerkin_vi::baselines::{OneStepMethod, Rk4, integrate_one_step};
+use galerkin_vi::baselines::{Rk4, integrate_one_step};
 use galerkin_vi::basis::{Basis, Enriched, Legendre};
-use galerkin_vi::geometry::{finite_difference_jacobian, relative_symplecticity_defect};
 use galerkin_vi::quadrature::{GaussLegendre, Quadrature};
 use galerkin_vi::refinement::{ErrorMeasure, Problem, RefineBy, fitted_rate, n_refinement};
 use galerkin_vi::systems::{Fpu, Kepler, System};
@@ -47,32 +47,8 @@ fn enriched_map_is_symplectic_on_fpu() {
     let fpu = Fpu::hlw();
     let h = 0.04;
     let gvi = enriched(4, fpu.omega(), h).unwrap();
-    let (mut q, mut p) = fpu.hlw_initial_state();
-    let mut worst = 0.0f64;
-    for _ in 0..20 {
-        let jac = gvi.step_jacobian(&fpu, &q, &p).unwrap();
-        worst = worst.max(relative_symplecticity_defect(&jac.matrix));
-        q = jac.q_next;
-        p = jac.p_next;
-    }
     let (q0, p0) = fpu.hlw_initial_state();
-    let step = |q: &[f64], p: &[f64]| {
-        let t = gvi.integrate(&fpu, 0.0, q, p, 1).unwrap();
-        (t.q[1].clone(), t.p[1].clone())
-    };
-    let fd = finite_difference_jacobian(step, &q0, &p0, 1e-6);
-    let exact = gvi.step_jacobian(&fpu, &q0, &p0).unwrap().matrix;
-    let fd_error = (&fd - &exact).amax() / exact.amax();
-    let rk4 = finite_difference_jacobian(
-        |q, p| {
-            let (qs, ps) = rk4_states(&fpu, q, p, h, 1);
-            (qs[1].clone(), ps[1].clone())
-        },
-        &q0,
-        &p0,
-        1e-6,
-    );
-    let rk4_defect = relative_symplecticity_defect(&rk4);
+    let (worst, fd_error, rk4_defect) = enriched_checks::symplecticity(&gvi, &fpu, &q0, &p0, h);
     println!(
         "enriched symplecticity defect {worst:.1e} (20 steps); FD vs exact Jacobian {fd_error:.1e}; \
          RK4 {rk4_defect:.1e}"
@@ -88,28 +64,9 @@ fn enriched_map_is_symplectic_on_fpu() {
 /// round-off over 400 steps. Negative control: RK4 at the same h drifts.
 #[test]
 fn enriched_map_conserves_angular_momentum() {
-    let kepler = Kepler::new(1.0).unwrap();
-    let (q0, p0) = Kepler::paper_initial_state();
-    let h = 0.5;
-    let gvi = enriched(6, 1.0, h).unwrap();
-    let traj = gvi.integrate(&kepler, 0.0, &q0, &p0, 400).unwrap();
-    let ang = |q: &[f64], p: &[f64]| q[0] * p[1] - q[1] * p[0];
-    let l0 = ang(&q0, &p0);
-    let drift = traj
-        .q
-        .iter()
-        .zip(&traj.p)
-        .fold(0.0f64, |m, (q, p)| m.max((ang(q, p) - l0).abs()));
-    let mut rk4 = Rk4::new(&kepler, h).unwrap();
-    let (qs, ps) = integrate_one_step(&mut rk4, &q0, &p0, 400).unwrap();
-    let rk4_drift = qs
-        .iter()
-        .zip(&ps)
-        .fold(0.0f64, |m, (q, p)| m.max((ang(q, p) - l0).abs()));
-    println!(
-        "angular momentum drift: enriched {drift:.1e}, RK4 {rk4_drift:.1e} ({})",
-        rk4.name()
-    );
+    let gvi = enriched(6, 1.0, 0.5).unwrap();
+    let (drift, rk4_drift) = enriched_checks::kepler_angular_momentum_drift(&gvi, 400);
+    println!("angular momentum drift: enriched {drift:.1e}, RK4 {rk4_drift:.1e}");
     assert!(drift < 1e-13, "enriched drift {drift:e}");
     assert!(rk4_drift > 1e-6, "RK4 should drift: {rk4_drift:e}");
 }

@@ -5,12 +5,11 @@
 //! Numbers quoted are measured with `cargo test --test integration enriched_frequencies:: --
 //! --nocapture` and are what docs/guide/enriched-bases.md reports.
 
+use crate::enriched_checks;
 use galerkin_vi::GalerkinIntegrator;
-use galerkin_vi::baselines::{Rk4, integrate_one_step};
 use galerkin_vi::basis::{Basis, ChebyshevLagrange, Enriched};
-use galerkin_vi::geometry::{finite_difference_jacobian, relative_symplecticity_defect};
 use galerkin_vi::quadrature::GaussLegendre;
-use galerkin_vi::systems::{Fpu, Kepler};
+use galerkin_vi::systems::Fpu;
 use galerkin_vi::{Lagrangian, Result};
 
 /// The chain of scene fpu-two-frequency: springs 1–2 at ω = 50, springs 3–4 at ω = 20, the
@@ -63,34 +62,8 @@ fn max_error<B: Basis, Q: galerkin_vi::quadrature::Quadrature, L: Lagrangian>(
 #[test]
 fn two_frequency_map_is_symplectic() {
     let (fpu, q0, p0) = two_block();
-    let h = 0.1;
-    let gvi = enriched(4, &[50.0, 20.0], h).unwrap();
-    let (mut q, mut p) = (q0.clone(), p0.clone());
-    let mut worst = 0.0f64;
-    for _ in 0..20 {
-        let jac = gvi.step_jacobian(&fpu, &q, &p).unwrap();
-        worst = worst.max(relative_symplecticity_defect(&jac.matrix));
-        q = jac.q_next;
-        p = jac.p_next;
-    }
-    let step = |q: &[f64], p: &[f64]| {
-        let t = gvi.integrate(&fpu, 0.0, q, p, 1).unwrap();
-        (t.q[1].clone(), t.p[1].clone())
-    };
-    let fd = finite_difference_jacobian(step, &q0, &p0, 1e-6);
-    let exact = gvi.step_jacobian(&fpu, &q0, &p0).unwrap().matrix;
-    let fd_error = (&fd - &exact).amax() / exact.amax();
-    let rk4 = finite_difference_jacobian(
-        |q, p| {
-            let mut m = Rk4::new(&fpu, 0.01).unwrap();
-            let (qs, ps) = integrate_one_step(&mut m, q, p, 1).unwrap();
-            (qs[1].clone(), ps[1].clone())
-        },
-        &q0,
-        &p0,
-        1e-6,
-    );
-    let rk4_defect = relative_symplecticity_defect(&rk4);
+    let gvi = enriched(4, &[50.0, 20.0], 0.1).unwrap();
+    let (worst, fd_error, rk4_defect) = enriched_checks::symplecticity(&gvi, &fpu, &q0, &p0, 0.01);
     println!(
         "two-frequency symplecticity defect {worst:.1e} (20 steps); FD vs exact {fd_error:.1e}; \
          RK4 (h = 0.01) {rk4_defect:.1e}"
@@ -105,24 +78,8 @@ fn two_frequency_map_is_symplectic() {
 /// round-off over 400 steps. Negative control: RK4 at the same h drifts.
 #[test]
 fn two_frequency_map_conserves_angular_momentum() {
-    let kepler = Kepler::new(1.0).unwrap();
-    let (q0, p0) = Kepler::paper_initial_state();
-    let h = 0.5;
-    let gvi = enriched(6, &[2.0, 5.0], h).unwrap();
-    let traj = gvi.integrate(&kepler, 0.0, &q0, &p0, 400).unwrap();
-    let ang = |q: &[f64], p: &[f64]| q[0] * p[1] - q[1] * p[0];
-    let l0 = ang(&q0, &p0);
-    let drift = traj
-        .q
-        .iter()
-        .zip(&traj.p)
-        .fold(0.0f64, |m, (q, p)| m.max((ang(q, p) - l0).abs()));
-    let mut rk4 = Rk4::new(&kepler, h).unwrap();
-    let (qs, ps) = integrate_one_step(&mut rk4, &q0, &p0, 400).unwrap();
-    let rk4_drift = qs
-        .iter()
-        .zip(&ps)
-        .fold(0.0f64, |m, (q, p)| m.max((ang(q, p) - l0).abs()));
+    let gvi = enriched(6, &[2.0, 5.0], 0.5).unwrap();
+    let (drift, rk4_drift) = enriched_checks::kepler_angular_momentum_drift(&gvi, 400);
     println!("angular momentum drift: two-frequency {drift:.1e}, RK4 {rk4_drift:.1e}");
     assert!(drift < 1e-13, "drift {drift:e}");
     assert!(rk4_drift > 1e-6, "RK4 should drift: {rk4_drift:e}");

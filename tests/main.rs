@@ -4,6 +4,8 @@
 
 #[path = "common/counting.rs"]
 mod counting;
+#[path = "common/enriched_checks.rs"]
+mod enriched_checks;
 #[path = "common/kepler_periapsis.rs"]
 mod kepler_periapsis;
 
