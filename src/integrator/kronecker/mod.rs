@@ -446,15 +446,41 @@ impl KroneckerWork {
             gemm(k, d, d, 1.0, x, rd, m, rd, 0.0, out, rd);
             return;
         }
-        let bb = b * b;
-        for (xr, or) in x.chunks_exact(d).zip(out.chunks_exact_mut(d)) {
-            for c in 0..d / b {
-                let blk = &m[c * bb..(c + 1) * bb];
-                let (xs, os) = (&xr[c * b..(c + 1) * b], &mut or[c * b..(c + 1) * b]);
+        match b {
+            // The N-body blocks (3-D and 2-D bodies): the block size a constant.
+            3 => Self::transform_blocks::<3>(d, m, k, x, out),
+            2 => Self::transform_blocks::<2>(d, m, k, x, out),
+            _ => {
+                let bb = b * b;
+                for (xr, or) in x.chunks_exact(d).zip(out.chunks_exact_mut(d)).take(k) {
+                    for c in 0..d / b {
+                        let blk = &m[c * bb..(c + 1) * bb];
+                        let (xs, os) = (&xr[c * b..(c + 1) * b], &mut or[c * b..(c + 1) * b]);
+                        for (j, o) in os.iter_mut().enumerate() {
+                            let mut s = 0.0;
+                            for (i, &xv) in xs.iter().enumerate() {
+                                s += xv * blk[i * b + j];
+                            }
+                            *o = s;
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// [`Self::transform`] for block diagonal m with B×B blocks, B a constant: each block's
+    /// product is straight-line code (through run-time loops over b = 3 it took 17
+    /// instructions per multiply–add on the outer solar system), every sum over i in order
+    /// from zero as there, so the same bits.
+    fn transform_blocks<const B: usize>(d: usize, m: &[f64], k: usize, x: &[f64], out: &mut [f64]) {
+        for (xr, or) in x.chunks_exact(d).zip(out.chunks_exact_mut(d)).take(k) {
+            let rows = xr.chunks_exact(B).zip(or.chunks_exact_mut(B));
+            for ((xs, os), blk) in rows.zip(m.chunks_exact(B * B)) {
                 for (j, o) in os.iter_mut().enumerate() {
                     let mut s = 0.0;
-                    for (i, &xv) in xs.iter().enumerate() {
-                        s += xv * blk[i * b + j];
+                    for i in 0..B {
+                        s += xs[i] * blk[i * B + j];
                     }
                     *o = s;
                 }

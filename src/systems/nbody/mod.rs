@@ -7,6 +7,8 @@ use crate::symmetries::{NamedMomentumMap, Rotation, Translation};
 use nalgebra::DMatrix;
 use num_dual::DualNum;
 
+mod pairwise;
+
 /// N point masses under Newtonian gravity,
 /// L = Σᵢ ½ mᵢ |q̇ᵢ|² + Σ_{i<j} G mᵢ mⱼ / |qᵢ − qⱼ|.
 ///
@@ -264,18 +266,11 @@ impl NBody {
     /// The diagonal k×k blocks of ∇²V(q), body after body (the same sums, in the same order,
     /// as the diagonal of [`Mechanical::potential_hessian`]).
     fn potential_hessian_diagonal_blocks(&self, q: &[f64], out: &mut [f64]) {
-        let k = self.dim;
-        let kk = k * k;
-        out.iter_mut().for_each(|y| *y = 0.0);
-        self.for_each_pair(q, |i, j, d, a, b| {
-            for r in 0..k {
-                for s in 0..k {
-                    let blk = pair_block_entry(d, a, b, r, s);
-                    out[i * kk + r * k + s] += blk;
-                    out[j * kk + r * k + s] += blk;
-                }
-            }
-        });
+        if self.dim == 2 {
+            pairwise::hessian_diagonal_blocks::<2>(self.g, &self.masses, q, out);
+        } else {
+            pairwise::hessian_diagonal_blocks::<3>(self.g, &self.masses, q, out);
+        }
     }
 }
 
@@ -312,19 +307,11 @@ impl Mechanical for NBody {
     }
 
     fn potential_gradient(&self, q: &[f64], out: &mut [f64]) {
-        let (k, nb) = (self.dim, self.masses.len());
-        out.iter_mut().for_each(|x| *x = 0.0);
-        let mut d = [0.0; 3];
-        for i in 0..nb {
-            for j in i + 1..nb {
-                // ∇_{qᵢ} (−G mᵢ mⱼ / r) = G mᵢ mⱼ (qᵢ − qⱼ) / r³ = −∇_{qⱼ}.
-                let r2 = self.separation(q, i, j, &mut d);
-                let f = self.g * self.masses[i] * self.masses[j] / (r2 * r2.sqrt());
-                for c in 0..k {
-                    out[i * k + c] += f * d[c];
-                    out[j * k + c] -= f * d[c];
-                }
-            }
+        // dim is 2 or 3 (the constructors check it): the pairwise sums with it a constant.
+        if self.dim == 2 {
+            pairwise::gradient::<2>(self.g, &self.masses, q, out);
+        } else {
+            pairwise::gradient::<3>(self.g, &self.masses, q, out);
         }
     }
 
