@@ -71,6 +71,35 @@ where
     states(GalerkinMethod::new(&gvi, sys)?, q0, p0, t)
 }
 
+/// The spring pendulum's two methods at step h from (q0, p0), both with the same n = 7: the
+/// max position errors of the enriched basis at the fixed rest frequency (p = 4) and of
+/// Chebyshev, against `reference` sampled every `every` (the (a) and (b) sweeps compare them
+/// alike).
+fn pendulum_errors(
+    sp: &SpringPendulum,
+    q0: &[f64],
+    p0: &[f64],
+    h: f64,
+    horizon: f64,
+    reference: &States,
+    every: f64,
+) -> (f64, f64) {
+    let enriched_run = galerkin(enriched(4, &[sp.omega()], h), sp, q0, p0, horizon);
+    let chebyshev_run = galerkin(chebyshev(7, h), sp, q0, p0, horizon);
+    (
+        max_error(enriched_run, h, reference, every),
+        max_error(chebyshev_run, h, reference, every),
+    )
+}
+
+/// Add the point (x, error) to an error curve of a log-log chart: a failed run (infinite
+/// error) has no point, and an exact zero is drawn at 1e-16 so the log axis can show it.
+fn push_error(curve: &mut Vec<(f64, f64)>, x: f64, error: f64) {
+    if error.is_finite() {
+        curve.push((x, error.max(1e-16)));
+    }
+}
+
 fn log_chart(
     title: &str,
     x: &str,
@@ -132,10 +161,8 @@ fn two_frequency_fpu() -> std::result::Result<(), Failure> {
             e[2],
             e[3]
         );
-        for (c, e) in curves.iter_mut().zip(&e) {
-            if e.is_finite() {
-                c.push((20.0 * h, e.max(1e-16)));
-            }
+        for (c, &e) in curves.iter_mut().zip(&e) {
+            push_error(c, 20.0 * h, e);
         }
     }
     let series = curves
@@ -168,25 +195,10 @@ fn spring_pendulum() -> std::result::Result<(), Failure> {
     );
     let (mut e_curve, mut c_curve) = (Vec::new(), Vec::new());
     for h in [0.01, 0.02, 0.04, 0.08, 0.16, 0.32] {
-        let e = max_error(
-            galerkin(enriched(4, &[omega], h), &sp, &q0, &p0, horizon),
-            h,
-            &reference,
-            every,
-        );
-        let c = max_error(
-            galerkin(chebyshev(7, h), &sp, &q0, &p0, horizon),
-            h,
-            &reference,
-            every,
-        );
+        let (e, c) = pendulum_errors(&sp, &q0, &p0, h, horizon, &reference, every);
         println!("{h:>6} {:>6} {e:>12.2e} {c:>12.2e}", omega * h);
-        if e.is_finite() {
-            e_curve.push((omega * h, e.max(1e-16)));
-        }
-        if c.is_finite() {
-            c_curve.push((omega * h, c.max(1e-16)));
-        }
+        push_error(&mut e_curve, omega * h, e);
+        push_error(&mut c_curve, omega * h, c);
     }
     log_chart(
         "Stiff spring pendulum (ω = 50, swing ±60°), T = 6.4, n = 7",
@@ -218,18 +230,7 @@ fn spring_pendulum() -> std::result::Result<(), Failure> {
                 (lo.min(w), hi.max(w))
             });
         for (curve, h) in ratio_curves.iter_mut().zip([0.04, 0.08]) {
-            let e = max_error(
-                galerkin(enriched(4, &[omega], h), &sp, &q0, &p0, horizon),
-                h,
-                &reference,
-                every,
-            );
-            let c = max_error(
-                galerkin(chebyshev(7, h), &sp, &q0, &p0, horizon),
-                h,
-                &reference,
-                every,
-            );
+            let (e, c) = pendulum_errors(&sp, &q0, &p0, h, horizon, &reference, every);
             println!(
                 "{spin:>5} {lo:>7.2}–{hi:<8.2} {:>6} {e:>12.2e} {c:>12.2e} {:>10.2e}",
                 omega * h,

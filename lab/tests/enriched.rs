@@ -3,26 +3,19 @@
 //! (docs/guide/enriched-bases.md).
 
 use crate::common::cli::gvi;
+use crate::common::scenes::{built, euclidean, invariants_along};
 use galerkin_vi::GviError;
 use galerkin_vi::basis::{Basis, BasisKind};
-use galerkin_vi::solve::solve;
 use galerkin_vi::systems::System;
 use galerkin_vi_lab::error::LabError;
-use galerkin_vi_lab::scene::{BuiltSystem, Overrides, Scene};
+use galerkin_vi_lab::scene::{Overrides, Scene};
 
 /// The `fpu` scene builds the book's chain and initial value with the enriched basis at
 /// ωh = 2; 500 steps (T = 20) keep the oscillatory energy I within the exact flow's own
 /// O(1/ω) excursion (0.062 over T = 200, measured against DOP853) of I(0) = 1.
 #[test]
 fn fpu_scene_runs_with_the_enriched_basis() {
-    let scene = Scene::load("fpu")
-        .unwrap()
-        .with_overrides(&Overrides {
-            steps: Some(500),
-            ..Overrides::default()
-        })
-        .build()
-        .unwrap();
+    let scene = built("fpu", Some(500));
     assert_eq!(
         (
             scene.method.basis,
@@ -31,17 +24,10 @@ fn fpu_scene_runs_with_the_enriched_basis() {
         ),
         (BasisKind::Enriched, Some(vec![50.0]), 7)
     );
-    let BuiltSystem::Euclidean(system) = &scene.system else {
-        panic!("fpu is Euclidean");
-    };
-    assert_eq!(system.name(), "fpu");
-    let solution = solve(system, &scene.initial, &scene.method).unwrap();
-    let traj = solution.trajectory;
-    let mut inv = vec![0.0; system.invariant_names().len()];
-    let worst = traj.q.iter().zip(&traj.p).fold(0.0f64, |m, (q, p)| {
-        system.invariants(q, p, &mut inv);
-        m.max((inv[1] - 1.0).abs())
-    });
+    assert_eq!(euclidean(&scene).name(), "fpu");
+    let worst = invariants_along(&scene)
+        .iter()
+        .fold(0.0f64, |m, inv| m.max((inv[1] - 1.0).abs()));
     assert!(worst < 0.07, "I deviates by {worst}");
     // The enriched integrator took at least its own Gauss count.
     let gvi = scene.method.integrator().unwrap();
@@ -149,34 +135,17 @@ fn command_line_selects_the_enriched_basis() {
 /// does not match the springs, and frequencies that cannot be told apart, are typed errors.
 #[test]
 fn several_frequencies_by_name_and_their_errors() {
-    let scene = Scene::load("fpu-two-frequency")
-        .unwrap()
-        .with_overrides(&Overrides {
-            steps: Some(48),
-            ..Overrides::default()
-        })
-        .build()
-        .unwrap();
+    let scene = built("fpu-two-frequency", Some(48));
     assert_eq!(
         (scene.method.omega.clone(), scene.method.n),
         (Some(vec![50.0, 20.0]), 9)
     );
     let gvi_built = scene.method.integrator().unwrap();
     assert_eq!(gvi_built.basis().len(), 9);
-    let BuiltSystem::Euclidean(system) = &scene.system else {
-        panic!("fpu-two-frequency is Euclidean");
-    };
-    let traj = solve(system, &scene.initial, &scene.method)
-        .unwrap()
-        .trajectory;
-    let mut inv = vec![0.0; system.invariant_names().len()];
-    system.invariants(&traj.q[0], &traj.p[0], &mut inv);
-    let (h0, i0) = (inv[0], inv[1]);
+    let inv = invariants_along(&scene);
+    let (h0, i0) = (inv[0][0], inv[0][1]);
     assert_eq!(i0, 2.0);
-    let worst = traj.q.iter().zip(&traj.p).fold(0.0f64, |m, (q, p)| {
-        system.invariants(q, p, &mut inv);
-        m.max((inv[0] - h0).abs())
-    });
+    let worst = inv.iter().fold(0.0f64, |m, i| m.max((i[0] - h0).abs()));
     // A symplectic map at ωh = 5 and 2: the energy error stays at round-off level (measured
     // 3.6e-12 over the scene's 200 steps, `gvi run fpu-two-frequency`).
     assert!(worst < 1e-9, "energy error {worst}");
@@ -229,20 +198,12 @@ fn several_frequencies_by_name_and_their_errors() {
 /// oscillatory energy near its initial 1/2, and the reported fast frequency sweeps above 50.
 #[test]
 fn spring_pendulum_scene_runs_with_the_enriched_basis() {
-    let scene = Scene::load("spring-pendulum").unwrap().build().unwrap();
-    let BuiltSystem::Euclidean(system) = &scene.system else {
-        panic!("spring-pendulum is Euclidean");
-    };
-    assert_eq!(system.name(), "spring-pendulum");
-    let traj = solve(system, &scene.initial, &scene.method)
-        .unwrap()
-        .trajectory;
-    let mut inv = vec![0.0; system.invariant_names().len()];
-    system.invariants(&traj.q[0], &traj.p[0], &mut inv);
-    let (h0, i0) = (inv[0], inv[1]);
+    let scene = built("spring-pendulum", None);
+    assert_eq!(euclidean(&scene).name(), "spring-pendulum");
+    let along = invariants_along(&scene);
+    let (h0, i0) = (along[0][0], along[0][1]);
     let (mut worst_h, mut worst_i, mut top) = (0.0f64, 0.0f64, 0.0f64);
-    for (q, p) in traj.q.iter().zip(&traj.p) {
-        system.invariants(q, p, &mut inv);
+    for inv in &along {
         worst_h = worst_h.max((inv[0] - h0).abs());
         worst_i = worst_i.max((inv[1] - i0).abs());
         top = top.max(inv[2]);

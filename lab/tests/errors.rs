@@ -1,8 +1,7 @@
 //! Every error variant of the core is reached through the API and through the CLI: typed
 //! errors, non-zero exit codes, a message on stderr, never a panic.
 
-use crate::common::cli;
-use cli::gvi;
+use crate::common::cli::{assert_clean_failure, gvi};
 use galerkin_vi::prelude::*;
 use galerkin_vi_lab::scene::Scene;
 
@@ -148,16 +147,6 @@ fn dense_output_outside_the_time_span_is_an_error() {
         traj.position_at(f64::NAN),
         Err(GviError::InvalidInput { .. })
     ));
-}
-
-fn assert_clean_failure(args: &[&str], needle: &str) {
-    let (code, _, err) = gvi(args);
-    assert_ne!(code, 0, "{args:?} should fail");
-    assert!(
-        err.contains(needle),
-        "{args:?}: stderr lacks {needle:?}:\n{err}"
-    );
-    assert!(!err.contains("panicked"), "{args:?} panicked:\n{err}");
 }
 
 #[test]

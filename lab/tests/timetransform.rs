@@ -2,7 +2,7 @@
 //! `pythagorean`, the `--time-transform` flag and its options, rows in physical time, the
 //! step-size chart, and typed errors for bad input.
 
-use crate::common::cli::gvi;
+use crate::common::cli::{assert_clean_failure, gvi};
 
 /// The CSV's header and rows.
 fn table(csv: &str) -> (Vec<String>, Vec<Vec<f64>>) {
@@ -137,47 +137,41 @@ fn pythagorean_scene_reaches_the_escape() {
 /// Bad input is a typed error with a message, never a panic or a silent default.
 #[test]
 fn bad_time_transform_input_is_refused() {
-    let refused = |args: &[&str], needle: &str| {
-        let (code, _, err) = gvi(args);
-        assert_ne!(code, 0, "{args:?} succeeded");
-        assert!(err.contains(needle), "{args:?}: {err}");
-        assert!(!err.contains("panicked"), "{args:?}: {err}");
-    };
-    refused(
+    assert_clean_failure(
         &["run", "kepler", "--time-transform", "warp"],
         "unknown 'warp'",
     );
-    refused(
+    assert_clean_failure(
         &["run", "kepler-e099", "--energy-level", "nan"],
         "energy E0",
     );
-    refused(&["run", "kepler-e099", "--alpha", "inf"], "alpha");
-    refused(&["run", "kepler-e099", "--every", "0"], "every");
-    refused(&["run", "kepler-e099", "--t-end", "-1"], "t_end");
-    refused(&["run", "kepler", "--alpha", "1"], "--alpha");
-    refused(&["run", "kepler", "--t-end", "10"], "--t-end");
-    refused(
+    assert_clean_failure(&["run", "kepler-e099", "--alpha", "inf"], "alpha");
+    assert_clean_failure(&["run", "kepler-e099", "--every", "0"], "every");
+    assert_clean_failure(&["run", "kepler-e099", "--t-end", "-1"], "t_end");
+    assert_clean_failure(&["run", "kepler", "--alpha", "1"], "--alpha");
+    assert_clean_failure(&["run", "kepler", "--t-end", "10"], "--t-end");
+    assert_clean_failure(
         &["run", "pythagorean", "--time-transform", "radius"],
         "Kepler",
     );
-    refused(
+    assert_clean_failure(
         &["run", "rigid-body", "--time-transform", "sundman"],
         "rigid body",
     );
-    refused(
+    assert_clean_failure(
         &["run", "henon-heiles", "--time-transform", "sundman"],
         "N-body",
     );
-    refused(&["run", "kepler-e099", "--tol", "1e-8"], "--tol");
+    assert_clean_failure(&["run", "kepler-e099", "--tol", "1e-8"], "--tol");
     // The commands that step in physical time refuse a time-transformed scene.
-    refused(&["check", "kepler-e099"], "only `gvi run`");
-    refused(
+    assert_clean_failure(&["check", "kepler-e099"], "only `gvi run`");
+    assert_clean_failure(
         &["section", "pythagorean", "--every", "1"],
         "only `gvi run`",
     );
     // Two bodies at one point: refused as a collision before the monitor (zero there) is
     // evaluated; the monitor's own error is src/time_transform/tests.rs's.
-    refused(&["run", "pythagorean", "--q0", "1,3,1,3,1,-1"], "collide");
+    assert_clean_failure(&["run", "pythagorean", "--q0", "1,3,1,3,1,-1"], "collide");
     // Not enough fictitious steps for t_end: an error, with the rows kept.
     let (code, out, err) = gvi(&["run", "kepler-e099", "--steps", "30"]);
     assert_ne!(code, 0);

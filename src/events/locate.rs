@@ -82,9 +82,8 @@ impl CurveProbe {
 }
 
 /// The root of g on [a, b] ⊂ [0, 1] (local times) given g(a) = ga and g(b) = gb of opposite
-/// signs (or one of them zero): Illinois regula falsi, stopped when the bracket is below
-/// `tau_tol` or g vanishes; at most 200 iterations (each halves the bracket's worst case
-/// within a few steps). Returns the local time, with the state there left in `probe`.
+/// signs (or one of them zero), by [`illinois`] to a bracket below `tau_tol`. Returns the local
+/// time, with the state there left in `probe`.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn refine<B: Basis + ?Sized, L: Lagrangian>(
     probe: &mut CurveProbe,
@@ -92,49 +91,73 @@ pub(crate) fn refine<B: Basis + ?Sized, L: Lagrangian>(
     basis: &B,
     lag: &L,
     g: &dyn EventFunction,
-    (mut a, mut ga): (f64, f64),
-    (mut b, mut gb): (f64, f64),
+    (a, ga): (f64, f64),
+    (b, gb): (f64, f64),
     tau_tol: f64,
 ) -> f64 {
-    if ga == 0.0 {
-        probe.value(curve, basis, lag, g, a);
+    // The iterate where g vanished, if the search stopped there: the probe already holds its
+    // state, and evaluating it again would count one evaluation too many
+    // (`EventRun::curve_evaluations`).
+    let mut zero_at = None;
+    let g_at = |x: f64| {
+        let gx = probe.value(curve, basis, lag, g, x);
+        if gx == 0.0 {
+            zero_at = Some(x);
+        }
+        gx
+    };
+    let x = illinois(g_at, (a, ga), (b, gb), tau_tol);
+    if zero_at != Some(x) {
+        probe.value(curve, basis, lag, g, x);
+    }
+    x
+}
+
+/// The root of f on [a, b] given f(a) = fa and f(b) = fb of opposite signs (or fa zero):
+/// Illinois regula falsi, stopped when the bracket is below `tol` or f vanishes; at most 200
+/// iterations (each halves the bracket's worst case within a few steps). Returns a when fa is
+/// zero, the iterate where f vanished, or else the final bracket's midpoint.
+///
+/// The one root finder of the crate's located times: the events on a step's curve
+/// ([`refine`]) and, on the curve's physical time t(τ), the output times, events and dense
+/// output of time-transformed runs (`time_transform::run`).
+pub(crate) fn illinois(
+    mut f: impl FnMut(f64) -> f64,
+    (mut a, mut fa): (f64, f64),
+    (mut b, mut fb): (f64, f64),
+    tol: f64,
+) -> f64 {
+    if fa == 0.0 {
         return a;
     }
     // Which end the last iterate replaced, to halve the other's weight when one end sticks.
     let mut side = 0i8;
-    let mut x = b;
     for _ in 0..200 {
-        if (b - a).abs() <= tau_tol {
+        if (b - a).abs() <= tol {
             break;
         }
-        x = (a * gb - b * ga) / (gb - ga);
+        let mut x = (a * fb - b * fa) / (fb - fa);
         if !(x > a.min(b) && x < a.max(b)) {
             x = 0.5 * (a + b);
         }
-        let gx = probe.value(curve, basis, lag, g, x);
-        if gx == 0.0 {
+        let fx = f(x);
+        if fx == 0.0 {
             return x;
         }
-        if (gx > 0.0) == (gb > 0.0) {
-            b = x;
-            gb = gx;
+        if (fx > 0.0) == (fb > 0.0) {
+            (b, fb) = (x, fx);
             if side == 1 {
-                ga *= 0.5;
+                fa *= 0.5;
             }
             side = 1;
         } else {
-            a = x;
-            ga = gx;
+            (a, fa) = (x, fx);
             if side == -1 {
-                gb *= 0.5;
+                fb *= 0.5;
             }
             side = -1;
         }
     }
     // The bracket is below the tolerance (or the iterations ran out): its midpoint.
-    if (b - a).abs() <= tau_tol {
-        x = 0.5 * (a + b);
-    }
-    probe.value(curve, basis, lag, g, x);
-    x
+    0.5 * (a + b)
 }

@@ -48,7 +48,9 @@ use crate::integrator::GalerkinIntegrator;
 use crate::lagrangian::Lagrangian;
 use crate::quadrature::Quadrature;
 use crate::trajectory::Trajectory;
-use locate::{CurveProbe, refine};
+use locate::refine;
+// The curve probe and the root finder serve the time-transformed runs too (`time_transform`).
+pub(crate) use locate::{CurveProbe, illinois};
 
 /// A function g(t, q, p) whose zeros are the events; implemented by closures
 /// `Fn(f64, &[f64], &[f64]) -> f64`.

@@ -7,7 +7,7 @@ use super::{Monitor, TimeTransformed};
 use crate::basis::Basis;
 use crate::curve::GalerkinCurveRef;
 use crate::error::{GviError, Result};
-use crate::events::{Crossing, Event, EventOptions};
+use crate::events::{Crossing, CurveProbe, Event, EventOptions, illinois};
 use crate::integrator::{GalerkinIntegrator, MAX_STEPS};
 use crate::lagrangian::Lagrangian;
 use crate::quadrature::Quadrature;
@@ -140,7 +140,7 @@ impl TimeTransformedRun {
         let (fa, fb) = (f(0.0), f(1.0));
         let tau = illinois(&mut f, (0.0, fa), (1.0, fb), 4.0 * f64::EPSILON);
         probe.state(&curve, gvi.basis(), tt, tau);
-        Ok((probe.q, probe.p))
+        Ok((probe.at.q, probe.at.p))
     }
 }
 
@@ -179,30 +179,24 @@ impl From<GviError> for TimeTransformFailure {
     }
 }
 
-/// Buffers for the state and the physical time on a curve.
+/// Buffers for the physical time on a curve (`clock`) and the state there (`at`: the event
+/// locator's probe, whose Legendre transform is then the time-transformed Lagrangian's,
+/// p = ∂L̃/∂q', the physical momentum; the time it passes is the fictitious s, which the
+/// autonomous L̃ does not read, so the state is the one the run's own buffers gave).
 struct Probe {
     clock: CurveClock,
-    phi: Vec<f64>,
-    dphi: Vec<f64>,
-    q: Vec<f64>,
-    v: Vec<f64>,
-    p: Vec<f64>,
+    at: CurveProbe,
 }
 
 impl Probe {
     fn new<B: Basis, Q: Quadrature>(gvi: &GalerkinIntegrator<B, Q>, d: usize) -> Self {
-        let n = gvi.n();
         Probe {
             clock: CurveClock::new(gvi, d),
-            phi: vec![0.0; n],
-            dphi: vec![0.0; n],
-            q: vec![0.0; d],
-            v: vec![0.0; d],
-            p: vec![0.0; d],
+            at: CurveProbe::new(gvi.n(), d),
         }
     }
 
-    /// (q, p) at local time τ into `self.q`, `self.p` (p = ∂L̃/∂q', the physical momentum).
+    /// (q, p) at local time τ into `self.at.q`, `self.at.p`.
     fn state<B: Basis + ?Sized, S: Lagrangian, M: Monitor>(
         &mut self,
         curve: &GalerkinCurveRef<'_>,
@@ -210,60 +204,8 @@ impl Probe {
         tt: &TimeTransformed<S, M>,
         tau: f64,
     ) {
-        curve.state_into(
-            basis,
-            tau,
-            &mut self.phi,
-            &mut self.dphi,
-            &mut self.q,
-            &mut self.v,
-        );
-        tt.legendre_transform(&self.q, &self.v, &mut self.p);
+        self.at.state(curve, basis, tt, tau);
     }
-}
-
-/// The root of f on [a, b] given f(a), f(b) of opposite signs (or one zero): Illinois regula
-/// falsi to a bracket below `tol` (at most 200 iterations), as `events` locates its zeros.
-fn illinois(
-    f: &mut impl FnMut(f64) -> f64,
-    (mut a, mut fa): (f64, f64),
-    (mut b, mut fb): (f64, f64),
-    tol: f64,
-) -> f64 {
-    if fa == 0.0 {
-        return a;
-    }
-    if fb == 0.0 {
-        return b;
-    }
-    let mut side = 0i8;
-    for _ in 0..200 {
-        if (b - a).abs() <= tol {
-            break;
-        }
-        let mut x = (a * fb - b * fa) / (fb - fa);
-        if !(x > a.min(b) && x < a.max(b)) {
-            x = 0.5 * (a + b);
-        }
-        let fx = f(x);
-        if fx == 0.0 {
-            return x;
-        }
-        if (fx > 0.0) == (fb > 0.0) {
-            (b, fb) = (x, fx);
-            if side == 1 {
-                fa *= 0.5;
-            }
-            side = 1;
-        } else {
-            (a, fa) = (x, fx);
-            if side == -1 {
-                fb *= 0.5;
-            }
-            side = -1;
-        }
-    }
-    0.5 * (a + b)
 }
 
 /// Integrate the time-transformed Lagrangian `tt` with `gvi` (step size = the fictitious
@@ -449,7 +391,7 @@ pub fn integrate_time_transformed_until<B: Basis, Q: Quadrature, S: Lagrangian, 
                 let t = t_a + clock.partial(&curve, basis, tt, tau);
                 probe.state(&curve, basis, tt, tau);
                 for (e, event) in events.iter().enumerate() {
-                    let g = event.evaluate(t, &probe.q, &probe.p);
+                    let g = event.evaluate(t, &probe.at.q, &probe.at.p);
                     if !g.is_finite() {
                         let error = GviError::NonFinite {
                             what: format!("event '{}' on step {step} at t = {t}", event.name()),
@@ -469,7 +411,7 @@ pub fn integrate_time_transformed_until<B: Basis, Q: Quadrature, S: Lagrangian, 
                     let mut f = |x: f64| {
                         let t = t_a + probe.clock.partial(&curve, basis, tt, x);
                         probe.state(&curve, basis, tt, x);
-                        event.evaluate(t, &probe.q, &probe.p)
+                        event.evaluate(t, &probe.at.q, &probe.at.p)
                     };
                     let root = illinois(&mut f, (tau_prev, ga), (tau, gb), tau_tol);
                     let t_root = t_a + probe.clock.partial(&curve, basis, tt, root);
@@ -481,8 +423,8 @@ pub fn integrate_time_transformed_until<B: Basis, Q: Quadrature, S: Lagrangian, 
                         event: e,
                         name: event.name().to_string(),
                         t: t_root,
-                        q: probe.q.clone(),
-                        p: probe.p.clone(),
+                        q: probe.at.q.clone(),
+                        p: probe.at.p.clone(),
                         step,
                         rising,
                     };
@@ -522,8 +464,8 @@ pub fn integrate_time_transformed_until<B: Basis, Q: Quadrature, S: Lagrangian, 
             let located = OutputState {
                 t: target,
                 s: curve.start_time() + tau * curve.h(),
-                q: probe.q.clone(),
-                p: probe.p.clone(),
+                q: probe.at.q.clone(),
+                p: probe.at.p.clone(),
                 step,
                 dt,
             };

@@ -15,3 +15,15 @@ pub fn gvi(args: &[&str]) -> (i32, String, String) {
         String::from_utf8_lossy(&out.stderr).into_owned(),
     )
 }
+
+/// Run `gvi ARGS` and require a clean refusal: a non-zero exit, `needle` in stderr, and no
+/// panic (a panic would also exit non-zero, so the status alone does not tell them apart).
+pub fn assert_clean_failure(args: &[&str], needle: &str) {
+    let (code, _, err) = gvi(args);
+    assert_ne!(code, 0, "{args:?} should fail");
+    assert!(
+        err.contains(needle),
+        "{args:?}: stderr lacks {needle:?}:\n{err}"
+    );
+    assert!(!err.contains("panicked"), "{args:?} panicked:\n{err}");
+}

@@ -4,6 +4,7 @@ pub mod adaptive;
 pub mod cli;
 pub mod distance;
 pub mod robust;
+pub mod scenes;
 pub mod systems;
 
 #[path = "../../../tests/common/counting.rs"]
