@@ -34,7 +34,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut last = None;
     for _ in 0..repeats {
         let start = Instant::now();
-        let run = run_peer(scene.euclidean()?, &scene.initial, peer, interval, divisor, 100)?;
+        let run = run_peer(
+            scene.euclidean()?,
+            &scene.initial,
+            peer,
+            interval,
+            divisor,
+            100,
+        )?;
         times.push(start.elapsed().as_secs_f64());
         last = Some(run);
     }

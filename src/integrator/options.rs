@@ -68,6 +68,10 @@ fn default_self_block_rate() -> f64 {
     super::self_blocks::FAST_RATE
 }
 
+fn default_velocity_self_block_rate() -> f64 {
+    super::self_blocks::VELOCITY_FAST_RATE
+}
+
 fn default_true() -> bool {
     true
 }
@@ -128,12 +132,23 @@ pub struct StructuredOptions {
     /// `f64::MAX` to turn it off. Concerns the nodal stage equations of systems with
     /// coordinate blocks only (N-body); the map does not change.
     pub self_block_rate: f64,
+    /// The same threshold for the frozen iteration of the velocity form (the default route of
+    /// separable systems, docs/solvers.md), whose exact self-blocks are those of its own
+    /// Newton matrix. Default 1: measured on the outer solar system (h = 912.5 d, Chebyshev
+    /// n = 10, 15 points: Jupiter alone, 31 % fewer force evaluations, 8.6 % fewer instructions)
+    /// and the J2000 10-body scene (h = 12.5 d, n = 10, 10 points: 27 % fewer force
+    /// evaluations, 11 % fewer instructions); at 0.5 more bodies are treated exactly and the
+    /// factorisations cost what the iterations save on the outer solar system. The map
+    /// does not change beyond round-off (the iteration stops at the same tolerance).
+    #[serde(default = "default_velocity_self_block_rate")]
+    pub velocity_self_block_rate: f64,
 }
 
 impl Default for StructuredOptions {
     fn default() -> Self {
         StructuredOptions {
             self_block_rate: default_self_block_rate(),
+            velocity_self_block_rate: default_velocity_self_block_rate(),
         }
     }
 }

@@ -16,6 +16,12 @@
 //! preconditioner). A block is treated exactly when h² max |μ| exceeds the rate
 //! (`StructuredOptions::self_block_rate`, default [`FAST_RATE`]), μ the eigenvalues of its frozen
 //! block relative to its mass; at most [`MAX_SELF_BLOCKS`] blocks, the fastest.
+//!
+//! The velocity form's frozen iteration ([`super::velocity`]) takes the same blocks of its own
+//! Newton matrix, A_c = I ⊗ M_cc/h + h Σ_j b_j ψ_j ι_jᵀ ⊗ H_j,cc ([`SelfBlocks::factor_velocity`]),
+//! above its own threshold ([`VELOCITY_FAST_RATE`]): at the large steps of the fastest
+//! configurations (the outer solar system at h = 912.5 d, where Jupiter turns through 76° in
+//! a step) the mean H̄ leaves out most of the variation of Jupiter's block over the step.
 
 use crate::linalg::{Lu, Strided, gemm};
 
@@ -23,6 +29,12 @@ use super::Tables;
 
 /// h² |μ| above which a block's exact self-block replaces the frozen one.
 pub(crate) const FAST_RATE: f64 = 4.0;
+
+/// The threshold of the velocity form's exact self-blocks
+/// ([`StructuredOptions::velocity_self_block_rate`]).
+///
+/// [`StructuredOptions::velocity_self_block_rate`]: super::StructuredOptions::velocity_self_block_rate
+pub(crate) const VELOCITY_FAST_RATE: f64 = 1.0;
 
 /// At most this many blocks get exact self-blocks (the fastest ones): it bounds the memory,
 /// ((n − 1) b)² per block, and the factorisations per freeze for large N.
@@ -59,6 +71,7 @@ impl SelfBlocks {
             0
         };
         let kb = k * b;
+        let pairs = b * (b + 1) / 2;
         SelfBlocks {
             b,
             k,
@@ -70,8 +83,18 @@ impl SelfBlocks {
             } else {
                 vec![]
             },
-            weighted: if blocks > 0 { vec![0.0; m * k] } else { vec![] },
-            gram: if blocks > 0 { vec![0.0; k * k] } else { vec![] },
+            // m×k and k×k for the nodal blocks; the velocity form's assembly takes the
+            // b(b+1)/2 entries of a symmetric block side by side.
+            weighted: if blocks > 0 {
+                vec![0.0; m * k * pairs]
+            } else {
+                vec![]
+            },
+            gram: if blocks > 0 {
+                vec![0.0; k * k * pairs]
+            } else {
+                vec![]
+            },
             saved: vec![0.0; blocks * kb],
             scratch: vec![0.0; kb],
         }
@@ -101,27 +124,8 @@ impl SelfBlocks {
         let (n, m) = (t.n, t.m);
         let d = mu.len();
         let kb = k * b;
-        let rate = |c: usize| {
-            mu[c * b..(c + 1) * b]
-                .iter()
-                .fold(0.0f64, |r, x| r.max(h * h * x.abs()))
-        };
-        // The fastest blocks above the threshold, at most as many as there are buffers, in
-        // the order of the coordinates.
+        let (rate, floor) = selection(b, self.rate, self.lus.len(), h, mu);
         let capacity = self.lus.len();
-        let mut floor = self.rate;
-        let fast_count = (0..d / b).filter(|&c| rate(c) > floor).count();
-        if fast_count > capacity {
-            // Raise the floor to the capacity-th largest rate (ties may leave fewer).
-            let mut above = fast_count;
-            while above > capacity {
-                floor = (0..d / b)
-                    .map(rate)
-                    .filter(|&r| r > floor)
-                    .fold(f64::INFINITY, f64::min);
-                above = (0..d / b).filter(|&c| rate(c) > floor).count();
-            }
-        }
         for c in 0..d / b {
             if rate(c) <= floor || self.active.len() == capacity {
                 continue;
@@ -188,6 +192,100 @@ impl SelfBlocks {
         }
     }
 
+    /// [`Self::factor`] for the velocity form ([`super::velocity`]): the exact self-block of
+    /// block c in the velocity modes,
+    ///
+    /// A_c = I_k ⊗ M_cc / h + h Σ_j b_j ψ_j ι_jᵀ ⊗ H_j,cc,
+    ///
+    /// (k b)²: the block of the velocity form's Newton matrix (`assemble_dense`) that couples
+    /// block c's modes to themselves, divided by h as the Kronecker solve's bracket is, with
+    /// the time-varying H_j instead of the frozen mean. `psi` and
+    /// `iota` are the m×k tables ψ_jb and ι_ja, `weights` the quadrature weights b_j.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn factor_velocity(
+        &mut self,
+        psi: &[f64],
+        iota: &[f64],
+        weights: &[f64],
+        h: f64,
+        mass: &[f64],
+        mu: &[f64],
+        node_entry: impl Fn(usize, usize, usize) -> f64,
+    ) {
+        self.active.clear();
+        let (b, k) = (self.b, self.k);
+        if self.lus.is_empty() {
+            return;
+        }
+        let (d, m, kb) = (mu.len(), weights.len(), k * b);
+        let pairs = b * (b + 1) / 2;
+        let (rate, floor) = selection(b, self.rate, self.lus.len(), h, mu);
+        let capacity = self.lus.len();
+        for c in 0..d / b {
+            if rate(c) <= floor || self.active.len() == capacity {
+                continue;
+            }
+            let o = c * b;
+            // H_j,cc is symmetric: its b(b+1)/2 entries r ≤ s, each weighted W_rs = h b_j H_j,rs ι_j
+            // (m×k) side by side, and all their Gram blocks ψᵀ W_rs (k×k) in one product.
+            let width = pairs * k;
+            for j in 0..m {
+                let iota_j = &iota[j * k..(j + 1) * k];
+                let row = &mut self.weighted[j * width..(j + 1) * width];
+                let mut p = 0;
+                for r in 0..b {
+                    for s in r..b {
+                        let w = h * weights[j] * node_entry(j, o + r, o + s);
+                        for (x, &y) in row[p * k..(p + 1) * k].iter_mut().zip(iota_j) {
+                            *x = w * y;
+                        }
+                        p += 1;
+                    }
+                }
+            }
+            let rw = Strided::rows(0, width);
+            let psi_t = Strided::transposed(k);
+            gemm(
+                k,
+                m,
+                width,
+                1.0,
+                psi,
+                psi_t,
+                &self.weighted,
+                rw,
+                0.0,
+                &mut self.gram,
+                rw,
+            );
+            for row in 0..k {
+                let gram = &self.gram[row * width..(row + 1) * width];
+                let mut p = 0;
+                for r in 0..b {
+                    for s in r..b {
+                        for a in 0..k {
+                            let v = gram[p * k + a];
+                            self.mat[(row * b + r) * kb + a * b + s] = v;
+                            self.mat[(row * b + s) * kb + a * b + r] = v;
+                        }
+                        p += 1;
+                    }
+                }
+            }
+            for a in 0..k {
+                for r in 0..b {
+                    for s in 0..b {
+                        self.mat[(a * b + r) * kb + a * b + s] += mass[(o + r) * d + o + s] / h;
+                    }
+                }
+            }
+            let slot = self.active.len();
+            if self.lus[slot].refactor(&self.mat).is_ok() {
+                self.active.push(c);
+            }
+        }
+    }
+
     /// Keep the right-hand side's entries of the active blocks (before the Kronecker solve
     /// overwrites them).
     pub(crate) fn save(&mut self, d: usize, rhs: &[f64]) {
@@ -213,4 +311,32 @@ impl SelfBlocks {
             }
         }
     }
+}
+
+/// The rate h² max |μ| of block c (b coordinates), and the floor a block's rate must exceed to
+/// get an exact self-block: the threshold, raised to the capacity-th largest rate when more
+/// blocks are above it than there are buffers (ties may leave fewer).
+fn selection(
+    b: usize,
+    threshold: f64,
+    capacity: usize,
+    h: f64,
+    mu: &[f64],
+) -> (impl Fn(usize) -> f64 + '_, f64) {
+    let rate = move |c: usize| {
+        mu[c * b..(c + 1) * b]
+            .iter()
+            .fold(0.0f64, |r, x| r.max(h * h * x.abs()))
+    };
+    let blocks = mu.len() / b;
+    let mut floor = threshold;
+    let mut above = (0..blocks).filter(|&c| rate(c) > floor).count();
+    while above > capacity {
+        floor = (0..blocks)
+            .map(rate)
+            .filter(|&r| r > floor)
+            .fold(f64::INFINITY, f64::min);
+        above = (0..blocks).filter(|&c| rate(c) > floor).count();
+    }
+    (rate, floor)
 }

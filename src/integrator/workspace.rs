@@ -169,7 +169,8 @@ impl Workspace {
         let substeps = gvi.options().predictor_substeps.unwrap_or(n.max(8));
         let velocity = match (&t.velocity, &separable) {
             (Some(vt), Some(sep)) => {
-                VelocityState::new(vt, d, sep.mass(), lagrangian.coordinate_blocks())
+                let rate = gvi.options().structured.velocity_self_block_rate;
+                VelocityState::new(vt, d, sep.mass(), lagrangian.coordinate_blocks(), rate)
             }
             _ => None,
         };

@@ -16,7 +16,7 @@ use super::equations::{DenseNewton, assemble_dense};
 use crate::basis::Basis;
 use crate::integrator::auto;
 use crate::integrator::dd::{max_abs, two_sum};
-use crate::integrator::kronecker::KroneckerWork;
+use crate::integrator::kronecker::{KroneckerWork, KroneckerWorkParts};
 use crate::integrator::linear::Linear;
 use crate::integrator::{GalerkinIntegrator, InitialGuess, StepStats, Workspace};
 use crate::lagrangian::Lagrangian;
@@ -111,13 +111,15 @@ impl VelocityState {
     }
 
     /// Buffers for `vt`, D coordinates and mass matrix `mass` (coordinate blocks as
-    /// `Lagrangian::coordinate_blocks`); `None` without a Schur form of the velocity pencil or
+    /// `Lagrangian::coordinate_blocks`, exact self-blocks above `self_block_rate`:
+    /// `StructuredOptions::velocity_self_block_rate`); `None` without a Schur form of the velocity pencil or
     /// with a mass matrix that is not symmetric positive definite.
     pub(crate) fn new(
         vt: &VelocityTables,
         d: usize,
         mass: &[f64],
         blocks: Option<usize>,
+        self_block_rate: f64,
     ) -> Option<Self> {
         let size = vt.k * d;
         Some(VelocityState {
@@ -126,7 +128,14 @@ impl VelocityState {
             prev: vec![0.0; size],
             has_prev: false,
             delta: vec![0.0; size],
-            kron: KroneckerWork::new(vt.kron.as_ref()?, d, mass, blocks, 0, f64::MAX)?,
+            kron: KroneckerWork::new(
+                vt.kron.as_ref()?,
+                d,
+                mass,
+                blocks,
+                vt.iota.len() / vt.k.max(1),
+                self_block_rate,
+            )?,
             dense: (size <= auto::DENSE_SIZE || (d <= 3 && size <= VELOCITY_DENSE_SMALL_D)).then(
                 || DenseNewton {
                     jac: vec![0.0; size * size],
@@ -301,6 +310,31 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> NewtonIteration for VelocityNewton<
                         gvi.mean_force_jacobian(lag, &mut ws.stage, &mut vs.kron);
                     if vs.kron.factor(kt, h).is_err() {
                         return Err(fail("singular frozen matrix"));
+                    }
+                    // The fast bodies' exact self-blocks beside the frozen mean (none below
+                    // `StructuredOptions::velocity_self_block_rate`), from the node Jacobians
+                    // the mean was taken from.
+                    if let Some(sep) = ws.separable.as_ref() {
+                        let (d, b) = (vs.kron.dim(), vs.kron.block());
+                        let stage = &ws.stage;
+                        let full = stage.node_jacobians_current();
+                        let KroneckerWorkParts { exact, mu } = vs.kron.parts();
+                        let weights = &gvi.tables().weights;
+                        exact.factor_velocity(
+                            &vt.psi,
+                            &vt.iota,
+                            weights,
+                            h,
+                            sep.mass(),
+                            mu,
+                            |j, r, s| {
+                                if full {
+                                    stage.hall[j * d * d + r * d + s]
+                                } else {
+                                    stage.hblocks[j * d * b + (r / b) * b * b + (r % b) * b + s % b]
+                                }
+                            },
+                        );
                     }
                 }
             }

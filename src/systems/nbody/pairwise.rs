@@ -46,9 +46,8 @@ pub(super) fn hessian_diagonal_blocks<const K: usize>(
     for i in 0..nb {
         let qi: [f64; K] = std::array::from_fn(|c| q[i * K + c]);
         let base = i * K * K;
-        let mut bi: [[f64; K]; K] = std::array::from_fn(|r| {
-            std::array::from_fn(|s| out[base + r * K + s])
-        });
+        let mut bi: [[f64; K]; K] =
+            std::array::from_fn(|r| std::array::from_fn(|s| out[base + r * K + s]));
         let gmi = g * masses[i];
         for j in i + 1..nb {
             let qj = &q[j * K..j * K + K];
