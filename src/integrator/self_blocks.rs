@@ -40,6 +40,15 @@ pub(crate) const VELOCITY_FAST_RATE: f64 = 1.0;
 /// ((n − 1) b)² per block, and the factorisations per freeze for large N.
 pub(crate) const MAX_SELF_BLOCKS: usize = 8;
 
+/// Assembly scratch of the self-blocks: A_c ((k b)²), the weighted node values and the Gram
+/// blocks (m×k and k×k per distinct entry of a b×b block).
+#[derive(Debug, Clone)]
+struct Assembly {
+    mat: Vec<f64>,
+    weighted: Vec<f64>,
+    gram: Vec<f64>,
+}
+
 /// The exact self-blocks of one workspace (allocated once, for at most [`MAX_SELF_BLOCKS`]).
 #[derive(Debug, Clone)]
 pub(crate) struct SelfBlocks {
@@ -49,10 +58,8 @@ pub(crate) struct SelfBlocks {
     /// The block indices with an exact self-block (at most [`MAX_SELF_BLOCKS`]).
     active: Vec<usize>,
     lus: Vec<Lu>,
-    /// Assembly scratch: A_c ((kb)²), the weighted node values (m×k) and one Gram block (k×k).
-    mat: Vec<f64>,
-    weighted: Vec<f64>,
-    gram: Vec<f64>,
+    /// Assembly scratch of the blocks being factorised.
+    assembly: Assembly,
     /// The right-hand sides of the active blocks (kb each) and a solve scratch (kb).
     saved: Vec<f64>,
     scratch: Vec<f64>,
@@ -78,22 +85,24 @@ impl SelfBlocks {
             rate,
             active: Vec::with_capacity(blocks),
             lus: (0..blocks).map(|_| Lu::with_capacity(kb)).collect(),
-            mat: if blocks > 0 {
-                vec![0.0; kb * kb]
-            } else {
-                vec![]
-            },
-            // m×k and k×k for the nodal blocks; the velocity form's assembly takes the
-            // b(b+1)/2 entries of a symmetric block side by side.
-            weighted: if blocks > 0 {
-                vec![0.0; m * k * pairs]
-            } else {
-                vec![]
-            },
-            gram: if blocks > 0 {
-                vec![0.0; k * k * pairs]
-            } else {
-                vec![]
+            assembly: Assembly {
+                mat: if blocks > 0 {
+                    vec![0.0; kb * kb]
+                } else {
+                    vec![]
+                },
+                // m×k and k×k for the nodal blocks; the velocity form's assembly takes the
+                // b(b+1)/2 entries of a symmetric block side by side.
+                weighted: if blocks > 0 {
+                    vec![0.0; m * k * pairs]
+                } else {
+                    vec![]
+                },
+                gram: if blocks > 0 {
+                    vec![0.0; k * k * pairs]
+                } else {
+                    vec![]
+                },
             },
             saved: vec![0.0; blocks * kb],
             scratch: vec![0.0; kb],
@@ -116,20 +125,11 @@ impl SelfBlocks {
         mu: &[f64],
         node_entry: impl Fn(usize, usize, usize) -> f64,
     ) {
-        self.active.clear();
         let (b, k) = (self.b, self.k);
-        if self.lus.is_empty() {
-            return;
-        }
         let (n, m) = (t.n, t.m);
         let d = mu.len();
         let kb = k * b;
-        let (rate, floor) = selection(b, self.rate, self.lus.len(), h, mu);
-        let capacity = self.lus.len();
-        for c in 0..d / b {
-            if rate(c) <= floor || self.active.len() == capacity {
-                continue;
-            }
+        self.factor_selected(h, mu, |c, asm| {
             let o = c * b;
             // Kinetic part (1/h) K_s ⊗ M_cc.
             for a in 0..k {
@@ -137,8 +137,7 @@ impl SelfBlocks {
                     let kin = t.kinetic[a * n + e + 1] / h;
                     for r in 0..b {
                         for s in 0..b {
-                            self.mat[(a * b + r) * kb + e * b + s] =
-                                kin * mass[(o + r) * d + o + s];
+                            asm.mat[(a * b + r) * kb + e * b + s] = kin * mass[(o + r) * d + o + s];
                         }
                     }
                 }
@@ -149,7 +148,7 @@ impl SelfBlocks {
                     for j in 0..m {
                         let w = h * t.weights[j] * node_entry(j, o + r, o + s);
                         for e in 0..k {
-                            self.weighted[j * k + e] = w * t.phi[j * n + e + 1];
+                            asm.weighted[j * k + e] = w * t.phi[j * n + e + 1];
                         }
                     }
                     let phi_t = Strided::transposed(n);
@@ -161,15 +160,15 @@ impl SelfBlocks {
                         1.0,
                         &t.phi,
                         phi_t,
-                        &self.weighted,
+                        &asm.weighted,
                         rk,
                         0.0,
-                        &mut self.gram,
+                        &mut asm.gram,
                         rk,
                     );
                     for a in 0..k {
                         for e in 0..k {
-                            self.mat[(a * b + r) * kb + e * b + s] += self.gram[a * k + e];
+                            asm.mat[(a * b + r) * kb + e * b + s] += asm.gram[a * k + e];
                         }
                     }
                 }
@@ -178,18 +177,14 @@ impl SelfBlocks {
             for a in 1..k {
                 let u = t.unit[a];
                 if u != 0.0 {
-                    let (first, rest) = self.mat.split_at_mut(b * kb);
+                    let (first, rest) = asm.mat.split_at_mut(b * kb);
                     let block = &rest[(a - 1) * b * kb..a * b * kb];
                     for (f, x) in first.iter_mut().zip(block) {
                         *f += u * x;
                     }
                 }
             }
-            let slot = self.active.len();
-            if self.lus[slot].refactor(&self.mat).is_ok() {
-                self.active.push(c);
-            }
-        }
+        });
     }
 
     /// [`Self::factor`] for the velocity form ([`super::velocity`]): the exact self-block of
@@ -212,26 +207,17 @@ impl SelfBlocks {
         mu: &[f64],
         node_entry: impl Fn(usize, usize, usize) -> f64,
     ) {
-        self.active.clear();
         let (b, k) = (self.b, self.k);
-        if self.lus.is_empty() {
-            return;
-        }
         let (d, m, kb) = (mu.len(), weights.len(), k * b);
         let pairs = b * (b + 1) / 2;
-        let (rate, floor) = selection(b, self.rate, self.lus.len(), h, mu);
-        let capacity = self.lus.len();
-        for c in 0..d / b {
-            if rate(c) <= floor || self.active.len() == capacity {
-                continue;
-            }
+        self.factor_selected(h, mu, |c, asm| {
             let o = c * b;
             // H_j,cc is symmetric: its b(b+1)/2 entries r ≤ s, each weighted W_rs = h b_j H_j,rs ι_j
             // (m×k) side by side, and all their Gram blocks ψᵀ W_rs (k×k) in one product.
             let width = pairs * k;
             for j in 0..m {
                 let iota_j = &iota[j * k..(j + 1) * k];
-                let row = &mut self.weighted[j * width..(j + 1) * width];
+                let row = &mut asm.weighted[j * width..(j + 1) * width];
                 let mut p = 0;
                 for r in 0..b {
                     for s in r..b {
@@ -252,21 +238,21 @@ impl SelfBlocks {
                 1.0,
                 psi,
                 psi_t,
-                &self.weighted,
+                &asm.weighted,
                 rw,
                 0.0,
-                &mut self.gram,
+                &mut asm.gram,
                 rw,
             );
             for row in 0..k {
-                let gram = &self.gram[row * width..(row + 1) * width];
+                let gram = &asm.gram[row * width..(row + 1) * width];
                 let mut p = 0;
                 for r in 0..b {
                     for s in r..b {
                         for a in 0..k {
                             let v = gram[p * k + a];
-                            self.mat[(row * b + r) * kb + a * b + s] = v;
-                            self.mat[(row * b + s) * kb + a * b + r] = v;
+                            asm.mat[(row * b + r) * kb + a * b + s] = v;
+                            asm.mat[(row * b + s) * kb + a * b + r] = v;
                         }
                         p += 1;
                     }
@@ -275,12 +261,34 @@ impl SelfBlocks {
             for a in 0..k {
                 for r in 0..b {
                     for s in 0..b {
-                        self.mat[(a * b + r) * kb + a * b + s] += mass[(o + r) * d + o + s] / h;
+                        asm.mat[(a * b + r) * kb + a * b + s] += mass[(o + r) * d + o + s] / h;
                     }
                 }
             }
+        });
+    }
+
+    /// Assemble (`assemble(c, scratch)` into `scratch.mat`) and factorise the exact self-blocks
+    /// of the blocks [`selection`] picks from the frozen eigenvalues `mu`, in the order of the
+    /// coordinates; a singular block keeps the frozen solve.
+    fn factor_selected(
+        &mut self,
+        h: f64,
+        mu: &[f64],
+        mut assemble: impl FnMut(usize, &mut Assembly),
+    ) {
+        self.active.clear();
+        if self.lus.is_empty() {
+            return;
+        }
+        let (rate, floor) = selection(self.b, self.rate, self.lus.len(), h, mu);
+        for c in 0..mu.len() / self.b {
+            if rate(c) <= floor || self.active.len() == self.lus.len() {
+                continue;
+            }
+            assemble(c, &mut self.assembly);
             let slot = self.active.len();
-            if self.lus[slot].refactor(&self.mat).is_ok() {
+            if self.lus[slot].refactor(&self.assembly.mat).is_ok() {
                 self.active.push(c);
             }
         }
