@@ -9,7 +9,9 @@
 //!
 //! - **converged** when the correction is below `tolerance` relative to the unknowns' scale;
 //!   or, for quadratically converging solves, when the contraction estimate θ = |δ_k|/|δ_{k−1}|
-//!   bounds the remaining error, θ/(1 − θ)|δ| ≤ tolerance (θ below `estimate_below`); or at
+//!   bounds the remaining error, θ/(1 − θ)|δ| ≤ tolerance (θ below `estimate_below`; for a
+//!   problem that applies one more correction when it finishes, the error left after that
+//!   one, θ²/(1 − θ)|δ| ≤ `final_correction`); or at
 //!   the round-off floor, when the correction no longer shrinks (θ above `floor_theta`, or it
 //!   grew) but is below `floor` relative to the scale; or when the residual itself is below
 //!   `residual_tolerance`;
@@ -53,6 +55,12 @@ pub struct Termination {
     pub floor: f64,
     /// See [`floor`](Self::floor).
     pub floor_theta: f64,
+    /// For a problem whose [`finish`](NewtonIteration::finish) applies one more correction
+    /// (from the residual at the solution, contracting by θ like the others): the estimate
+    /// test bounds the error left *after* that correction instead, θ²/(1 − θ)·|δ| ≤
+    /// `final_correction` · scale (θ below `estimate_below`); `None`: the test on the error
+    /// before it, θ/(1 − θ)·|δ| ≤ `tolerance` · scale.
+    pub final_correction: Option<f64>,
     /// Converged as soon as the residual is at most this (before any correction).
     pub residual_tolerance: Option<f64>,
     /// Fail when the iteration diverges.
@@ -76,6 +84,7 @@ impl Termination {
             estimate_below,
             floor,
             floor_theta,
+            final_correction: None,
             residual_tolerance: None,
             divergence: None,
         }
@@ -90,9 +99,15 @@ impl Termination {
         }
         if let Some(below) = self.estimate_below
             && theta < below
-            && theta / (1.0 - theta) * delta <= tol
         {
-            return Some(ConvergedBy::Estimate);
+            let left = theta / (1.0 - theta) * delta;
+            let done = match self.final_correction {
+                Some(after) => theta * left <= after * scale,
+                None => left <= tol,
+            };
+            if done {
+                return Some(ConvergedBy::Estimate);
+            }
         }
         let stopped = progress.growing || (theta.is_finite() && theta > self.floor_theta);
         if stopped && delta <= self.floor * scale {
