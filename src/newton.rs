@@ -9,9 +9,7 @@
 //!
 //! - **converged** when the correction is below `tolerance` relative to the unknowns' scale;
 //!   or, for quadratically converging solves, when the contraction estimate θ = |δ_k|/|δ_{k−1}|
-//!   bounds the remaining error, θ/(1 − θ)|δ| ≤ tolerance (θ below `estimate_below`; for a
-//!   problem that applies one more correction when it finishes, also when the error left
-//!   after that one is small, θ²/(1 − θ)|δ| ≤ `final_correction`); or at
+//!   bounds the remaining error, θ/(1 − θ)|δ| ≤ tolerance (θ below `estimate_below`); or at
 //!   the round-off floor, when the correction no longer shrinks (θ above `floor_theta`, or it
 //!   grew) but is below `floor` relative to the scale; or when the residual itself is below
 //!   `residual_tolerance`;
@@ -55,12 +53,6 @@ pub struct Termination {
     pub floor: f64,
     /// See [`floor`](Self::floor).
     pub floor_theta: f64,
-    /// For a problem whose [`finish`](NewtonIteration::finish) applies one more correction
-    /// (from the residual at the solution, contracting by θ like the others): the estimate
-    /// test also converges when the error left *after* that correction is small enough,
-    /// θ²/(1 − θ)·|δ| ≤ `final_correction` · scale (θ below `estimate_below`). `None`: only
-    /// the test on the error before it, θ/(1 − θ)·|δ| ≤ `tolerance` · scale.
-    pub final_correction: Option<f64>,
     /// Converged as soon as the residual is at most this (before any correction).
     pub residual_tolerance: Option<f64>,
     /// Fail when the iteration diverges.
@@ -84,7 +76,6 @@ impl Termination {
             estimate_below,
             floor,
             floor_theta,
-            final_correction: None,
             residual_tolerance: None,
             divergence: None,
         }
@@ -99,13 +90,9 @@ impl Termination {
         }
         if let Some(below) = self.estimate_below
             && theta < below
+            && theta / (1.0 - theta) * delta <= tol
         {
-            let left = theta / (1.0 - theta) * delta;
-            let after = self.final_correction.map(|f| f * scale);
-            let done = left <= tol || after.is_some_and(|after| theta * left <= after);
-            if done {
-                return Some(ConvergedBy::Estimate);
-            }
+            return Some(ConvergedBy::Estimate);
         }
         let stopped = progress.growing || (theta.is_finite() && theta > self.floor_theta);
         if stopped && delta <= self.floor * scale {

@@ -39,22 +39,6 @@ const VELOCITY_STALL: f64 = 0.5;
 /// the predictor too often (+13 % time); 1e-3 costs +4 % and had no such step.
 const EXTRAPOLATION_TRUST: f64 = 1e-3;
 
-/// The frozen-Hessian iteration also stops when the error estimated to be left after the final
-/// correction (`finish`: the residual at the solution, needed for the impulse, corrected once
-/// more) is at most this times the tolerance, relative to the modes: θ²/(1 − θ)·|δ| ≤
-/// 1e-2 · 1e-16 · max|c| (`Termination::final_correction`), besides the test on the error
-/// before it, θ/(1 − θ)·|δ| ≤ 1e-16 · max|c|, which leaves θ · 1e-16 after it: far below
-/// round-off where the frozen matrix contracts fast (θ ≈ 1e-4 near Kepler's apoapsis). Measured
-/// on Kepler e = 0.6, n = 13, h = 0.4, 500 steps: 3.40 instead of 3.61 iterations per step;
-/// same maps within 6.1e-14 (`scripts/same-maps.sh`, 296 of 344 cases bit-identical); over
-/// eight realisations of n = 20, h = 0.5, 40 000 steps the energy error stays a walk of mixed
-/// sign (max |ΔE| median 2.0e-14, before 3.1e-14). The new test alone (without the old one)
-/// saved as much but moved 30-step Kepler trajectories at h = 1 by up to 7.8e-13: where θ is
-/// large it stops later than the old test and leaves a smaller remainder than the base did.
-/// A bound at the tolerance itself (3.02 iterations) would let the remainder reach the level
-/// that drifted before the final correction was added (docs/solvers.md, "Long runs").
-const VELOCITY_FINAL_REMAINDER: f64 = 1e-2;
-
 /// Relative increment below which an iteration that stops contracting is at the round-off
 /// floor of its residual (converged, not stalled).
 const VELOCITY_FLOOR: f64 = 1e-13;
@@ -257,23 +241,17 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> VelocityNewton<'_, B, Q, L> {
     /// Newton's own rate here, the Newton matrix being M plus an O(h²) term).
     fn termination(&self) -> Termination {
         let opts = self.gvi.options();
-        let (floor, final_correction) = match self.linear {
-            Linear::Frozen => (
-                VELOCITY_FLOOR,
-                Some(VELOCITY_FINAL_REMAINDER * opts.tolerance),
-            ),
-            Linear::Dense | Linear::Krylov => (opts.floor_tolerance, None),
+        let floor = match self.linear {
+            Linear::Frozen => VELOCITY_FLOOR,
+            Linear::Dense | Linear::Krylov => opts.floor_tolerance,
         };
-        Termination {
-            final_correction,
-            ..Termination::new(
-                opts.max_iterations,
-                opts.tolerance,
-                Some(VELOCITY_STALL),
-                floor,
-                VELOCITY_STALL,
-            )
-        }
+        Termination::new(
+            opts.max_iterations,
+            opts.tolerance,
+            Some(VELOCITY_STALL),
+            floor,
+            VELOCITY_STALL,
+        )
     }
 }
 
