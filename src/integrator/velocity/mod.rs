@@ -312,3 +312,41 @@ impl VelocityTables {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::linalg::{Strided, gemm};
+
+    /// `panel_times` gives `gemm`'s bits (β = 0) for every D it takes and both shapes of the
+    /// step (fewer and more rows than inner terms), and declines what it cannot take.
+    #[test]
+    fn panel_times_is_gemm_bit_for_bit() {
+        for (rows, inner) in [(12usize, 12usize), (13, 12), (12, 13), (1, 16)] {
+            let a: Vec<f64> = (0..rows * inner)
+                .map(|i| ((i * 37 % 101) as f64 / 7.0).sin())
+                .collect();
+            let cols = panel_columns(&a, rows, inner);
+            for d in 1..=4 {
+                let x: Vec<f64> = (0..inner * d)
+                    .map(|i| ((i * 13 % 29) as f64 / 3.0).cos())
+                    .collect();
+                for alpha in [1.0, 0.4, 1.0 / 0.4] {
+                    let mut panel = vec![f64::NAN; rows * d];
+                    assert!(panel_times(&cols, &x, inner, rows, d, alpha, &mut panel));
+                    let mut plain = vec![0.0; rows * d];
+                    let (ra, rd) = (Strided::rows(0, inner), Strided::rows(0, d));
+                    gemm(rows, inner, d, alpha, &a, ra, &x, rd, 0.0, &mut plain, rd);
+                    for (p, g) in panel.iter().zip(&plain) {
+                        assert!(p.to_bits() == g.to_bits() || (*p == 0.0 && *g == 0.0));
+                    }
+                }
+            }
+            let mut out = vec![0.0; rows * 5];
+            let x = vec![1.0; inner * 5];
+            assert!(!panel_times(&cols, &x, inner, rows, 5, 1.0, &mut out));
+        }
+        assert!(panel_columns(&[0.0; 17], 17, 1).is_empty());
+        assert!(!panel_times(&[], &[1.0], 1, 1, 1, 1.0, &mut [0.0]));
+    }
+}
