@@ -3,7 +3,7 @@
 //! double-double, the dense exact Newton matrix, and the converged modes written back as the
 //! basis's coefficients, the impulse and the state the next step extrapolates from.
 
-use super::VelocityTables;
+use super::{VelocityTables, panel_times};
 use crate::basis::Basis;
 use crate::integrator::dd::{dd_acc, dd_acc_columns, two_sum};
 use crate::integrator::separable::Separable;
@@ -41,19 +41,21 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         {
             let rk = Strided::rows(0, k);
             let rd = Strided::rows(0, d);
-            gemm(
-                k,
-                k,
-                d,
-                1.0,
-                &vt.extrapolate,
-                rk,
-                &vs.prev,
-                rd,
-                0.0,
-                &mut vs.c,
-                rd,
-            );
+            if !panel_times(&vt.extrapolate_cols, &vs.prev, k, k, d, 1.0, &mut vs.c) {
+                gemm(
+                    k,
+                    k,
+                    d,
+                    1.0,
+                    &vt.extrapolate,
+                    rk,
+                    &vs.prev,
+                    rd,
+                    0.0,
+                    &mut vs.c,
+                    rd,
+                );
+            }
             return InitialGuess::Extrapolate;
         }
         let predicted = self.make_guess(lag, ws, InitialGuess::Predictor, q, p);
@@ -62,19 +64,22 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         };
         if predicted {
             let (rn, rd) = (Strided::rows(0, n), Strided::rows(0, d));
-            gemm(
-                k,
-                n,
-                d,
-                1.0 / h,
-                &vt.from_basis,
-                rn,
-                ws.guess.candidate(),
-                rd,
-                0.0,
-                &mut vs.c,
-                rd,
-            );
+            let cand = ws.guess.candidate();
+            if !panel_times(&vt.from_basis_cols, cand, n, k, d, 1.0 / h, &mut vs.c) {
+                gemm(
+                    k,
+                    n,
+                    d,
+                    1.0 / h,
+                    &vt.from_basis,
+                    rn,
+                    cand,
+                    rd,
+                    0.0,
+                    &mut vs.c,
+                    rd,
+                );
+            }
             if vs.c.iter().all(|x| x.is_finite()) {
                 return InitialGuess::Predictor;
             }
@@ -289,7 +294,9 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         };
         let (rk, rd) = (Strided::rows(0, k), Strided::rows(0, d));
         let (increments, last_lo) = ws.iterate.increments_and_last_lo_mut();
-        gemm(n, k, d, h, &vt.to_basis, rk, &vs.c, rd, 0.0, increments, rd);
+        if !panel_times(&vt.to_basis_cols, &vs.c, k, n, d, h, increments) {
+            gemm(n, k, d, h, &vt.to_basis, rk, &vs.c, rd, 0.0, increments, rd);
+        }
         let last = (n - 1) * d;
         for r in 0..d {
             let c0 = vs.c[r];
