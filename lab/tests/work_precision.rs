@@ -294,10 +294,11 @@ fn kepler_error(points: usize, n: usize) -> (f64, usize) {
 
 /// Kepler e = 0.6, T = 200, Legendre n = 12, h = 0.5 (the speed guide's table: ⌈3n/2⌉ points
 /// keep the 2n accuracy there). The study's economical row is as accurate as the paper row
-/// (measured: 8.1349e-8 against 8.1353e-8, a relative difference of 5e-5; asserted within
-/// 1 %) at 0.843× the force evaluations (47 406 against 56 232). Not 0.75×: the count
-/// includes the RK4 predictor's force evaluations (20 928, 52.3 per step, independent of the
-/// quadrature), while the quadrature-point evaluations scale exactly as 18/24 (asserted). Negative
+/// (measured: 8.1348e-8 against 8.1353e-8, a relative difference of 7e-5; asserted within
+/// 1 %) at 0.774× the force evaluations (52 020 against 67 200). Not 0.75×: the count
+/// includes the RK4 predictor's force evaluations (about 6 480, independent of the
+/// quadrature), while the quadrature-point evaluations scale nearly as 18/24 (asserted to 1 %;
+/// before the velocity form's fixed-point start: 0.843×, 47 406 against 56 232). Negative
 /// control: with m = n = 12 points the error is 3.53e-7, 4.33× the paper's, and fails the
 /// same 1 % test.
 #[test]
@@ -336,17 +337,19 @@ fn economical_quadrature_keeps_the_accuracy_at_fewer_force_evaluations() {
         (paper.force_evaluations, econ.force_evaluations)
     );
     assert!((e24 / paper.error - 1.0).abs() < 1e-6 && (e18 / econ.error - 1.0).abs() < 1e-6);
-    // Why 0.843 and not 0.75: the count is c + k·m, linear in the points m (equal
-    // differences over m = 12, 18, 24, 30), with k·m exactly 18/24 between the two rules
-    // and c (the RK4 predictor, measured 20 928 = 52.3 per step) the same for both.
+    // Why not 0.75: the count is c + k·m, nearly linear in the points m, with c (the RK4
+    // predictor's evaluations) the same for both rules. Since the velocity form's fixed-point
+    // start the iterations depend a little on the rule (its contraction is set by the rule's
+    // C), so the differences over m = 12, 18, 24, 30 agree to 1 %, not exactly (with the frozen
+    // Hessian alone they were equal).
     let (e12, f12) = kepler_error(12, 12);
     let (_, f30) = kepler_error(30, 12);
-    assert_eq!(f18 - f12, f24 - f18);
-    assert_eq!(f30 - f24, f24 - f18);
+    eprintln!("evaluations at m = 12, 18, 24, 30: {f12} {f18} {f24} {f30}");
+    let near = |a: usize, b: usize| (a as f64 - b as f64).abs() <= 0.01 * b as f64;
+    assert!(near(f18 - f12, f24 - f18) && near(f30 - f24, f24 - f18));
     let k = (f24 - f18) / 6;
     let c = f24 - 24 * k;
-    eprintln!("evaluations = {c} + {k}·m");
-    assert_eq!(f18 - c, (f24 - c) / 4 * 3);
+    eprintln!("evaluations ≈ {c} + {k}·m");
     assert!(c > 0);
     // Negative control: n points lose the accuracy, and the 1 % test catches it.
     eprintln!(

@@ -95,6 +95,9 @@ pub(crate) struct AutoState {
     pub velocity_gives_up: Escalation,
     /// The velocity form's frozen Hessian stalled into its dense matrix: start with it.
     pub velocity_dense: Escalation,
+    /// The velocity form's fixed-point iterations handed over to the frozen Hessian: start
+    /// with it.
+    pub velocity_frozen: Escalation,
 }
 
 impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {

@@ -72,6 +72,10 @@ fn default_velocity_self_block_rate() -> f64 {
     super::self_blocks::VELOCITY_FAST_RATE
 }
 
+fn default_velocity_fixed_point_handover() -> f64 {
+    super::velocity::FIXED_POINT_HANDOVER
+}
+
 fn default_true() -> bool {
     true
 }
@@ -142,6 +146,20 @@ pub struct StructuredOptions {
     /// does not change beyond round-off (the iteration stops at the same tolerance).
     #[serde(default = "default_velocity_self_block_rate")]
     pub velocity_self_block_rate: f64,
+    /// The velocity form starts each step with fixed-point iterations — its Newton matrix
+    /// without the force term, I ⊗ M: no force Jacobian, no factorisation, a correction that
+    /// costs a division — and hands the step over to the frozen Hessian when they contract by
+    /// less than this per iteration. The fixed-point iteration contracts at about
+    /// h² ρ(C) max|M⁻¹H|, ρ(C) = 5.9e-3 at n = 10 (docs/solvers.md), which is small at the
+    /// step sizes of the spectral method's n-refinement. Two hand-overs within 8 steps start
+    /// the next 32 with the frozen Hessian. Default 0.5, measured in instructions against 0.05,
+    /// 0.1, 0.2, 0.3, 0.7 and 0.9 (Kepler e = 0.6 at h = 0.4, n = 13: the higher the better up
+    /// to 0.5, then within 2 %; the N-body configurations of issue 35: flat from 0.1). 0 turns
+    /// the fixed-point start off (every step starts with the frozen Hessian, as before this
+    /// option). The map does not change beyond round-off (the iteration stops at the same
+    /// tolerance).
+    #[serde(default = "default_velocity_fixed_point_handover")]
+    pub velocity_fixed_point_handover: f64,
 }
 
 impl Default for StructuredOptions {
@@ -149,6 +167,7 @@ impl Default for StructuredOptions {
         StructuredOptions {
             self_block_rate: default_self_block_rate(),
             velocity_self_block_rate: default_velocity_self_block_rate(),
+            velocity_fixed_point_handover: default_velocity_fixed_point_handover(),
         }
     }
 }

@@ -38,7 +38,7 @@
 mod equations;
 mod solve;
 
-pub(crate) use solve::VelocityState;
+pub(crate) use solve::{FIXED_POINT_HANDOVER, VelocityState};
 
 use crate::integrator::Tables;
 use crate::integrator::kronecker::KroneckerTables;

@@ -1,8 +1,15 @@
 //! Newton's method on the stage equations in the velocity form ([`super`];
 //! the equations themselves are in [`super::equations`]).
 //!
-//! Each step freezes the force Jacobian at H̄ (the quadrature-weighted mean over the curve of
-//! the initial guess) and iterates with the Kronecker solve of I ⊗ M + h² C ⊗ H̄: the Newton
+//! Each step starts with fixed-point iterations: the Newton matrix without its force term,
+//! I ⊗ M, whose correction is M⁻¹(−F) — no force Jacobian, no factorisation. They contract at
+//! about h² ρ(C) max|M⁻¹H| (C the velocity pencil's matrix below), which at the step sizes
+//! of the spectral method is small: ρ(C) = 5.9e-3 at n = 10, 4.1e-3 at n = 12. Where they
+//! contract by less than [`FIXED_POINT_HANDOVER`] (`StructuredOptions::
+//! velocity_fixed_point_handover`), the step continues with the frozen Hessian below.
+//!
+//! The frozen-Hessian iteration freezes the force Jacobian at H̄ (the quadrature-weighted mean
+//! over the curve of the initial guess) and iterates with the Kronecker solve of I ⊗ M + h² C ⊗ H̄: the Newton
 //! matrix is the mass matrix plus an O(h²) term, so the frozen matrix contracts fast wherever
 //! the force Jacobian varies little over a step. Where it does not (θ > 0.5), H̄ is refrozen
 //! once at the current iterate, then small systems continue with the dense exact matrix of the
@@ -18,6 +25,7 @@ use crate::integrator::auto;
 use crate::integrator::dd::{max_abs, two_sum};
 use crate::integrator::kronecker::{KroneckerWork, KroneckerWorkParts};
 use crate::integrator::linear::Linear;
+use crate::integrator::separable::Separable;
 use crate::integrator::{GalerkinIntegrator, InitialGuess, StepStats, Workspace};
 use crate::lagrangian::Lagrangian;
 use crate::linalg::Lu;
@@ -38,6 +46,11 @@ const VELOCITY_STALL: f64 = 0.5;
 /// one step stopped at its noise floor with an angular-momentum error of 2e-15; 1e-6 tries
 /// the predictor too often (+13 % time); 1e-3 costs +4 % and had no such step.
 const EXTRAPOLATION_TRUST: f64 = 1e-3;
+
+/// Contraction per iteration above which the fixed-point start hands the step over to the
+/// frozen Hessian (the default of `StructuredOptions::velocity_fixed_point_handover`, where
+/// the measurements are).
+pub(crate) const FIXED_POINT_HANDOVER: f64 = 0.5;
 
 /// Relative increment below which an iteration that stops contracting is at the round-off
 /// floor of its residual (converged, not stalled).
@@ -68,6 +81,11 @@ pub(crate) struct VelocityState {
     pub(super) has_prev: bool,
     /// −F, then the Newton correction (k×D).
     pub(super) delta: Vec<f64>,
+    /// The step's guess, kept while the fixed-point iterations run: a hand-over after they
+    /// diverged starts the frozen Hessian from it.
+    start: Vec<f64>,
+    /// Scratch for M⁻¹ of a non-diagonal mass matrix (D).
+    mass_scratch: Vec<f64>,
     /// The frozen-Hessian Kronecker solve of I ⊗ M + h² C ⊗ H̄.
     kron: KroneckerWork,
     /// The exact Newton matrix, dense, for steps where the frozen Hessian stalls (small
@@ -82,18 +100,27 @@ impl VelocityState {
         self.has_prev = false;
     }
 
-    /// One correction δ = J⁻¹(−F) from the residual in `delta` (left there) with the frozen
-    /// Kronecker matrix or the dense exact one, c ← c + δ with c_0 compensated (TwoSum into
-    /// its low part).
+    /// One correction δ = J⁻¹(−F) from the residual in `delta` (left there) with the mass
+    /// matrix alone (`fixed_point`: the fixed-point iteration), the frozen Kronecker matrix or
+    /// the dense exact one, c ← c + δ with c_0 compensated (TwoSum into its low part).
     fn correct(
         &mut self,
         linear: Linear,
+        fixed_point: Option<&Separable>,
         kt: &crate::integrator::kronecker::KroneckerTables,
         h: f64,
         d: usize,
     ) {
-        match (linear, self.dense.as_mut()) {
-            (Linear::Dense, Some(dn)) => dn.lu.solve_in_place(&mut self.delta, &mut dn.scratch),
+        match (linear, fixed_point, self.dense.as_mut()) {
+            (_, Some(sep), _) => {
+                // J̃ = I ⊗ M: each mode's correction M⁻¹(−F_b).
+                for row in self.delta.chunks_exact_mut(d) {
+                    sep.solve_mass(row, &mut self.mass_scratch);
+                }
+            }
+            (Linear::Dense, None, Some(dn)) => {
+                dn.lu.solve_in_place(&mut self.delta, &mut dn.scratch)
+            }
             _ => {
                 // J̃ = h (I ⊗ M/h + h C ⊗ H̄): the Kronecker solve of the bracket.
                 self.delta.iter_mut().for_each(|x| *x /= h);
@@ -128,6 +155,8 @@ impl VelocityState {
             prev: vec![0.0; size],
             has_prev: false,
             delta: vec![0.0; size],
+            start: vec![0.0; size],
+            mass_scratch: vec![0.0; d],
             kron: KroneckerWork::new(
                 vt.kron.as_ref()?,
                 d,
@@ -196,6 +225,16 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         // dense matrix for the steps after two stalls of the frozen Hessian.
         let start_dense = ws.velocity.as_ref().is_some_and(|v| v.dense.is_some())
             && ws.auto.velocity_dense.holding();
+        // The fixed-point start, unless it is off, the step starts dense, or it handed over
+        // twice within the last few steps (then the frozen Hessian starts, for a while).
+        let handover = self.options().structured.velocity_fixed_point_handover;
+        let fixed_point = handover > 0.0
+            && ws.separable.is_some()
+            && !start_dense
+            && !ws.auto.velocity_frozen.holding();
+        if fixed_point && let Some(vs) = ws.velocity.as_mut() {
+            vs.start.copy_from_slice(&vs.c);
+        }
         let mut iteration = VelocityNewton {
             gvi: self,
             lag,
@@ -210,6 +249,8 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             } else {
                 Linear::Frozen
             },
+            fixed_point,
+            handover,
             factored: false,
             fresh: false,
             refrozen: false,
@@ -233,6 +274,10 @@ struct VelocityNewton<'a, B: Basis, Q: Quadrature, L: Lagrangian> {
     initial_residual: f64,
     /// The step started with the dense matrix (`Auto`'s memory; not recorded again).
     start_dense: bool,
+    /// The iteration is the fixed-point one (J̃ = I ⊗ M) …
+    fixed_point: bool,
+    /// … until it contracts by less than this.
+    handover: f64,
     linear: Linear,
     /// The current linear solve's matrix belongs to this step …
     factored: bool,
@@ -251,6 +296,10 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> VelocityNewton<'_, B, Q, L> {
     fn termination(&self) -> Termination {
         let opts = self.gvi.options();
         let floor = match self.linear {
+            // No floor for the fixed-point iteration: one that stops contracting hands the step
+            // over to the frozen Hessian (`adapt`) rather than stopping where it stands (at
+            // θ > 0.5 the error left is at least the last increment).
+            Linear::Frozen if self.fixed_point => 0.0,
             Linear::Frozen => VELOCITY_FLOOR,
             Linear::Dense | Linear::Krylov => opts.floor_tolerance,
         };
@@ -291,6 +340,14 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> NewtonIteration for VelocityNewton<
         let (Some(vs), Some(kt)) = (ws.velocity.as_mut(), vt.kron.as_ref()) else {
             return Err(fail("no velocity form"));
         };
+        if self.fixed_point {
+            let sep = ws.separable.as_ref();
+            vs.correct(self.linear, sep, kt, h, ws.d);
+            self.stats.iterations += 1;
+            let delta = max_abs(&vs.delta);
+            let scale = max_abs(&vs.c).max(f64::MIN_POSITIVE);
+            return Ok((Correction { size: delta, scale }, self.termination()));
+        }
         if !self.factored {
             // At this iterate: the step's guess, or where the iteration stalled.
             self.stats.factorizations += 1;
@@ -342,7 +399,7 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> NewtonIteration for VelocityNewton<
             self.fresh = true;
         }
         let d = ws.d;
-        vs.correct(self.linear, kt, h, d);
+        vs.correct(self.linear, None, kt, h, d);
         self.stats.iterations += 1;
         let delta = max_abs(&vs.delta);
         let scale = max_abs(&vs.c).max(f64::MIN_POSITIVE);
@@ -355,6 +412,23 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> NewtonIteration for VelocityNewton<
         let has_dense = self.ws.velocity.as_ref().is_some_and(|v| v.dense.is_some());
         let opts = self.gvi.options();
         let fresh = std::mem::replace(&mut self.fresh, false);
+        if self.fixed_point {
+            if !(theta.is_finite() && theta > self.handover) {
+                return Adapt::Continue;
+            }
+            // Too slow for the fixed-point iteration: the frozen Hessian from here — or from
+            // the step's guess, if the fixed-point iterations moved away from it.
+            self.fixed_point = false;
+            self.stats.fallbacks += 1;
+            self.ws.auto.velocity_frozen.failure();
+            if theta >= 1.0
+                && let Some(vs) = self.ws.velocity.as_mut()
+            {
+                vs.c.copy_from_slice(&vs.start);
+                vs.c0_lo.iter_mut().for_each(|x| *x = 0.0);
+            }
+            return Adapt::Restart;
+        }
         match self.linear {
             Linear::Frozen if stalled && !self.refrozen => {
                 self.factored = false;
@@ -393,8 +467,15 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> NewtonIteration for VelocityNewton<
         self.stats.residual = gvi.velocity_residual(self.lag, self.ws, vt, self.p);
         self.stats.gradient_evaluations += gvi.tables().m;
         let (h, d) = (gvi.step_size(), self.ws.d);
+        let fixed_point = self
+            .fixed_point
+            .then_some(())
+            .and(self.ws.separable.as_ref());
         if let (Some(vs), Some(kt)) = (self.ws.velocity.as_mut(), vt.kron.as_ref()) {
-            vs.correct(self.linear, kt, h, d);
+            vs.correct(self.linear, fixed_point, kt, h, d);
+        }
+        if self.fixed_point {
+            self.ws.auto.velocity_frozen.calm_solve();
         }
         if !self.start_dense {
             if self.linear == Linear::Dense {
