@@ -1,5 +1,5 @@
 //! Profile harness for issue 35: the fastest Galerkin configuration at 1e-9 on Kepler T = 200
-//! (n = 13, h = 0.4, 13 Gauss points; the work-precision study's row) beside DOP853 at the
+//! (n = 12, h = 1/3, 12 Gauss points; the work-precision study's row, 2026-11-26) beside DOP853 at the
 //! tolerance that reaches 1e-9 there, both through the study's own sampled runner.
 //!
 //!     cargo run --release -p galerkin-vi-lab --example kepler_fastest [galerkin|dop853|both] [REPEATS]
@@ -15,7 +15,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let scene = Scene::load("kepler")?.build()?;
     let galerkin = Peer::Galerkin {
         basis: BasisKind::Legendre,
-        n: 13,
+        n: 12,
         points: QuadPoints::Compact,
     };
     let dop = Peer::Dop853 {
@@ -23,7 +23,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let mut peers = Vec::new();
     if which != "dop853" {
-        peers.push(("galerkin n=13 h=0.4 m=13", galerkin, 5));
+        peers.push(("galerkin n=12 h=1/3 m=12", galerkin, 6));
     }
     if which != "galerkin" {
         peers.push(("dop853 tol=10^-13.5", dop, 1));
