@@ -263,27 +263,25 @@ const LANES: usize = 8;
 /// cut into blocks of [`ROWS`] × [`LANES`] entries held in registers over the whole k-loop
 /// (the i-k-j loop instead loads and stores its row of C at every k, a chain through memory
 /// that bounds it by latency: the GMRES products of the 10-body step spent 41 % there). The
-/// last block of a row overlaps the one before it when [`LANES`] does not divide n, and only
-/// its new columns are stored. Every entry sees the operations of the i-k-j loop in the same
-/// order — the β-scaled C, then α·a_ik·b_kj for k ascending, a zero α·a_ik skipped — so the
-/// results are the same bits.
+/// t = n mod [`LANES`] columns left over take a block of 1, 2 or 4 lanes (t ≤ 4; D = 18, an
+/// outer-solar-system state, is 8 + 8 + 2) or one of [`LANES`] that overlaps the block before
+/// it, of which only the new columns are stored. Every entry sees the operations of the i-k-j
+/// loop in the same order — the β-scaled C, then α·a_ik·b_kj for k ascending, a zero α·a_ik
+/// skipped — so the results are the same bits.
 fn wide(args: ThinArgs<'_>, n: usize, c: &mut [f64], sc: Strided) {
     let m = args.0;
-    // Column blocks: LANES apart, the last one ending at column n, each with the lanes the
-    // block before it already covers (the overlap, not stored again).
     let full = n - n % LANES;
-    let last = (full < n).then(|| (n - LANES, full - (n - LANES)));
-    let mut blocks = (0..full).step_by(LANES).map(|j0| (j0, 0)).chain(last);
+    let mut blocks = (0..full).step_by(LANES);
     let blocked_rows = m - m % ROWS;
     // Four rows × one column block, or one row × four column blocks: four independent sums
     // in flight either way (one sum alone is bound by the latency of its additions).
-    let mut group = [(0, 0); ROWS];
+    let mut group = [0; ROWS];
     loop {
         let mut len = 0;
         for slot in group.iter_mut() {
             match blocks.next() {
-                Some(b) => {
-                    *slot = b;
+                Some(j0) => {
+                    *slot = j0;
                     len += 1;
                 }
                 None => break,
@@ -292,24 +290,48 @@ fn wide(args: ThinArgs<'_>, n: usize, c: &mut [f64], sc: Strided) {
         if len == 0 {
             break;
         }
-        for &block in &group[..len] {
+        for &j0 in &group[..len] {
             for i in (0..blocked_rows).step_by(ROWS) {
-                wide_block::<ROWS, 1>(args, i, [block], c, sc);
+                wide_block::<ROWS, 1, LANES>(args, i, [(j0, 0)], c, sc);
             }
         }
         for i in blocked_rows..m {
+            let b = |g: usize| (group[g], 0);
             match len {
-                4 => wide_block::<1, 4>(args, i, [group[0], group[1], group[2], group[3]], c, sc),
-                3 => wide_block::<1, 3>(args, i, [group[0], group[1], group[2]], c, sc),
-                2 => wide_block::<1, 2>(args, i, [group[0], group[1]], c, sc),
-                _ => wide_block::<1, 1>(args, i, [group[0]], c, sc),
+                4 => wide_block::<1, 4, LANES>(args, i, [b(0), b(1), b(2), b(3)], c, sc),
+                3 => wide_block::<1, 3, LANES>(args, i, [b(0), b(1), b(2)], c, sc),
+                2 => wide_block::<1, 2, LANES>(args, i, [b(0), b(1)], c, sc),
+                _ => wide_block::<1, 1, LANES>(args, i, [b(0)], c, sc),
             }
         }
     }
+    match n - full {
+        0 => {}
+        1 => wide_tail::<1>(args, n, c, sc),
+        2 => wide_tail::<2>(args, n, c, sc),
+        3 | 4 => wide_tail::<4>(args, n, c, sc),
+        _ => wide_tail::<LANES>(args, n, c, sc),
+    }
 }
 
-/// [`wide`] on rows i … i + R − 1 and G column blocks (start, lanes to skip when storing).
-fn wide_block<const R: usize, const G: usize>(
+/// The last t ≤ L columns of C with blocks of L lanes ending at column n (L ≤ n), storing only
+/// the t columns [`wide`]'s full blocks left.
+fn wide_tail<const L: usize>(args: ThinArgs<'_>, n: usize, c: &mut [f64], sc: Strided) {
+    let m = args.0;
+    let block = (n - L, L - n % LANES);
+    let blocked_rows = m - m % ROWS;
+    for i in (0..blocked_rows).step_by(ROWS) {
+        wide_block::<ROWS, 1, L>(args, i, [block], c, sc);
+    }
+    for i in blocked_rows..m {
+        wide_block::<1, 1, L>(args, i, [block], c, sc);
+    }
+}
+
+/// [`wide`] on rows i … i + R − 1 and G column blocks of L lanes (start, lanes to skip when
+/// storing).
+#[inline(always)]
+fn wide_block<const R: usize, const G: usize, const L: usize>(
     args: ThinArgs<'_>,
     i: usize,
     blocks: [(usize, usize); G],
@@ -317,11 +339,11 @@ fn wide_block<const R: usize, const G: usize>(
     sc: Strided,
 ) {
     let (_, k, alpha, a, sa, b, sb, beta) = args;
-    let mut acc = [[[0.0f64; LANES]; G]; R];
+    let mut acc = [[[0.0f64; L]; G]; R];
     for (r, acc) in acc.iter_mut().enumerate() {
         for (acc, &(j0, _)) in acc.iter_mut().zip(&blocks) {
             let c0 = sc.offset + (i + r) * sc.row_stride + j0;
-            for (x, &cij) in acc.iter_mut().zip(&c[c0..c0 + LANES]) {
+            for (x, &cij) in acc.iter_mut().zip(&c[c0..c0 + L]) {
                 *x = scaled_start(beta, cij);
             }
         }
@@ -334,8 +356,8 @@ fn wide_block<const R: usize, const G: usize>(
                 continue;
             }
             for (acc, &(j0, _)) in acc.iter_mut().zip(&blocks) {
-                let br = &b[o + j0..o + j0 + LANES];
-                for l in 0..LANES {
+                let br = &b[o + j0..o + j0 + L];
+                for l in 0..L {
                     acc[l] += aik * br[l];
                 }
             }
@@ -344,7 +366,7 @@ fn wide_block<const R: usize, const G: usize>(
     for (r, acc) in acc.iter().enumerate() {
         for (acc, &(j0, skip)) in acc.iter().zip(&blocks) {
             let c0 = sc.offset + (i + r) * sc.row_stride + j0;
-            c[c0 + skip..c0 + LANES].copy_from_slice(&acc[skip..]);
+            c[c0 + skip..c0 + L].copy_from_slice(&acc[skip..]);
         }
     }
 }
@@ -446,6 +468,11 @@ mod gemm_tests {
             (24, 50, 30),
             (1, 30, 30),
             (2, 7, 41),
+            (10, 9, 18),
+            (15, 9, 17),
+            (9, 10, 20),
+            (5, 9, 27),
+            (10, 9, 16),
         ] {
             let a: Vec<f64> = (0..m * k)
                 .map(|x| {
