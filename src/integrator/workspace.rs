@@ -170,7 +170,7 @@ impl Workspace {
         let velocity = match (&t.velocity, &separable) {
             (Some(vt), Some(sep)) => {
                 let rate = gvi.options().structured.velocity_self_block_rate;
-                VelocityState::new(vt, d, sep.mass(), lagrangian.coordinate_blocks(), rate)
+                VelocityState::new(vt, d, sep, lagrangian.coordinate_blocks(), rate)
             }
             _ => None,
         };

@@ -60,6 +60,18 @@ impl Mechanical for Kepler {
         out[0] = k * q[0];
         out[1] = k * q[1];
     }
+    /// The same arithmetic as [`Self::potential_gradient`], point by point with the two
+    /// coordinates fixed, so that the square roots and divisions of several points run side by
+    /// side in vector lanes (the same bits: each is correctly rounded in either form). The
+    /// default's per-point calls were 10 % of issue 35's fastest Kepler run.
+    fn potential_gradient_at_points(&self, q: &[f64], out: &mut [f64]) {
+        for (qj, oj) in q.chunks_exact(2).zip(out.chunks_exact_mut(2)) {
+            let r2 = qj[0] * qj[0] + qj[1] * qj[1];
+            let k = self.mu / (r2 * r2.sqrt());
+            oj[0] = k * qj[0];
+            oj[1] = k * qj[1];
+        }
+    }
     fn potential_hessian(&self, q: &[f64], out: &mut [f64]) {
         // ∇²V = μ (I/r³ − 3 q qᵀ/r⁵)
         let r2 = q[0] * q[0] + q[1] * q[1];

@@ -212,7 +212,14 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 }
             }
         }
-        close_rows(sep, &vs.c, &mut vs.delta, |r| hi[r] + lo[r], D)
+        close_rows(
+            sep,
+            vs.mass_tiled.as_deref(),
+            &vs.c,
+            &mut vs.delta,
+            |r| hi[r] + lo[r],
+            D,
+        )
     }
 
     /// [`Self::velocity_residual`] for any D, through the strided products.
@@ -280,7 +287,14 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             ws.stage.dd_lo[r0..r0 + w_lanes].copy_from_slice(&lo[..w_lanes]);
         }
         let (dd_hi, dd_lo) = (&ws.stage.dd_hi, &ws.stage.dd_lo);
-        close_rows(sep, &vs.c, &mut vs.delta, |r| dd_hi[r] + dd_lo[r], d)
+        close_rows(
+            sep,
+            vs.mass_tiled.as_deref(),
+            &vs.c,
+            &mut vs.delta,
+            |r| dd_hi[r] + dd_lo[r],
+            d,
+        )
     }
 
     /// The converged modes as the nodal solve leaves its result: increments ΔQ_i = h Σ_a B_ia
@@ -366,33 +380,43 @@ fn momentum_row(
 
 /// −F into `delta` (k×D): row 0 the momentum row `row0(r)`, rows b ≥ 1 M c_b plus the
 /// projections already in `delta`; returns max |F| (∞ if an entry is not finite).
+///
+/// With a diagonal M (`tiled`: its diagonal repeated for every mode) rows b ≥ 1 are one flat
+/// loop over their (k − 1)·D entries, which vectorises; the same products and sums as the
+/// row-by-row form below.
 fn close_rows(
     sep: &Separable,
+    tiled: Option<&[f64]>,
     c: &[f64],
     delta: &mut [f64],
     row0: impl Fn(usize) -> f64,
     d: usize,
 ) -> f64 {
-    let mut norm = 0.0f64;
-    for (b, (delta, c)) in delta.chunks_exact_mut(d).zip(c.chunks_exact(d)).enumerate() {
-        for r in 0..d {
-            let f = if b == 0 {
-                row0(r)
-            } else {
-                let mc = match sep.mass_diagonal() {
-                    Some(diag) => diag[r] * c[r],
-                    None => (0..d).map(|s| sep.mass()[r * d + s] * c[s]).sum(),
-                };
-                mc + delta[r]
-            };
-            delta[r] = -f;
-            norm = norm.max(f.abs());
-            if !f.is_finite() {
-                norm = f64::INFINITY;
+    let (mut norm, mut finite) = (0.0f64, true);
+    let mut close = |x: &mut f64, f: f64| {
+        *x = -f;
+        norm = norm.max(f.abs());
+        finite &= f.is_finite();
+    };
+    for (r, x) in delta[..d].iter_mut().enumerate() {
+        close(x, row0(r));
+    }
+    match tiled {
+        Some(tiled) => {
+            for ((x, &c), &m) in delta[d..].iter_mut().zip(&c[d..]).zip(&tiled[d..]) {
+                close(x, m * c + *x);
+            }
+        }
+        None => {
+            for (delta, c) in delta.chunks_exact_mut(d).zip(c.chunks_exact(d)).skip(1) {
+                for (r, x) in delta.iter_mut().enumerate() {
+                    let mc: f64 = (0..d).map(|s| sep.mass()[r * d + s] * c[s]).sum();
+                    close(x, mc + *x);
+                }
             }
         }
     }
-    norm
+    if finite { norm } else { f64::INFINITY }
 }
 
 /// The exact Newton matrix of the velocity form, J = I ⊗ M + h² Σ_j b_j ψ_j ι_jᵀ ⊗ H_j, from the

@@ -86,6 +86,12 @@ pub(crate) struct VelocityState {
     start: Vec<f64>,
     /// Scratch for M⁻¹ of a non-diagonal mass matrix (D).
     mass_scratch: Vec<f64>,
+    /// A diagonal mass matrix's diagonal repeated for every mode (k×D, the layout of `c`), so
+    /// that M c_b and M⁻¹F_b run as one flat, vectorised loop over all modes; `None` for a
+    /// non-diagonal M.
+    pub(super) mass_tiled: Option<Vec<f64>>,
+    /// M = I: M⁻¹ is the identity.
+    unit_mass: bool,
     /// The frozen-Hessian Kronecker solve of I ⊗ M + h² C ⊗ H̄.
     kron: KroneckerWork,
     /// The exact Newton matrix, dense, for steps where the frozen Hessian stalls (small
@@ -100,33 +106,29 @@ impl VelocityState {
         self.has_prev = false;
     }
 
-    /// One correction δ = J⁻¹(−F) from the residual in `delta` (left there) with the mass
-    /// matrix alone (`fixed_point`: the fixed-point iteration), the frozen Kronecker matrix or
-    /// the dense exact one, c ← c + δ with c_0 compensated (TwoSum into its low part).
+    /// One correction δ = J⁻¹(−F) from the residual in `delta` (left there) with the frozen
+    /// Kronecker matrix or the dense exact one, c ← c + δ with c_0 compensated (TwoSum into
+    /// its low part).
     fn correct(
         &mut self,
         linear: Linear,
-        fixed_point: Option<&Separable>,
         kt: &crate::integrator::kronecker::KroneckerTables,
         h: f64,
         d: usize,
     ) {
-        match (linear, fixed_point, self.dense.as_mut()) {
-            (_, Some(sep), _) => {
-                // J̃ = I ⊗ M: each mode's correction M⁻¹(−F_b).
-                for row in self.delta.chunks_exact_mut(d) {
-                    sep.solve_mass(row, &mut self.mass_scratch);
-                }
-            }
-            (Linear::Dense, None, Some(dn)) => {
-                dn.lu.solve_in_place(&mut self.delta, &mut dn.scratch)
-            }
+        match (linear, self.dense.as_mut()) {
+            (Linear::Dense, Some(dn)) => dn.lu.solve_in_place(&mut self.delta, &mut dn.scratch),
             _ => {
                 // J̃ = h (I ⊗ M/h + h C ⊗ H̄): the Kronecker solve of the bracket.
                 self.delta.iter_mut().for_each(|x| *x /= h);
                 self.kron.solve(kt, h, &mut self.delta);
             }
         }
+        self.apply_correction(d);
+    }
+
+    /// c ← c + δ, c_0 compensated: TwoSum into its low part.
+    fn apply_correction(&mut self, d: usize) {
         for ((c, lo), &x) in self.c[..d].iter_mut().zip(&mut self.c0_lo).zip(&self.delta) {
             let (s, e) = two_sum(*c, x);
             *c = s;
@@ -137,19 +139,45 @@ impl VelocityState {
         }
     }
 
-    /// Buffers for `vt`, D coordinates and mass matrix `mass` (coordinate blocks as
+    /// One fixed-point correction, J̃ = I ⊗ M: each mode's δ_b = M⁻¹(−F_b) from `delta` (left
+    /// there), c ← c + δ with c_0 compensated as in [`Self::correct`]; returns (max |δ|,
+    /// max |c|), the iteration's size and scale. With a diagonal M the division is one flat
+    /// loop over the k×D entries (vectorised; skipped for M = I, where it is exact), the same
+    /// arithmetic as row by row: in Kepler's fastest run the per-row calls were 4 % of the time.
+    fn correct_fixed_point(&mut self, sep: &Separable, d: usize) -> (f64, f64) {
+        match self.mass_tiled.as_deref() {
+            Some(_) if self.unit_mass => {}
+            Some(tiled) => self.delta.iter_mut().zip(tiled).for_each(|(x, m)| *x /= m),
+            None => {
+                for row in self.delta.chunks_exact_mut(d) {
+                    sep.solve_mass(row, &mut self.mass_scratch);
+                }
+            }
+        }
+        self.apply_correction(d);
+        (max_abs(&self.delta), max_abs(&self.c))
+    }
+
+    /// Buffers for `vt`, D coordinates and the mass matrix of `sep` (coordinate blocks as
     /// `Lagrangian::coordinate_blocks`, exact self-blocks above `self_block_rate`:
     /// `StructuredOptions::velocity_self_block_rate`); `None` without a Schur form of the velocity pencil or
     /// with a mass matrix that is not symmetric positive definite.
     pub(crate) fn new(
         vt: &VelocityTables,
         d: usize,
-        mass: &[f64],
+        sep: &Separable,
         blocks: Option<usize>,
         self_block_rate: f64,
     ) -> Option<Self> {
         let size = vt.k * d;
+        let mass = sep.mass();
         Some(VelocityState {
+            mass_tiled: sep
+                .mass_diagonal()
+                .map(|diag| diag.iter().copied().cycle().take(size).collect()),
+            unit_mass: sep
+                .mass_diagonal()
+                .is_some_and(|m| m.iter().all(|&x| x == 1.0)),
             c: vec![0.0; size],
             c0_lo: vec![0.0; d],
             prev: vec![0.0; size],
@@ -340,13 +368,13 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> NewtonIteration for VelocityNewton<
         let (Some(vs), Some(kt)) = (ws.velocity.as_mut(), vt.kron.as_ref()) else {
             return Err(fail("no velocity form"));
         };
-        if self.fixed_point {
-            let sep = ws.separable.as_ref();
-            vs.correct(self.linear, sep, kt, h, ws.d);
+        if self.fixed_point
+            && let Some(sep) = ws.separable.as_ref()
+        {
+            let (size, scale) = vs.correct_fixed_point(sep, ws.d);
             self.stats.iterations += 1;
-            let delta = max_abs(&vs.delta);
-            let scale = max_abs(&vs.c).max(f64::MIN_POSITIVE);
-            return Ok((Correction { size: delta, scale }, self.termination()));
+            let scale = scale.max(f64::MIN_POSITIVE);
+            return Ok((Correction { size, scale }, self.termination()));
         }
         if !self.factored {
             // At this iterate: the step's guess, or where the iteration stalled.
@@ -399,7 +427,7 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> NewtonIteration for VelocityNewton<
             self.fresh = true;
         }
         let d = ws.d;
-        vs.correct(self.linear, None, kt, h, d);
+        vs.correct(self.linear, kt, h, d);
         self.stats.iterations += 1;
         let delta = max_abs(&vs.delta);
         let scale = max_abs(&vs.c).max(f64::MIN_POSITIVE);
@@ -467,12 +495,14 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> NewtonIteration for VelocityNewton<
         self.stats.residual = gvi.velocity_residual(self.lag, self.ws, vt, self.p);
         self.stats.gradient_evaluations += gvi.tables().m;
         let (h, d) = (gvi.step_size(), self.ws.d);
-        let fixed_point = self
-            .fixed_point
-            .then_some(())
-            .and(self.ws.separable.as_ref());
+        let fixed_point = self.ws.separable.as_ref().filter(|_| self.fixed_point);
         if let (Some(vs), Some(kt)) = (self.ws.velocity.as_mut(), vt.kron.as_ref()) {
-            vs.correct(self.linear, fixed_point, kt, h, d);
+            match fixed_point {
+                Some(sep) => {
+                    vs.correct_fixed_point(sep, d);
+                }
+                None => vs.correct(self.linear, kt, h, d),
+            }
         }
         if self.fixed_point {
             self.ws.auto.velocity_frozen.calm_solve();
