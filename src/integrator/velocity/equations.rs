@@ -5,7 +5,7 @@
 
 use super::{VelocityTables, panel_times};
 use crate::basis::Basis;
-use crate::integrator::dd::{dd_acc, dd_acc_columns, two_sum};
+use crate::integrator::dd::{dd_acc, dd_acc_columns, max_abs_or_infinite, two_sum};
 use crate::integrator::separable::Separable;
 use crate::integrator::{GalerkinIntegrator, InitialGuess, Workspace};
 use crate::lagrangian::Lagrangian;
@@ -392,31 +392,25 @@ fn close_rows(
     row0: impl Fn(usize) -> f64,
     d: usize,
 ) -> f64 {
-    let (mut norm, mut finite) = (0.0f64, true);
-    let mut close = |x: &mut f64, f: f64| {
-        *x = -f;
-        norm = norm.max(f.abs());
-        finite &= f.is_finite();
-    };
     for (r, x) in delta[..d].iter_mut().enumerate() {
-        close(x, row0(r));
+        *x = -row0(r);
     }
     match tiled {
         Some(tiled) => {
             for ((x, &c), &m) in delta[d..].iter_mut().zip(&c[d..]).zip(&tiled[d..]) {
-                close(x, m * c + *x);
+                *x = -(m * c + *x);
             }
         }
         None => {
             for (delta, c) in delta.chunks_exact_mut(d).zip(c.chunks_exact(d)).skip(1) {
                 for (r, x) in delta.iter_mut().enumerate() {
                     let mc: f64 = (0..d).map(|s| sep.mass()[r * d + s] * c[s]).sum();
-                    close(x, mc + *x);
+                    *x = -(mc + *x);
                 }
             }
         }
     }
-    if finite { norm } else { f64::INFINITY }
+    max_abs_or_infinite(delta)
 }
 
 /// The exact Newton matrix of the velocity form, J = I ⊗ M + h² Σ_j b_j ψ_j ι_jᵀ ⊗ H_j, from the
