@@ -78,8 +78,10 @@ fn realisations(solver: StageSolver, count: usize) -> (Vec<f64>, Vec<f64>) {
 /// The nodal stage equations (exact Newton) from four states; the default (`auto`, the velocity
 /// form of docs/solvers.md) from eight — its round-off walk has the same size, and eight
 /// realisations tell a walk from a drift more reliably than four. Measured, velocity form with
-/// its fixed-point start: max errors 3.9e-10, 2.6e-9, 9.5e-10, 1.9e-9, 6.8e-10, 3.3e-10,
-/// 9.0e-10, 4.4e-10 (median 7.9e-10), energy changes of both signs (|mean|/rms = 0.11); with
+/// its fixed-point start and the guesses' residuals rounded: max errors 2.1e-10, 1.2e-9,
+/// 1.1e-9, 3.2e-10, 1.5e-9, 2.7e-10, 2.9e-10, 7.1e-10 (median 5.2e-10), energy changes of both
+/// signs (|mean|/rms = 0.25; 0.11 with every residual compensated, 0.79 with the iterations'
+/// residuals rounded too above corrections of 1e-10, which is why they are not); with
 /// the frozen Hessian alone (before the fixed-point start) 5.9e-10 … 2.3e-9, median 8.3e-10;
 /// the nodal equations from twelve states: 2.4e-10 … 1.7e-9, median 5.3e-10. The largest of
 /// eight realisations of a walk scatters widely; its bound is 3e-9.

@@ -19,7 +19,7 @@
 //! the next steps ([`VelocityState::record`]).
 
 use super::VelocityTables;
-use super::equations::{DenseNewton, assemble_dense};
+use super::equations::{DenseNewton, MomentumRow, assemble_dense};
 use crate::basis::Basis;
 use crate::integrator::auto;
 use crate::integrator::dd::{max_abs, two_sum};
@@ -224,7 +224,9 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         if let Some(vs) = ws.velocity.as_mut() {
             vs.c0_lo.iter_mut().for_each(|x| *x = 0.0);
         }
-        let mut res = self.velocity_residual(lag, ws, vt, p);
+        // The guess's residual (and the predictor's, to choose between them) with the momentum
+        // row rounded: its double-double sum matters only near the solution.
+        let mut res = self.velocity_residual(lag, ws, vt, p, MomentumRow::Rounded);
         stats.gradient_evaluations += self.tables().m;
         if stats.guess == InitialGuess::Extrapolate
             && let Some(vs) = ws.velocity.as_mut()
@@ -235,13 +237,13 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             // predictor and keep the better of the two.
             vs.prev.copy_from_slice(&vs.c);
             let predicted = self.velocity_guess(lag, ws, vt, q, p, false);
-            let r = self.velocity_residual(lag, ws, vt, p);
+            let r = self.velocity_residual(lag, ws, vt, p, MomentumRow::Rounded);
             stats.gradient_evaluations += self.tables().m;
             if r < res || !res.is_finite() {
                 (stats.guess, res) = (predicted, r);
             } else if let Some(vs) = ws.velocity.as_mut() {
                 vs.c.copy_from_slice(&vs.prev);
-                res = self.velocity_residual(lag, ws, vt, p);
+                res = self.velocity_residual(lag, ws, vt, p, MomentumRow::Rounded);
                 stats.gradient_evaluations += self.tables().m;
             }
         }
@@ -348,7 +350,7 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> NewtonIteration for VelocityNewton<
         } else {
             self.stats.gradient_evaluations += self.gvi.tables().m;
             self.gvi
-                .velocity_residual(self.lag, self.ws, self.vt, self.p)
+                .velocity_residual(self.lag, self.ws, self.vt, self.p, MomentumRow::Compensated)
         };
         self.stats.residual = res;
         res
@@ -492,7 +494,8 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> NewtonIteration for VelocityNewton<
         // the forces before it (they differ by O(h²|H|) times a correction at the round-off
         // level).
         let (gvi, vt) = (self.gvi, self.vt);
-        self.stats.residual = gvi.velocity_residual(self.lag, self.ws, vt, self.p);
+        self.stats.residual =
+            gvi.velocity_residual(self.lag, self.ws, vt, self.p, MomentumRow::Compensated);
         self.stats.gradient_evaluations += gvi.tables().m;
         let (h, d) = (gvi.step_size(), self.ws.d);
         let fixed_point = self.ws.separable.as_ref().filter(|_| self.fixed_point);
