@@ -39,14 +39,15 @@ def test_python_guide_examples(repo, capsys):
 
 def test_python_guide_check_sees_a_drifted_number(repo):
     """Negative control: the first section with the symplecticity defect the guide once
-    quoted (1.93e-11, before the velocity form's fixed-point start; the run prints 1.35e-11)
+    quoted (1.93e-11, before the velocity form's fixed-point start; 1.35e-11 before the
+    guesses' residuals were rounded; the run prints 1.29e-11)
     fails, the section as written passes."""
     path = repo / "docs" / "guide" / "python.md"
     text = path.read_text(encoding="utf-8")
     first = text[: text.index("## Running scenes")]
-    assert "\n1.35e-11\n" in first
+    assert "\n1.29e-11\n" in first
     assert run_examples(first, path).failed == 0
-    drifted = first.replace("\n1.35e-11\n", "\n1.93e-11\n")
+    drifted = first.replace("\n1.29e-11\n", "\n1.93e-11\n")
     assert run_examples(drifted, path).failed == 1
 
 

@@ -174,53 +174,16 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         if !panel {
             vs.delta.iter_mut().for_each(|x| *x = 0.0);
         }
-        if momentum == MomentumRow::Rounded {
-            // The weighted forces and their projections alone; row 0 from its projection.
-            for (j, ((f, sc), psi)) in ws
-                .stage
-                .lq
-                .chunks_exact(D)
-                .zip(ws.stage.scaled.chunks_exact_mut(D))
-                .zip(vt.psi.chunks_exact(k))
-                .take(m)
-                .enumerate()
-            {
-                let w = t.weights[j] * h;
-                for r in 0..D {
-                    sc[r] = w * f[r];
-                }
-                if !panel {
-                    for (&x, delta) in psi.iter().zip(vs.delta.chunks_exact_mut(D)) {
-                        for r in 0..D {
-                            delta[r] += x * sc[r];
-                        }
-                    }
-                }
-            }
-            if panel {
-                let acc = panel_product::<D>(&vt.psi_rows, &ws.stage.scaled, m);
-                for (b, delta) in vs.delta.chunks_exact_mut(D).take(k).enumerate() {
-                    for r in 0..D {
-                        delta[r] = acc[r][b];
-                    }
-                }
-            }
-            let row0: [f64; D] =
-                std::array::from_fn(|r| rounded_momentum_row(sep, &vs.c, p_k, vs.delta[r], r));
-            return close_rows(
-                sep,
-                vs.mass_tiled.as_deref(),
-                &vs.c,
-                &mut vs.delta,
-                |r| row0[r],
-                D,
-            );
-        }
-        // Row 0, the momentum condition, in double-double (`momentum_row`), then the forces.
+        // Row 0, the momentum condition: in double-double (`momentum_row`, the force terms
+        // added node by node below), or rounded from its projection.
+        let compensated = momentum == MomentumRow::Compensated;
         let mut hi = [0.0f64; D];
         let mut lo = [0.0f64; D];
-        for r in 0..D {
-            (hi[r], lo[r]) = momentum_row(sep, &vs.c, &vs.c0_lo, p_k, ws.iterate.momentum_lo(), r);
+        if compensated {
+            for r in 0..D {
+                (hi[r], lo[r]) =
+                    momentum_row(sep, &vs.c, &vs.c0_lo, p_k, ws.iterate.momentum_lo(), r);
+            }
         }
         for (j, ((f, sc), psi)) in ws
             .stage
@@ -241,10 +204,12 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                     }
                 }
             }
-            let psi0 = psi[0];
-            for r in 0..D {
-                dd_acc(&mut hi[r], &mut lo[r], psi0, g[r]);
-                lo[r] += psi0 * w.mul_add(f[r], -g[r]);
+            if compensated {
+                let psi0 = psi[0];
+                for r in 0..D {
+                    dd_acc(&mut hi[r], &mut lo[r], psi0, g[r]);
+                    lo[r] += psi0 * w.mul_add(f[r], -g[r]);
+                }
             }
         }
         if panel {
@@ -256,12 +221,19 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 }
             }
         }
+        let row0: [f64; D] = std::array::from_fn(|r| {
+            if compensated {
+                hi[r] + lo[r]
+            } else {
+                rounded_momentum_row(sep, &vs.c, p_k, vs.delta[r], r)
+            }
+        });
         close_rows(
             sep,
             vs.mass_tiled.as_deref(),
             &vs.c,
             &mut vs.delta,
-            |r| hi[r] + lo[r],
+            |r| row0[r],
             D,
         )
     }
