@@ -107,6 +107,18 @@ impl Separable {
         self.mass_diagonal.as_deref()
     }
 
+    /// (M x)_r for the first D entries of `x`: M's diagonal entry times x_r when M is
+    /// diagonal, else row r of M times x summed in order.
+    pub(crate) fn mass_row_times(&self, r: usize, x: &[f64]) -> f64 {
+        match &self.mass_diagonal {
+            Some(diag) => diag[r] * x[r],
+            None => {
+                let d = self.mass_lu.dim();
+                (0..d).map(|s| self.mass[r * d + s] * x[s]).sum()
+            }
+        }
+    }
+
     /// The kinetic blocks (K_ab / h) M of the initial-value Newton matrix: ((n−1)D)².
     pub(crate) fn kinetic_jacobian(&self) -> &[f64] {
         &self.kinetic_jacobian

@@ -277,53 +277,51 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         self.weighted_forces(lag, &mut ws.stage);
         // Σ_j ψ_jb (h b_j f_j).
         gemm_transposed(k, m, d, &vt.psi, &ws.stage.scaled, 0.0, &mut vs.delta);
+        // Row 0, the momentum condition, into `dd_hi`: rounded from its projection, or in
+        // double-double (`momentum_row`) with the force terms added below.
         if momentum == MomentumRow::Rounded {
             for r in 0..d {
                 ws.stage.dd_hi[r] = rounded_momentum_row(sep, &vs.c, p_k, vs.delta[r], r);
             }
-            let row0 = &ws.stage.dd_hi;
-            return close_rows(
-                sep,
-                vs.mass_tiled.as_deref(),
-                &vs.c,
-                &mut vs.delta,
-                |r| row0[r],
-                d,
-            );
-        }
-        // Row 0, the momentum condition, in double-double (`momentum_row`).
-        for r in 0..d {
-            (ws.stage.dd_hi[r], ws.stage.dd_lo[r]) =
-                momentum_row(sep, &vs.c, &vs.c0_lo, p_k, ws.iterate.momentum_lo(), r);
-        }
-        // The force terms, eight coordinates side by side with their (hi, lo) pairs in
-        // registers: each sum runs over j in order (the same bits as one coordinate at a time),
-        // independent sums hide each other's latency, and they vectorise for large D.
-        const LANES: usize = 8;
-        for r0 in (0..d).step_by(LANES) {
-            let w_lanes = LANES.min(d - r0);
-            let (mut hi, mut lo) = ([0.0f64; LANES], [0.0f64; LANES]);
-            hi[..w_lanes].copy_from_slice(&ws.stage.dd_hi[r0..r0 + w_lanes]);
-            lo[..w_lanes].copy_from_slice(&ws.stage.dd_lo[r0..r0 + w_lanes]);
-            for j in 0..m {
-                let (w, psi) = (t.weights[j] * h, vt.psi[j * k]);
-                let f = &ws.stage.lq[j * d + r0..j * d + r0 + w_lanes];
-                for ((hi, lo), &f) in hi.iter_mut().zip(lo.iter_mut()).zip(f) {
-                    let g = w * f;
-                    dd_acc(hi, lo, psi, g);
-                    *lo += psi * w.mul_add(f, -g);
+        } else {
+            for r in 0..d {
+                (ws.stage.dd_hi[r], ws.stage.dd_lo[r]) =
+                    momentum_row(sep, &vs.c, &vs.c0_lo, p_k, ws.iterate.momentum_lo(), r);
+            }
+            // The force terms, eight coordinates side by side with their (hi, lo) pairs in
+            // registers: each sum runs over j in order (the same bits as one coordinate at a
+            // time), independent sums hide each other's latency, and they vectorise for large
+            // D. The row is their sum hi + lo.
+            const LANES: usize = 8;
+            for r0 in (0..d).step_by(LANES) {
+                let w_lanes = LANES.min(d - r0);
+                let (mut hi, mut lo) = ([0.0f64; LANES], [0.0f64; LANES]);
+                hi[..w_lanes].copy_from_slice(&ws.stage.dd_hi[r0..r0 + w_lanes]);
+                lo[..w_lanes].copy_from_slice(&ws.stage.dd_lo[r0..r0 + w_lanes]);
+                for j in 0..m {
+                    let (w, psi) = (t.weights[j] * h, vt.psi[j * k]);
+                    let f = &ws.stage.lq[j * d + r0..j * d + r0 + w_lanes];
+                    for ((hi, lo), &f) in hi.iter_mut().zip(lo.iter_mut()).zip(f) {
+                        let g = w * f;
+                        dd_acc(hi, lo, psi, g);
+                        *lo += psi * w.mul_add(f, -g);
+                    }
+                }
+                for (row, (&hi, &lo)) in ws.stage.dd_hi[r0..r0 + w_lanes]
+                    .iter_mut()
+                    .zip(hi.iter().zip(&lo))
+                {
+                    *row = hi + lo;
                 }
             }
-            ws.stage.dd_hi[r0..r0 + w_lanes].copy_from_slice(&hi[..w_lanes]);
-            ws.stage.dd_lo[r0..r0 + w_lanes].copy_from_slice(&lo[..w_lanes]);
         }
-        let (dd_hi, dd_lo) = (&ws.stage.dd_hi, &ws.stage.dd_lo);
+        let row0 = &ws.stage.dd_hi;
         close_rows(
             sep,
             vs.mass_tiled.as_deref(),
             &vs.c,
             &mut vs.delta,
-            |r| dd_hi[r] + dd_lo[r],
+            |r| row0[r],
             d,
         )
     }
@@ -396,12 +394,7 @@ pub(super) enum MomentumRow {
 /// The momentum row F_0 for coordinate r in working precision: (M c_0)_r − p_k,r plus the
 /// force term's projection `force` (row 0 of the projections).
 fn rounded_momentum_row(sep: &Separable, c: &[f64], p_k: &[f64], force: f64, r: usize) -> f64 {
-    let d = p_k.len();
-    let mc = match sep.mass_diagonal() {
-        Some(diag) => diag[r] * c[r],
-        None => (0..d).map(|s| sep.mass()[r * d + s] * c[s]).sum(),
-    };
-    (mc - p_k[r]) + force
+    (sep.mass_row_times(r, c) - p_k[r]) + force
 }
 
 /// The start of the momentum row for coordinate r (the condition that fixes q_{k+1} = q_k +
@@ -462,8 +455,7 @@ fn close_rows(
         None => {
             for (delta, c) in delta.chunks_exact_mut(d).zip(c.chunks_exact(d)).skip(1) {
                 for (r, x) in delta.iter_mut().enumerate() {
-                    let mc: f64 = (0..d).map(|s| sep.mass()[r * d + s] * c[s]).sum();
-                    *x = -(mc + *x);
+                    *x = -(sep.mass_row_times(r, c) + *x);
                 }
             }
         }
