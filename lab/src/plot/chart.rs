@@ -9,6 +9,7 @@ use plotters::prelude::*;
 use super::axis::{Axis, Scale, min_max, padded_range, to_plot, valid_range, widen};
 use super::error::{PlotError, backend_err};
 use super::layout::{FONT, frame, palette, plot_area_size, titled, write_file};
+use super::legend;
 
 /// An axis range (lo, hi) in plot space.
 type Range = (f64, f64);
@@ -111,7 +112,9 @@ impl Series {
 ///
 /// Axis ranges are chosen from the data with a 5 % margin (in log space for
 /// log axes). Each series gets a colour from a fixed 10-colour palette
-/// (cycling) and, if labelled, an entry in the legend box (upper right).
+/// (cycling) and, if labelled, an entry in the legend box: in the corner of the plot
+/// that covers no data (upper right if free), or, when every corner holds data, in a
+/// panel right of the plot (the image widens by the panel, the plot keeps its size).
 /// Series left without valid points are skipped, legend entry included.
 ///
 /// # Example
@@ -155,7 +158,8 @@ pub struct Chart {
     pub height: u32,
     /// Keep the legend off the data: when every corner of the plot holds data, raise the
     /// top of the y range until the legend fits above the data (orbit charts, whose curves
-    /// reach every corner). Off by default: the legend then goes to the least covered corner.
+    /// reach every corner). Off by default: the legend then goes to a corner free of data,
+    /// or right of the plot if there is none.
     pub keep_legend_clear: bool,
 }
 
@@ -306,36 +310,29 @@ impl Chart {
     }
 
     /// The legend box's width and height as fractions of the plot area, estimated from the
-    /// labels (16 px font).
+    /// labels ([`legend::box_pixels`]).
     fn legend_box(&self, data: &[Prepared], size: (u32, u32)) -> (f64, f64) {
-        let labels: Vec<&str> = data
-            .iter()
-            .map(|d| d.1.label.as_str())
-            .filter(|l| !l.is_empty())
-            .collect();
+        let (w, h) = legend::box_pixels(data.iter().map(|d| d.1.label.as_str()));
         let (pw, ph) = plot_area_size(size, &self.title);
-        let chars = labels.iter().map(|l| l.chars().count()).max().unwrap_or(0);
-        let box_w = ((chars as f64 * 8.5 + 45.0) / f64::from(pw)).min(1.0);
-        let box_h = ((labels.len() as f64 * 19.0 + 12.0) / f64::from(ph)).min(1.0);
-        (box_w, box_h)
+        ((w / f64::from(pw)).min(1.0), (h / f64::from(ph)).min(1.0))
     }
 
-    /// The corner of the plot whose legend box would cover the least data: the box's size
-    /// is estimated from the labels (16 px font), the data are the markers and points along
-    /// the lines (each segment sampled at 8 points). Upper right on a tie, so charts whose
-    /// upper right is free keep their legend there.
-    fn legend_corner(
+    /// Where the legend goes: the least covered corner ([`Chart::corner_coverage`]; upper
+    /// right on a tie, so charts whose upper right is free keep their legend there), or
+    /// `None`, a panel right of the plot, when every corner would cover data.
+    fn legend_place(
         &self,
         data: &[Prepared],
         size: (u32, u32),
         x: (f64, f64),
         y: (f64, f64),
-    ) -> SeriesLabelPosition {
+    ) -> Option<SeriesLabelPosition> {
         // The first of the least covered (min_by_key keeps the first of equal keys).
-        self.corner_coverage(data, size, x, y)
+        let least = self
+            .corner_coverage(data, size, x, y)
             .into_iter()
-            .min_by_key(|c| c.1)
-            .map_or(SeriesLabelPosition::UpperRight, |c| c.0)
+            .min_by_key(|c| c.1);
+        least.filter(|c| c.1 == 0).map(|c| c.0)
     }
 
     /// How many data samples the legend box would cover in each corner (upper right, upper
@@ -385,14 +382,28 @@ impl Chart {
     fn render(&self, out: &mut String) -> Result<(u32, u32), PlotError> {
         let data = self.prepared();
         let (size, x, y) = self.layout(&data)?;
-        let corner = self.legend_corner(&data, size, (x.lo, x.hi), (y.lo, y.hi));
+        let entries: Vec<legend::Entry> = data
+            .iter()
+            .filter(|d| !d.1.label.is_empty())
+            .map(|d| legend::Entry {
+                label: &d.1.label,
+                style: d.1.style,
+                color: d.0,
+            })
+            .collect();
+        // A legend that would cover data in every corner goes into a panel right of the
+        // plot: the image widens, the plot keeps its size.
+        let corner = self.legend_place(&data, size, (x.lo, x.hi), (y.lo, y.hi));
+        let panel = match corner {
+            None if !entries.is_empty() => legend::panel_width(&entries),
+            _ => 0,
+        };
         let (pw, ph) = plot_area_size(size, &self.title);
         let (sx, sy) = (f64::from(pw) / (x.hi - x.lo), f64::from(ph) / (y.hi - y.lo));
-        let root = SVGBackend::with_string(out, size).into_drawing_area();
+        let root = SVGBackend::with_string(out, (size.0 + panel, size.1)).into_drawing_area();
         root.fill(&WHITE).map_err(backend_err)?;
-        let area = titled(&root, &self.title)?;
+        let (area, side) = titled(&root, &self.title)?.split_horizontally(size.0);
         let mut chart = frame(&area, [&self.x_label, &self.y_label], x, y, true)?;
-        let mut any_label = false;
         // Pixels along a series: a dashed line longer than MAX_DASHES dashes (a long run
         // retracing its orbit) is drawn solid, since every dash is an SVG element.
         let pixels = |runs: &[Vec<(f64, f64)>]| -> f64 {
@@ -416,40 +427,26 @@ impl Chart {
                 Style::Markers => chart.draw_series(markers()),
             }
             .map_err(backend_err)?;
-            if !s.label.is_empty() {
-                any_label = true;
-                anno.label(s.label.as_str());
-                let at = |p: (i32, i32)| EmptyElement::at(p);
-                match s.style {
-                    Style::Line => {
-                        anno.legend(move |p| at(p) + PathElement::new([(0, 0), (20, 0)], line))
-                    }
-                    Style::DashedLine => anno.legend(move |p| {
-                        at(p)
-                            + PathElement::new([(0, 0), (7, 0)], line)
-                            + PathElement::new([(12, 0), (20, 0)], line)
-                    }),
-                    Style::Markers => anno.legend(move |p| at(p) + Circle::new((10, 0), 3, dot)),
-                    Style::LineMarkers => anno.legend(move |p| {
-                        at(p)
-                            + PathElement::new([(0, 0), (20, 0)], line)
-                            + Circle::new((10, 0), 3, dot)
-                    }),
-                };
+            if corner.is_some() && !s.label.is_empty() {
+                let (style, color) = (s.style, *color);
+                anno.label(s.label.as_str())
+                    .legend(move |at| legend::Swatch { at, style, color });
             }
             if s.style == Style::LineMarkers {
                 chart.draw_series(markers()).map_err(backend_err)?;
             }
         }
-        if any_label {
-            chart
+        match corner {
+            _ if entries.is_empty() => {}
+            Some(corner) => chart
                 .configure_series_labels()
                 .position(corner)
-                .background_style(WHITE.mix(0.85))
+                .background_style(legend::background())
                 .border_style(BLACK)
-                .label_font((FONT, 16))
+                .label_font((FONT, legend::LEGEND_FONT))
                 .draw()
-                .map_err(backend_err)?;
+                .map_err(backend_err)?,
+            None => legend::draw_outside(&side, &entries)?,
         }
         let dims = chart.plotting_area().dim_in_pixel();
         root.present().map_err(backend_err)?;

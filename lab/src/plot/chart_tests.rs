@@ -75,9 +75,10 @@ fn data_under_legend(svg: &str) -> usize {
 }
 
 /// The Kepler orbit of `gvi run kepler --plot` fills the equal-aspect plot and reaches
-/// every corner, so the least covered corner still hid part of it (the README figure);
+/// every corner, so any corner legend would hide part of it (the README figure);
 /// `legend_clear_of_data`, which the run's chart sets, raises the y range until the
-/// legend sits above the orbit. Negative control: the same chart without it.
+/// legend sits above the orbit, in the 800 px image. Negative control: without it every
+/// corner would cover the orbit, and the legend moves to a panel right of the plot.
 #[test]
 fn legend_clear_of_data_leaves_the_orbit_visible() {
     let scene = crate::scene::Scene::load("kepler")
@@ -95,12 +96,66 @@ fn legend_clear_of_data_leaves_the_orbit_visible() {
     assert!(chart.keep_legend_clear);
     let clear = chart.to_svg_string().unwrap();
     assert_eq!(data_under_legend(&clear), 0);
+    assert_eq!(svg_width(&clear), 800.0);
     chart.keep_legend_clear = false;
-    let covered = data_under_legend(&chart.to_svg_string().unwrap());
+    let data = chart.prepared();
+    let (size, x, y) = chart.layout(&data).unwrap();
+    let coverage = chart.corner_coverage(&data, size, (x.lo, x.hi), (y.lo, y.hi));
     assert!(
-        covered > 10,
-        "negative control: the legend covers the orbit ({covered})"
+        coverage.iter().all(|c| c.1 > 10),
+        "negative control: every corner covers the orbit ({:?})",
+        coverage.map(|c| c.1)
     );
+    let outside = chart.to_svg_string().unwrap();
+    assert_eq!(data_under_legend(&outside), 0);
+    assert!(svg_width(&outside) > 800.0);
+}
+
+/// The coverage count the legend tests rely on finds points under a box.
+#[test]
+fn data_under_legend_counts_covered_points() {
+    let svg = "<polyline points=\"10,10 50,50 150,150\"/><circle cx=\"20\" cy=\"90\"/>\
+               <rect x=\"0\" y=\"0\" width=\"100\" height=\"100\" fill-opacity=\"0.85\"/>";
+    assert_eq!(data_under_legend(svg), 3);
+}
+
+/// The image width written in the SVG's root element.
+fn svg_width(svg: &str) -> f64 {
+    let at = svg.find(" width=\"").unwrap() + 8;
+    svg[at..at + svg[at..].find('"').unwrap()].parse().unwrap()
+}
+
+/// A work–precision chart holds data in every corner (the Kepler study's 27 series), so
+/// any corner legend hid some of it: the legend goes into a panel right of the plot, which
+/// widens the image and leaves the plot its size. Negative control: with the upper right
+/// corner free, the same legend stays inside the 800 px image, in that corner.
+#[test]
+fn legend_moves_outside_when_every_corner_holds_data() {
+    let grid = |skip_upper_right: bool| -> Vec<(f64, f64)> {
+        let cells = (0..=20).flat_map(|i| (0..=20).map(move |j| (f64::from(i), f64::from(j))));
+        cells
+            .filter(|&(x, y)| !(skip_upper_right && x > 10.0 && y > 10.0))
+            .collect()
+    };
+    let chart = |pts: Vec<(f64, f64)>| {
+        let mut c = Chart::new("crowded", "x", "y");
+        for k in 0..8 {
+            let label = format!("series {k} with a longer label");
+            let mine = pts.iter().copied().skip(k).step_by(8);
+            c.push(Series::markers(label, mine));
+        }
+        c.to_svg_string().unwrap()
+    };
+    let outside = chart(grid(false));
+    assert!(svg_width(&outside) > 1000.0, "{}", svg_width(&outside));
+    assert_eq!(data_under_legend(&outside), 0);
+    // The labels sit right of the 800 px plot image.
+    assert!(text_x(&outside, "series 7 with a longer label") > 800.0);
+    let inside = chart(grid(true));
+    assert_eq!(svg_width(&inside), 800.0);
+    assert_eq!(data_under_legend(&inside), 0);
+    let x = text_x(&inside, "series 7 with a longer label");
+    assert!((400.0..800.0).contains(&x), "{x}");
 }
 
 #[test]

@@ -19,6 +19,7 @@ mod chart;
 mod error;
 mod heatmap;
 mod layout;
+mod legend;
 
 pub use axis::Scale;
 pub use chart::{Chart, MAX_POINTS_PER_SERIES, Series, Style, thin};
