@@ -304,10 +304,18 @@ fn the_member_step_loop_allocates_nothing() {
         assert!(r.failure.is_none());
         allocations() - before
     };
+    // The integrator builds its stage pencils' Schur forms when a solve first needs them
+    // (here the step Jacobian's), once for every member that shares it: the first member
+    // pays for those few tables, and no member's count grows with its steps.
+    let first = in_member(10);
     let (short, long) = (in_member(10), in_member(60));
     assert_eq!(
         short, long,
         "allocations: {short} for 10 steps, {long} for 60"
+    );
+    assert!(
+        first >= short && first - short <= 16,
+        "the first member's one-time tables: {first} against {short} allocations"
     );
     // Negative control: the owning step_jacobian_in allocates on every step.
     let owning = |steps: usize| {

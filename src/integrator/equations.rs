@@ -300,7 +300,7 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> StageEquations for StepEquations<'_
     fn solve_frozen(&mut self) -> Result<(), StepFailure> {
         let size = self.size();
         let h = self.gvi.step_size();
-        match (self.frozen, self.gvi.tables().kron.as_ref()) {
+        match (self.frozen, self.gvi.tables().kron()) {
             (true, Some(kt)) if self.ws.system.kronecker_solve(kt, h, size) => Ok(()),
             _ => Err(self.failure("no frozen Hessian: call freeze_hessian first")),
         }
@@ -317,7 +317,7 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> StageEquations for StepEquations<'_
         }
         let (h, d) = (self.gvi.step_size(), self.ws.d);
         let tables = self.gvi.tables();
-        let Some(kt) = tables.kron.as_ref() else {
+        let Some(kt) = tables.kron() else {
             return Err(self.failure("no Kronecker tables for this basis and quadrature"));
         };
         let Some((kw, kv, parts, rhs)) = self.ws.krylov_parts() else {

@@ -19,7 +19,7 @@ impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIn
     ) -> Result<usize> {
         let t = self.tables();
         let (m, h) = (t.m, self.step_size());
-        let (Some(kt), Some(kw)) = (t.kron.as_ref(), ws.system.kronecker_mut()) else {
+        let (Some(kt), Some(kw)) = (t.kron(), ws.system.kronecker_mut()) else {
             return Err(GviError::Unsupported(
                 "the Kronecker solver needs a separable Lagrangian".into(),
             ));
@@ -128,10 +128,7 @@ impl<B: crate::basis::Basis, Q: crate::quadrature::Quadrature> super::GalerkinIn
     /// # Ok::<(), galerkin_vi::GviError>(())
     /// ```
     pub fn stage_pencil_eigenvalues(&self) -> Option<Vec<(f64, f64)>> {
-        self.tables()
-            .kron
-            .as_ref()
-            .map(KroneckerTables::eigenvalues)
+        self.tables().kron().map(KroneckerTables::eigenvalues)
     }
 
     /// Whether the stage equations can be solved in their velocity form (`StageSolver::Modal`,

@@ -69,7 +69,7 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         // contracts slowly); Newton–Krylov freezes it for its preconditioner only. Either
         // continues with exact dense Newton within the step if it stalls.
         let structured =
-            mode == Mode::InitialValue && ws.system.structured() && self.tables().kron.is_some();
+            mode == Mode::InitialValue && ws.system.structured() && self.tables().kron().is_some();
         let auto = matches!(solver, StageSolver::Auto | StageSolver::Modal);
         let (linear, fixed_point) = match (structured, self.resolve_solver(ws, solver)) {
             (true, StageSolver::Kronecker) => (Linear::Frozen, false),
@@ -237,7 +237,7 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> NewtonIteration for NodalNewton<'_,
             self.fresh = true;
         }
         let h = gvi.step_size();
-        let kt = gvi.tables().kron.as_ref();
+        let kt = gvi.tables().kron();
         match (self.linear, kt) {
             (Linear::Frozen, Some(kt)) => {
                 ws.system.kronecker_solve(kt, h, size);

@@ -136,9 +136,10 @@ impl Workspace {
             Some(mass) if !timed && !forced => Some(Separable::new(&mass, t, d, h)?),
             _ => None,
         };
-        let kron = match (&t.kron, &separable) {
-            (Some(kt), Some(sep)) => super::kronecker::KroneckerWork::new(
-                kt,
+        // The buffers only: the Schur form is built by the first solve that needs it.
+        let kron = match &separable {
+            Some(sep) => super::kronecker::KroneckerWork::new(
+                n - 1,
                 d,
                 sep.mass(),
                 lagrangian.coordinate_blocks(),

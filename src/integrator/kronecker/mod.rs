@@ -23,7 +23,7 @@ mod small;
 
 use crate::error::{GviError, Result};
 use crate::linalg::{Lu, Strided, gemm};
-use small::{SMALL_MAX_D, SmallSolve};
+use small::{SMALL_MAX_D, SmallSolve, by_columns};
 
 use super::Tables;
 use super::self_blocks::SelfBlocks;
@@ -41,6 +41,10 @@ pub(crate) struct KroneckerTables {
     pub t: Vec<f64>,
     /// Diagonal blocks of T: (first index, size 1 or 2).
     pub blocks: Vec<(usize, usize)>,
+    /// R and U by columns, for the few-coordinate solve (`small.rs`).
+    pub r_cols: Vec<f64>,
+    /// See [`r_cols`](Self::r_cols).
+    pub u_cols: Vec<f64>,
 }
 
 impl KroneckerTables {
@@ -130,6 +134,8 @@ impl KroneckerTables {
         }
         Some(KroneckerTables {
             k,
+            r_cols: by_columns(&r, k),
+            u_cols: by_columns(&u, k),
             r,
             u,
             t: tt,
@@ -207,10 +213,11 @@ pub(crate) struct KroneckerWork {
 }
 
 impl KroneckerWork {
-    /// Buffers for dimension `d` and the constant mass matrix `mass` (D×D); `None` when M is
-    /// not symmetric positive definite.
+    /// Buffers for k = n − 1 unknown blocks, dimension `d` and the constant mass matrix
+    /// `mass` (D×D); `None` when M is not symmetric positive definite. They do not depend on
+    /// the Schur form, which the tables build when a solve first needs it.
     pub(crate) fn new(
-        kt: &KroneckerTables,
+        k: usize,
         d: usize,
         mass: &[f64],
         blocks: Option<usize>,
@@ -254,7 +261,6 @@ impl KroneckerWork {
                 linv[i * d + c] = s / l[i * d + i];
             }
         }
-        let k = kt.k;
         Some(KroneckerWork {
             d,
             block,
@@ -271,7 +277,7 @@ impl KroneckerWork {
             zeta: vec![0.0; k * d],
             acc: vec![0.0; 2 * d],
             exact: SelfBlocks::new(k, nodes, d, block, self_block_rate),
-            small: (block == d && d <= SMALL_MAX_D).then(|| SmallSolve::new(kt, d)),
+            small: (block == d && d <= SMALL_MAX_D).then(|| SmallSolve::new(k, d)),
         })
     }
 

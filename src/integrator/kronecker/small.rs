@@ -47,14 +47,24 @@ fn columns_times<const D: usize>(cols: &[f64], x: &[f64], k: usize, out: &mut [f
 /// along the coordinates).
 pub(crate) const SMALL_MAX_D: usize = 4;
 
-/// The Schur factors by columns and the solve's per-coordinate scratch.
+/// R and U stored by columns for this kernel: column a at `[a·w ..][..k]`, w =
+/// [`column_stride`] (the rows beyond k zero), from the row-major k×k `m`.
+pub(super) fn by_columns(m: &[f64], k: usize) -> Vec<f64> {
+    let w = column_stride(k);
+    let mut out = vec![0.0; k * w];
+    for i in 0..k {
+        for a in 0..k {
+            out[a * w + i] = m[i * k + a];
+        }
+    }
+    out
+}
+
+/// The solve's per-coordinate scratch (the Schur factors by columns are in the tables:
+/// [`super::KroneckerTables::r_cols`], [`super::KroneckerTables::u_cols`]).
 #[derive(Debug, Clone)]
 pub(crate) struct SmallSolve {
     k: usize,
-    /// R and U by columns: column a at `[a·w ..][..k]`, w = [`PANEL`] for k ≤ [`PANEL`] (the
-    /// rows beyond k zero) and w = k otherwise.
-    r_cols: Vec<f64>,
-    u_cols: Vec<f64>,
     /// R r, (R r) V, ζ and ζ Vᵀ (k×D each, by rows, as the right-hand side).
     y: Vec<f64>,
     yh: Vec<f64>,
@@ -63,23 +73,10 @@ pub(crate) struct SmallSolve {
 }
 
 impl SmallSolve {
-    /// Buffers for the Schur tables `kt` and D ≤ [`SMALL_MAX_D`] coordinates.
-    pub(crate) fn new(kt: &super::KroneckerTables, d: usize) -> Self {
-        let k = kt.k;
-        let w = column_stride(k);
-        let by_columns = |m: &[f64]| {
-            let mut out = vec![0.0; k * w];
-            for i in 0..k {
-                for a in 0..k {
-                    out[a * w + i] = m[i * k + a];
-                }
-            }
-            out
-        };
+    /// Buffers for k = n − 1 unknown blocks and D ≤ [`SMALL_MAX_D`] coordinates.
+    pub(crate) fn new(k: usize, d: usize) -> Self {
         SmallSolve {
             k,
-            r_cols: by_columns(&kt.r),
-            u_cols: by_columns(&kt.u),
             y: vec![0.0; d * k],
             yh: vec![0.0; d * k],
             zeta: vec![0.0; d * k],
@@ -123,7 +120,7 @@ impl SmallSolve {
         // y = R r: each entry summed over a in order from zero (the general route's
         // few-column product), by columns of R, the D coordinates of a row side by side.
         let y = &mut self.y[..k * D];
-        columns_times::<D>(&self.r_cols, rhs, k, y);
+        columns_times::<D>(&kt.r_cols, rhs, k, y);
         // ŷ = y V: ŷ_ar = Σ_s y_as V[s][r], s in order from zero.
         for (yh, y) in self.yh.chunks_exact_mut(D).zip(y.chunks_exact(D)) {
             for (r, o) in yh.iter_mut().enumerate() {
@@ -176,6 +173,6 @@ impl SmallSolve {
             }
         }
         // x = U (ζ Vᵀ), by columns of U, c in order from zero, into the right-hand side.
-        columns_times::<D>(&self.u_cols, &self.back, k, &mut rhs[..k * D]);
+        columns_times::<D>(&kt.u_cols, &self.back, k, &mut rhs[..k * D]);
     }
 }

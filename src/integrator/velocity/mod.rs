@@ -40,6 +40,8 @@ mod solve;
 
 pub(crate) use solve::{FIXED_POINT_HANDOVER, VelocityState};
 
+use std::sync::OnceLock;
+
 use crate::integrator::Tables;
 use crate::integrator::kronecker::KroneckerTables;
 use crate::linalg::{PANEL, panel_product};
@@ -82,9 +84,11 @@ pub(crate) struct VelocityTables {
     pub to_basis: Vec<f64>,
     /// The modes of a curve given by increments ΔQ (n×D): c = (1/h) F ΔQ, k×n.
     pub from_basis: Vec<f64>,
-    /// The Schur form of C = Σ_j b_j ψ(c_j) I(c_j)ᵀ for the frozen-Hessian solve (`None`
-    /// when it could not be computed).
-    pub kron: Option<KroneckerTables>,
+    /// C = Σ_j b_j ψ(c_j) I(c_j)ᵀ, k×k: the pencil of the frozen Newton matrix.
+    pub pencil: Vec<f64>,
+    /// The Schur form of C for the frozen-Hessian solve, built when first asked for
+    /// ([`VelocityTables::kron`]).
+    kron: OnceLock<Option<KroneckerTables>>,
 }
 
 /// P̃_a(τ) for a < len and I_a(τ) for a < len − 1 (with I_0 = τ), from the Legendre
@@ -270,10 +274,6 @@ impl VelocityTables {
                 }
             }
         }
-        let mut identity = vec![0.0; k * k];
-        for a in 0..k {
-            identity[a * k + a] = 1.0;
-        }
         let finite = [&it, &psi, &extrapolate, &to_basis, &from_basis]
             .iter()
             .all(|v| v.iter().all(|x| x.is_finite()));
@@ -303,13 +303,30 @@ impl VelocityTables {
             extrapolate_cols: panel_columns(&extrapolate, k, k),
             to_basis_cols: panel_columns(&to_basis, n, k),
             from_basis_cols: panel_columns(&from_basis, k, n),
-            kron: KroneckerTables::from_pencil(&c, &identity, k),
+            pencil: c,
+            kron: OnceLock::new(),
             iota: it,
             psi,
             extrapolate,
             to_basis,
             from_basis,
         })
+    }
+}
+
+impl VelocityTables {
+    /// The Schur form of the pencil C for the frozen-Hessian solve, or `None` when it could
+    /// not be computed (the velocity form then hands such steps to the nodal solvers). Built
+    /// on the first call, when a step first needs the frozen Hessian: runs that the
+    /// fixed-point start solves throughout never do.
+    pub(crate) fn kron(&self) -> Option<&KroneckerTables> {
+        let k = self.k;
+        let schur = || {
+            let mut identity = vec![0.0; k * k];
+            identity.iter_mut().step_by(k + 1).for_each(|x| *x = 1.0);
+            KroneckerTables::from_pencil(&self.pencil, &identity, k)
+        };
+        self.kron.get_or_init(schur).as_ref()
     }
 }
 

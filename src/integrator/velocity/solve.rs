@@ -186,7 +186,7 @@ impl VelocityState {
             start: vec![0.0; size],
             mass_scratch: vec![0.0; d],
             kron: KroneckerWork::new(
-                vt.kron.as_ref()?,
+                vt.k,
                 d,
                 mass,
                 blocks,
@@ -248,9 +248,6 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             }
         }
         ws.iterate.clear_last_lo();
-        if vt.kron.is_none() {
-            return false;
-        }
         // `Auto`'s memory (every solver that reaches the velocity form keeps it): start with the
         // dense matrix for the steps after two stalls of the frozen Hessian.
         let start_dense = ws.velocity.as_ref().is_some_and(|v| v.dense.is_some())
@@ -367,7 +364,7 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> NewtonIteration for VelocityNewton<
             iterations: iteration,
             reason: String::new(),
         };
-        let (Some(vs), Some(kt)) = (ws.velocity.as_mut(), vt.kron.as_ref()) else {
+        let Some(vs) = ws.velocity.as_mut() else {
             return Err(fail("no velocity form"));
         };
         if self.fixed_point
@@ -378,6 +375,10 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> NewtonIteration for VelocityNewton<
             let scale = scale.max(f64::MIN_POSITIVE);
             return Ok((Correction { size, scale }, self.termination()));
         }
+        // The frozen Hessian's first use builds the pencil's Schur form.
+        let Some(kt) = vt.kron() else {
+            return Err(fail("no Schur form of the velocity pencil"));
+        };
         if !self.factored {
             // At this iterate: the step's guess, or where the iteration stalled.
             self.stats.factorizations += 1;
@@ -499,12 +500,13 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> NewtonIteration for VelocityNewton<
         self.stats.gradient_evaluations += gvi.tables().m;
         let (h, d) = (gvi.step_size(), self.ws.d);
         let fixed_point = self.ws.separable.as_ref().filter(|_| self.fixed_point);
-        if let (Some(vs), Some(kt)) = (self.ws.velocity.as_mut(), vt.kron.as_ref()) {
-            match fixed_point {
-                Some(sep) => {
+        if let Some(vs) = self.ws.velocity.as_mut() {
+            match (fixed_point, vt.kron()) {
+                (Some(sep), _) => {
                     vs.correct_fixed_point(sep, d);
                 }
-                None => vs.correct(self.linear, kt, h, d),
+                (None, Some(kt)) => vs.correct(self.linear, kt, h, d),
+                (None, None) => {}
             }
         }
         if self.fixed_point {
