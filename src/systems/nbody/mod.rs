@@ -321,6 +321,16 @@ impl Mechanical for NBody {
 
     fn potential_gradient_at_points(&self, q: &[f64], out: &mut [f64]) {
         let d = self.degrees_of_freedom();
+        // The nodes side by side in vector lanes (the same bits as node by node), unless
+        // there are enough bodies for one rayon task per node.
+        if self.masses.len() < PARALLEL_BODIES || !cfg!(feature = "parallel") {
+            if self.dim == 2 {
+                pairwise::gradient_at_points::<2>(self.g, &self.masses, q, d, out);
+            } else {
+                pairwise::gradient_at_points::<3>(self.g, &self.masses, q, d, out);
+            }
+            return;
+        }
         for_each_node(self.masses.len(), q, d, None, out, d, |qj, _, oj| {
             self.potential_gradient(qj, oj)
         });
