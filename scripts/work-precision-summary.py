@@ -123,9 +123,10 @@ def main():
         cpu = []
     out.append("## Machine and versions\n")
     out.append(f"- CPU: {cpu[0] if cpu else platform.processor()} ({os.cpu_count()} cores), "
-               "a shared virtual machine; times are wall-clock medians. The committed run was made "
-               "under a load of 4–6 from other jobs (about 2× a quiet machine's times); the ratios "
-               "moved by up to 2× between two full runs ([README.md](README.md) compares them).")
+               "a shared virtual machine; times are wall-clock medians. The committed run had the "
+               "machine to itself (load about 1: the study, `uptime` before each scene); a repeat "
+               "of one scene minutes later moved its times by up to 1.4× and its ratios by up to "
+               "1.13× ([solvers.md](../solvers.md#fastest-at-1e-9-issue-35-where-each-target-stands)).")
     out.append("- galerkin-vi: this repository, release build (`target-cpu=native`); DOP853 from "
                "`differential-equations` 0.7; REBOUND 5.2.2 under CPython 3.11 "
                "(`scripts/rebound/requirements.txt`).")
