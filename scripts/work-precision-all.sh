@@ -4,7 +4,7 @@
 # (docs/studies/work-precision-long/), the outer solar system
 # (docs/studies/work-precision-outer-solar-system/) and the J2000 10-body scene
 # (docs/studies/work-precision-solar-system/). Run it on a quiet machine: every timing is
-# wall-clock, one configuration after another. About 7 minutes on a 2-core machine
+# wall-clock, one configuration after another. About 6 minutes on a 2-core machine
 # (REBOUND 5.2.2 runs and the economical and compact families included).
 #
 # Needs the REBOUND venv: python3 -m venv .venv-rebound &&
@@ -31,12 +31,12 @@ $GVI work-precision kepler --long --external $E/rebound-kepler-T20000.csv \
 uptime >&2
 rebound outer-solar-system --repeats 5 --out $E/rebound-outer-solar-system.csv
 $GVI work-precision outer-solar-system --repeats 3 --bases chebyshev,legendre \
-  --ns 6,8,10,12,14,16,20,24 --divisors 1,2,4 \
+  --ns 6,8,10,12,14,16,20,24 --divisors 1,2,3,4,6 \
   --external $E/rebound-outer-solar-system.csv --out docs/studies/work-precision-outer-solar-system
 uptime >&2
 rebound solar-system --repeats 5 --out $E/rebound-solar-system.csv
 $GVI work-precision solar-system --repeats 3 --bases chebyshev,legendre \
-  --ns 8,10,12,16,20,25,32 --divisors 1,2,4,8 \
+  --ns 8,10,12,16,20,25,32 --divisors 1,2,4,6,8 \
   --external $E/rebound-solar-system.csv --out docs/studies/work-precision-solar-system
 uptime >&2
 python3 scripts/work-precision-summary.py > docs/studies/work-precision-summary.md

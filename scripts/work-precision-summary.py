@@ -24,9 +24,9 @@ STUDIES = [
     ("Kepler e = 0.6, T = 20 000", "docs/studies/work-precision-long/work_precision.json",
      "gvi work-precision kepler --long --external docs/studies/external/rebound-kepler-T20000.csv --out docs/studies/work-precision-long", True),
     ("Outer solar system, T = 182 500 d", "docs/studies/work-precision-outer-solar-system/work_precision.json",
-     "gvi work-precision outer-solar-system --repeats 3 --bases chebyshev,legendre --ns 6,8,10,12,14,16,20,24 --divisors 1,2,4 --external docs/studies/external/rebound-outer-solar-system.csv --out docs/studies/work-precision-outer-solar-system", False),
+     "gvi work-precision outer-solar-system --repeats 3 --bases chebyshev,legendre --ns 6,8,10,12,14,16,20,24 --divisors 1,2,3,4,6 --external docs/studies/external/rebound-outer-solar-system.csv --out docs/studies/work-precision-outer-solar-system", False),
     ("J2000 10-body, T = 10 000 d", "docs/studies/work-precision-solar-system/work_precision.json",
-     "gvi work-precision solar-system --repeats 3 --bases chebyshev,legendre --ns 8,10,12,16,20,25,32 --divisors 1,2,4,8 --external docs/studies/external/rebound-solar-system.csv --out docs/studies/work-precision-solar-system", False),
+     "gvi work-precision solar-system --repeats 3 --bases chebyshev,legendre --ns 8,10,12,16,20,25,32 --divisors 1,2,4,6,8 --external docs/studies/external/rebound-solar-system.csv --out docs/studies/work-precision-solar-system", False),
 ]
 # 1e-11: issue 35 names it for the outer solar system (SABA(10,6,4) levels off at 1.2e-11).
 TARGETS = [1e-6, 1e-9, 1e-11, 1e-12]
@@ -124,9 +124,10 @@ def main():
     out.append("## Machine and versions\n")
     out.append(f"- CPU: {cpu[0] if cpu else platform.processor()} ({os.cpu_count()} cores), "
                "a shared virtual machine; times are wall-clock medians. The committed run had the "
-               "machine to itself (load about 1: the study, `uptime` before each scene); a repeat "
-               "of one scene minutes later moved its times by up to 1.4× and its ratios by up to "
-               "1.13× ([solvers.md](../solvers.md#fastest-at-1e-9-issue-35-where-each-target-stands)).")
+               "machine to itself (load about 1: the study, `uptime` before each scene); between runs "
+               "minutes apart single rows still moved by up to 1.4× (DOP853 at 1e-9 on Kepler: "
+               "1.09 and 1.49 ms), and ratios with them "
+               "([solvers.md](../solvers.md#fastest-at-1e-9-issue-35-where-each-target-stands)).")
     out.append("- galerkin-vi: this repository, release build (`target-cpu=native`); DOP853 from "
                "`differential-equations` 0.7; REBOUND 5.2.2 under CPython 3.11 "
                "(`scripts/rebound/requirements.txt`).")
