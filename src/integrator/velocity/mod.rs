@@ -85,7 +85,7 @@ pub(crate) struct VelocityTables {
     /// The modes of a curve given by increments ΔQ (n×D): c = (1/h) F ΔQ, k×n.
     pub from_basis: Vec<f64>,
     /// C = Σ_j b_j ψ(c_j) I(c_j)ᵀ, k×k: the pencil of the frozen Newton matrix.
-    pub pencil: Vec<f64>,
+    pencil: Vec<f64>,
     /// The Schur form of C for the frozen-Hessian solve, built when first asked for
     /// ([`VelocityTables::kron`]).
     kron: OnceLock<Option<KroneckerTables>>,
@@ -312,9 +312,7 @@ impl VelocityTables {
             from_basis,
         })
     }
-}
 
-impl VelocityTables {
     /// The Schur form of the pencil C for the frozen-Hessian solve, or `None` when it could
     /// not be computed (the velocity form then hands such steps to the nodal solvers). Built
     /// on the first call, when a step first needs the frozen Hessian: runs that the
