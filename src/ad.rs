@@ -15,30 +15,11 @@
 use num_dual::{Dual64, HyperDual64};
 use std::cell::RefCell;
 
+use crate::scratch::with_scratch;
+
 thread_local! {
     static DUAL_SCRATCH: RefCell<Vec<Dual64>> = const { RefCell::new(Vec::new()) };
     static HYPER_SCRATCH: RefCell<Vec<HyperDual64>> = const { RefCell::new(Vec::new()) };
-}
-
-/// Run `body` with a scratch vector of length `len`, reusing a thread-local buffer when it is
-/// free (a nested call, which cannot borrow it, gets a fresh vector instead of panicking).
-fn with_scratch<S: Copy, R>(
-    key: &'static std::thread::LocalKey<RefCell<Vec<S>>>,
-    len: usize,
-    fill: S,
-    body: impl FnOnce(&mut [S]) -> R,
-) -> R {
-    key.with(|cell| match cell.try_borrow_mut() {
-        Ok(mut buf) => {
-            buf.clear();
-            buf.resize(len, fill);
-            body(&mut buf)
-        }
-        Err(_) => {
-            let mut buf = vec![fill; len];
-            body(&mut buf)
-        }
-    })
 }
 
 /// Gradient of `f` at `x` by forward-mode AD: `grad[i] = ∂f/∂x_i`. Returns f(x).

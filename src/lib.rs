@@ -48,6 +48,7 @@ pub mod periodic;
 pub mod quadrature;
 pub mod reduce;
 pub mod refinement;
+mod scratch;
 pub mod solve;
 pub mod stats;
 pub mod symmetries;

@@ -11,6 +11,8 @@
 
 use std::cell::RefCell;
 
+use crate::scratch::with_scratch;
+
 /// ∇V(q) into `out` (N·K): for every pair i < j with d = qᵢ − qⱼ, r² = |d|² and
 /// f = G mᵢ mⱼ / r³, out_i += f d and out_j −= f d.
 pub(super) fn gradient<const K: usize>(g: f64, masses: &[f64], q: &[f64], out: &mut [f64]) {
@@ -67,15 +69,10 @@ pub(super) fn gradient_at_points<const K: usize>(
     if d == 0 {
         return;
     }
-    LANE_SCRATCH.with(|cell| match cell.try_borrow_mut() {
-        Ok(mut buf) => {
-            if buf.len() < 2 * d {
-                buf.resize(2 * d, [0.0; LANES]);
-            }
-            gradient_in_lanes::<K>(g, masses, q, d, out, &mut buf[..2 * d]);
-        }
-        // A nested call (none in the crate) gets its own buffer instead of panicking.
-        Err(_) => gradient_in_lanes::<K>(g, masses, q, d, out, &mut vec![[0.0; LANES]; 2 * d]),
+    // Every row the kernel reads it writes first (each group's transposed nodes and zeroed
+    // sums), so the buffer's previous contents do not matter.
+    with_scratch(&LANE_SCRATCH, 2 * d, [0.0; LANES], |buf| {
+        gradient_in_lanes::<K>(g, masses, q, d, out, buf)
     });
 }
 
