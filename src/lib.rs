@@ -39,6 +39,7 @@ pub mod events;
 pub mod forcing;
 pub mod geometry;
 pub mod integrator;
+pub mod kepler_adapted;
 pub mod lagrangian;
 pub mod lie;
 pub mod linalg;

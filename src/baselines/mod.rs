@@ -16,6 +16,7 @@ mod rk4;
 mod verlet;
 
 pub use composition::{Composition, CompositionScheme};
+pub(crate) use gauss_collocation::gauss_tableau;
 pub use gauss_collocation::{GaussCollocationBaseline, MAX_GAUSS_STAGES};
 pub use rk4::Rk4;
 pub use verlet::StormerVerlet;

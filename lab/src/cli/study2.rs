@@ -66,6 +66,14 @@ pub struct WorkPrecisionArgs {
     /// and `compact` (n points, families galerkin-BASIS-compact). Default: all three.
     #[arg(long, value_delimiter = ',', value_parser = super::values::parsed::<QuadPoints>)]
     pub quadratures: Option<Vec<QuadPoints>>,
+    /// Stage counts of the Kepler-adapted Galerkin integrator, comma-separated (N-body scenes;
+    /// families galerkin-kepler-S; default: the preset's).
+    #[arg(long, value_delimiter = ',', value_parser = super::values::count)]
+    pub kepler_stages: Option<Vec<usize>>,
+    /// Kepler-adapted steps per sample interval, comma-separated (h = Δ/m; default: the
+    /// preset's).
+    #[arg(long, value_delimiter = ',', value_parser = super::values::count)]
+    pub kepler_divisors: Option<Vec<usize>>,
     #[command(flatten)]
     pub run: SceneArgs,
 }
@@ -78,6 +86,8 @@ fn refuse_study_flags_with_write_reference(args: &WorkPrecisionArgs) -> Result<(
         ("--ns", args.ns.is_some()),
         ("--divisors", args.divisors.is_some()),
         ("--quadratures", args.quadratures.is_some()),
+        ("--kepler-stages", args.kepler_stages.is_some()),
+        ("--kepler-divisors", args.kepler_divisors.is_some()),
         ("--repeats", args.repeats.is_some()),
         ("--external", !args.external.is_empty()),
         ("--out", args.out.is_some()),
@@ -146,6 +156,12 @@ pub fn run_work_precision(args: WorkPrecisionArgs) -> Result<(), LabError> {
     }
     if let Some(m) = &args.divisors {
         config.galerkin_divisors = m.clone();
+    }
+    if let Some(k) = &args.kepler_stages {
+        config.kepler_stages = k.clone();
+    }
+    if let Some(m) = &args.kepler_divisors {
+        config.kepler_divisors = m.clone();
     }
     if let Some(q) = &args.quadratures {
         config.quad_points = QuadPoints::ALL

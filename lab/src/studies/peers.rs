@@ -10,8 +10,9 @@ use galerkin_vi::baselines::{
 };
 use galerkin_vi::basis::BasisKind;
 use galerkin_vi::integrator::GalerkinIntegrator;
+use galerkin_vi::kepler_adapted::KeplerAdaptedGalerkin;
 use galerkin_vi::quadrature::QuadratureKind;
-use galerkin_vi::systems::{AnySystem, System};
+use galerkin_vi::systems::{AnySystem, NBody, System};
 use serde::Serialize;
 
 /// How many Gauss–Legendre points a Galerkin step uses: the paper's 2n, the economical
@@ -113,6 +114,12 @@ pub enum Peer {
         /// Which one.
         scheme: CompositionScheme,
     },
+    /// The Kepler-adapted Galerkin integrator (Gauss collocation with `s` stages in the
+    /// interaction picture of the Jacobi Wisdom–Holman splitting): N-body scenes only.
+    KeplerAdapted {
+        /// Stages (order 2s).
+        s: usize,
+    },
     /// DOP853 (adaptive) with rtol = atol = tolerance, stopped at every sample time.
     Dop853 {
         /// Tolerance.
@@ -131,6 +138,7 @@ impl Peer {
             Peer::StormerVerlet => "stormer-verlet".into(),
             Peer::Rk4 => "rk4".into(),
             Peer::Gauss { s } => format!("gauss-{s}"),
+            Peer::KeplerAdapted { s } => format!("galerkin-kepler-{s}"),
             Peer::Composition { scheme } => scheme.as_str().into(),
             Peer::Dop853 { .. } => "dop853".into(),
         }
@@ -205,6 +213,18 @@ pub fn run_peer<S: System + 'static>(
             divisor,
             samples,
         ),
+        Peer::KeplerAdapted { s } => {
+            let nbody = nbody_of(system).ok_or_else(|| LabError::InvalidArgument {
+                name: "peer".into(),
+                reason: "the Kepler-adapted integrator needs an N-body scene".into(),
+            })?;
+            sampled(
+                &mut KeplerAdaptedGalerkin::new(nbody, s, h)?,
+                initial,
+                divisor,
+                samples,
+            )
+        }
         Peer::Dop853 { tolerance } => {
             let any = system as &dyn std::any::Any;
             match any.downcast_ref::<AnySystem>() {
@@ -214,6 +234,15 @@ pub fn run_peer<S: System + 'static>(
             }
         }
     })
+}
+
+/// The N-body system inside `system`, if it is one (directly or as a scene's [`AnySystem`]).
+pub fn nbody_of<S: System + 'static>(system: &S) -> Option<&NBody> {
+    let any = system as &dyn std::any::Any;
+    match any.downcast_ref::<AnySystem>() {
+        Some(AnySystem::NBody(nb)) => Some(nb),
+        _ => any.downcast_ref::<NBody>(),
+    }
 }
 
 #[cfg(feature = "dop853")]

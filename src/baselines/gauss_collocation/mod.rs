@@ -81,21 +81,7 @@ impl<'a, L: Lagrangian> GaussCollocationBaseline<'a, L> {
             });
         }
         let parts = CanonicalParts::new(lagrangian, h)?;
-        let rule = GaussLegendre::new(s)?.rule()?;
-        let (c, b) = (rule.nodes.clone(), rule.weights.clone());
-        // a_ij = ∫₀^{c_i} ℓ_j: the s-point Gauss rule mapped to [0, c_i] is exact (degree s−1).
-        let lagrange = |j: usize, x: f64| {
-            (0..s)
-                .filter(|&k| k != j)
-                .map(|k| (x - c[k]) / (c[j] - c[k]))
-                .product::<f64>()
-        };
-        let mut a = vec![0.0; s * s];
-        for i in 0..s {
-            for j in 0..s {
-                a[i * s + j] = c[i] * (0..s).map(|k| b[k] * lagrange(j, c[i] * c[k])).sum::<f64>();
-            }
-        }
+        let (c, b, a) = gauss_tableau(s)?;
         let mut a2 = vec![0.0; s * s];
         for i in 0..s {
             for j in 0..s {
@@ -349,6 +335,29 @@ impl<L: Lagrangian> GaussCollocationBaseline<'_, L> {
         }
         Ok((qs, ps))
     }
+}
+
+/// The Butcher tableau (c, b, A) of s-stage Gauss–Legendre collocation on [0, 1]: c the
+/// Gauss nodes, b their weights and a_ij = ∫₀^{c_i} ℓ_j(τ) dτ, A row-major s×s (Hairer, Lubich &
+/// Wanner, *Geometric Numerical Integration*, §II.1.3). Shared with the Kepler-adapted
+/// integrator, which runs the same collocation in the interaction picture.
+pub(crate) fn gauss_tableau(s: usize) -> Result<(Vec<f64>, Vec<f64>, Vec<f64>)> {
+    let rule = GaussLegendre::new(s)?.rule()?;
+    let (c, b) = (rule.nodes.clone(), rule.weights.clone());
+    // a_ij = ∫₀^{c_i} ℓ_j: the s-point Gauss rule mapped to [0, c_i] is exact (degree s−1).
+    let lagrange = |j: usize, x: f64| {
+        (0..s)
+            .filter(|&k| k != j)
+            .map(|k| (x - c[k]) / (c[j] - c[k]))
+            .product::<f64>()
+    };
+    let mut a = vec![0.0; s * s];
+    for i in 0..s {
+        for j in 0..s {
+            a[i * s + j] = c[i] * (0..s).map(|k| b[k] * lagrange(j, c[i] * c[k])).sum::<f64>();
+        }
+    }
+    Ok((c, b, a))
 }
 
 /// x += dx with the running compensation c (Kahan summation).

@@ -69,6 +69,11 @@ pub struct WorkPrecisionConfig {
     pub baseline_divisors: Vec<usize>,
     /// Gauss collocation stage counts.
     pub gauss_stages: Vec<usize>,
+    /// Stage counts of the Kepler-adapted Galerkin integrator (N-body scenes only; families
+    /// `galerkin-kepler-S`).
+    pub kepler_stages: Vec<usize>,
+    /// Kepler-adapted steps per sample interval (h = Δ/m).
+    pub kepler_divisors: Vec<usize>,
     /// DOP853 tolerances (rtol = atol).
     pub tolerances: Vec<f64>,
     /// Skip fixed-step runs with more steps than this.
@@ -88,6 +93,8 @@ impl WorkPrecisionConfig {
             ns: (4..=24).chain((26..=40).step_by(2)).collect(),
             baseline_divisors: (0..=14).map(|k| 1 << k).collect(),
             gauss_stages: vec![2, 4],
+            kepler_stages: vec![4, 6, 8],
+            kepler_divisors: vec![1, 2, 3, 4, 6, 8],
             tolerances: half_decades(4, 15),
             max_steps: 2_000_000,
         }
@@ -104,6 +111,8 @@ impl WorkPrecisionConfig {
             ns: vec![4, 8, 12, 16],
             baseline_divisors: vec![1, 4, 16, 64],
             gauss_stages: vec![2],
+            kepler_stages: vec![4],
+            kepler_divisors: vec![1, 2],
             tolerances: vec![1e-4, 1e-8, 1e-12],
             max_steps: 20_000,
         }
@@ -123,6 +132,8 @@ impl WorkPrecisionConfig {
             ns: vec![16, 20, 24, 28, 32],
             baseline_divisors: vec![16, 32, 64, 128],
             gauss_stages: vec![4],
+            kepler_stages: vec![6, 8],
+            kepler_divisors: vec![2, 4],
             tolerances: half_decades(10, 15),
             max_steps: 2_000_000,
         }
@@ -350,6 +361,19 @@ fn study_system<S: System + 'static>(
                         .collect(),
                 );
             }
+        }
+    }
+    // The Kepler-adapted integrator on N-body scenes: one family per stage count, over its
+    // own step grid (its steps are longer than the polynomial bases').
+    if crate::studies::peers::nbody_of(system).is_some() {
+        for &s in &config.kepler_stages {
+            plan.push(
+                config
+                    .kepler_divisors
+                    .iter()
+                    .map(|&m| (Peer::KeplerAdapted { s }, m))
+                    .collect(),
+            );
         }
     }
     let mut fixed = vec![Peer::StormerVerlet, Peer::Rk4];

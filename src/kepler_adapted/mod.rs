@@ -1,0 +1,470 @@
+//! A Galerkin variational integrator for planetary systems whose approximation space is
+//! adapted to Kepler motion: Gauss collocation in the *interaction picture* of the
+//! Wisdom–Holman splitting (Antoñana, Makazaga & Murua, arXiv:2511.03655; the paper's
+//! "enriched" approximation spaces, §4, for near-Keplerian motion).
+//!
+//! # The method
+//!
+//! In Jacobi coordinates (Wisdom & Holman 1991, with the Kepler masses of REBOUND's WHFast)
+//! the N-body Hamiltonian splits as H = H_K + H_I: one Kepler problem per planet (flow φᴷ_t, exact, [`KeplerDrift`]) and an interaction H_I(r′)
+//! of the order of the planet-to-star mass ratio ε. Over a step [t_k, t_k + h] write the
+//! state as y(t) = φᴷ_{t−t_k}(z(t)). Since φᴷ is symplectic this change of variables is
+//! canonical, and z obeys Hamilton's equations of the time-dependent Hamiltonian
+//!
+//! H̃(z, τ) = H_I(φᴷ_τ(z)),  ż = J∇H̃ = (Dφᴷ_τ(z))⁻¹ J∇H_I(φᴷ_τ(z)),   (1)
+//!
+//! whose right-hand side is O(ε) and varies on the planets' orbital periods. One step applies
+//! s-stage Gauss–Legendre collocation to (1) from z(t_k) = y_k and then the exact Kepler flow:
+//! y_{k+1} = φᴷ_h(z_{k+1}).
+//!
+//! # Which variational integrator it is
+//!
+//! s-stage Gauss collocation of a Hamiltonian system is the Galerkin discretisation of
+//! Hamilton's phase-space principle δ∫(p·q̇ − H̃) dt = 0 with curves that are polynomials of
+//! degree s and the s-point Gauss–Legendre rule for the action (the Galerkin type-II discrete
+//! Hamiltonian of Leok & Zhang, *IMA J. Numer. Anal.* 31 (2011); Hairer, Lubich & Wanner,
+//! *Geometric Numerical Integration*, §VI.6). The canonical change of variables leaves the
+//! phase-space action unchanged up to boundary terms, so in the physical variables the method
+//! is the same Galerkin principle for H over the approximation space
+//!
+//! { t ↦ φᴷ_{t−t_k}(P(t)) : P a polynomial of degree s },
+//!
+//! Kepler orbits whose elements vary polynomially: for ε = 0 the space contains the exact
+//! solution, and the error constant carries the factor ε. Hence the step map is symplectic
+//! (a composition of the symplectic Galerkin map and the exact Kepler flow), and it conserves
+//! the total angular momentum exactly (up to the stage solve and round-off): H̃ is invariant
+//! under rotations (H_I is and φᴷ commutes with them), so Σ r′ᵢ × p′ᵢ is a quadratic
+//! invariant of (1), which Gauss collocation conserves; φᴷ conserves each body's angular
+//! momentum; the Jacobi transform conserves the total. The total linear momentum is the
+//! centre of mass's, which drifts freely and exactly.
+//!
+//! # Cost
+//!
+//! Each evaluation of (1) at the s stages makes one Kepler drift per planet and stage (warm
+//! started from the previous iterate's universal anomaly), one pairwise force sum per stage
+//! and one tangent pull-back per planet and stage. The stage equations are solved by
+//! fixed-point iteration: its contraction is O(ε h²ω²), so it converges in a few iterations.
+
+pub mod drift;
+mod jacobi;
+#[cfg(test)]
+mod tests;
+
+pub use drift::{DriftError, KeplerDrift};
+
+use crate::baselines::{OneStepMethod, gauss_tableau};
+use crate::error::{GviError, Result};
+use crate::newton::{Correction, Divergence, NewtonFailure, NewtonIteration, Termination, drive};
+use crate::systems::NBody;
+use jacobi::{Jacobi, add, scale};
+
+/// The largest number of stages accepted.
+pub const MAX_KEPLER_ADAPTED_STAGES: usize = 16;
+
+/// Iteration cap of the stage equations' fixed-point iteration.
+const MAX_ITERATIONS: usize = 40;
+
+/// Converged at the round-off floor once the stage increment stops shrinking below this
+/// (relative to each planet's Jacobi position and momentum).
+const FLOOR: f64 = 1e-14;
+
+/// The Kepler-adapted Galerkin integrator: s-stage Gauss collocation in the interaction
+/// picture of the Jacobi Wisdom–Holman splitting (order 2s; see the [module](self) for the
+/// method and its variational statement).
+///
+/// It integrates an [`NBody`] system (2 or 3 dimensions) in its own coordinates — q
+/// body-major, p = m v — and fits systems with one dominant mass, body 0 (a star and its
+/// planets): the error constant is proportional to the planets' mass ratio.
+///
+/// ```
+/// use galerkin_vi::baselines::OneStepMethod;
+/// use galerkin_vi::kepler_adapted::KeplerAdaptedGalerkin;
+/// use galerkin_vi::systems::NBody;
+///
+/// // A star and one light planet on a circular orbit: nearly pure Kepler motion.
+/// let nb = NBody::new(vec![1.0, 1e-6], 1.0, 2)?;
+/// let v = (1.0f64 + 1e-6).sqrt();
+/// let (q, p) = ([0.0, 0.0, 1.0, 0.0], [0.0, -1e-6 * v, 0.0, 1e-6 * v]);
+/// let mut m = KeplerAdaptedGalerkin::new(&nb, 4, 0.5)?;
+/// let (mut q1, mut p1) = ([0.0; 4], [0.0; 4]);
+/// m.step(0.0, &q, &p, &mut q1, &mut p1)?;
+/// // The two-body problem is a pure Kepler motion in Jacobi coordinates: exact.
+/// let r = q1[2] - q1[0];
+/// assert!((r - 0.5f64.cos()).abs() < 1e-12);
+/// # Ok::<(), galerkin_vi::GviError>(())
+/// ```
+#[derive(Debug, Clone)]
+pub struct KeplerAdaptedGalerkin {
+    jacobi: Jacobi,
+    dim: usize,
+    h: f64,
+    s: usize,
+    c: Vec<f64>,
+    b: Vec<f64>,
+    /// a_ij, row-major s×s.
+    a: Vec<f64>,
+    stages: StageState,
+    evaluations: usize,
+    iterations: usize,
+}
+
+/// The stage equations' unknowns and work buffers: planet i of stage j at index j·n + i
+/// (n = N − 1 planets, Jacobi bodies 1 … N−1).
+#[derive(Debug, Clone)]
+struct StageState {
+    n: usize,
+    /// z_k: the Jacobi positions and momenta at the step's start (entry 0 the centre of mass).
+    rj: Vec<[f64; 3]>,
+    pj: Vec<[f64; 3]>,
+    /// Stage values Z_j (positions, momenta).
+    zq: Vec<[f64; 3]>,
+    zp: Vec<[f64; 3]>,
+    /// Right-hand side of (1) at the stage values.
+    fq: Vec<[f64; 3]>,
+    fp: Vec<[f64; 3]>,
+    /// Universal anomalies of the last stage drifts (warm starts); NaN before the first.
+    anomaly: Vec<f64>,
+    /// Universal anomalies of the last full-step drifts.
+    full_anomaly: Vec<f64>,
+    /// One stage's drifts, its Jacobi positions, Cartesian scratch and gradients.
+    drifts: Vec<KeplerDrift>,
+    positions: Vec<[f64; 3]>,
+    cartesian: Vec<[f64; 3]>,
+    cartesian_gradient: Vec<[f64; 3]>,
+    gradient: Vec<[f64; 3]>,
+    /// Cartesian state in and out.
+    r: Vec<[f64; 3]>,
+    p: Vec<[f64; 3]>,
+}
+
+impl KeplerAdaptedGalerkin {
+    /// The integrator with `stages` Gauss stages (1 ≤ s ≤ [`MAX_KEPLER_ADAPTED_STAGES`]) and
+    /// step `h` > 0 for `system` (at least two bodies; body 0 the central mass).
+    pub fn new(system: &NBody, stages: usize, h: f64) -> Result<Self> {
+        if !(1..=MAX_KEPLER_ADAPTED_STAGES).contains(&stages) {
+            return Err(GviError::InvalidInput {
+                name: "Kepler-adapted stages".into(),
+                reason: format!("s = {stages}; need 1 ≤ s ≤ {MAX_KEPLER_ADAPTED_STAGES}"),
+            });
+        }
+        let (c, b, a) = gauss_tableau(stages)?;
+        Self::from_tableau(system, c, b, a, h)
+    }
+
+    /// The interaction-picture step with the Runge–Kutta tableau (c, b, A) (A row-major):
+    /// Gauss for [`new`](Self::new); other tableaux serve as the property tests' negative
+    /// controls.
+    fn from_tableau(system: &NBody, c: Vec<f64>, b: Vec<f64>, a: Vec<f64>, h: f64) -> Result<Self> {
+        let stages = c.len();
+        if !(h.is_finite() && h > 0.0) {
+            return Err(GviError::InvalidStepSize { h });
+        }
+        let nb = system.bodies();
+        if nb < 2 {
+            return Err(GviError::InvalidInput {
+                name: "bodies".into(),
+                reason: "the Kepler-adapted integrator needs a central body and at least one \
+                         more"
+                    .into(),
+            });
+        }
+        let n = nb - 1;
+        let three = vec![[0.0; 3]; nb];
+        let stage_values = vec![[0.0; 3]; stages * n];
+        Ok(KeplerAdaptedGalerkin {
+            jacobi: Jacobi::new(system.masses(), system.g()),
+            dim: system.body_dim(),
+            h,
+            s: stages,
+            c,
+            b,
+            a,
+            stages: StageState {
+                n,
+                rj: three.clone(),
+                pj: three.clone(),
+                zq: stage_values.clone(),
+                zp: stage_values.clone(),
+                fq: stage_values.clone(),
+                fp: stage_values,
+                anomaly: vec![f64::NAN; stages * n],
+                full_anomaly: vec![f64::NAN; n],
+                drifts: Vec::with_capacity(n),
+                positions: three.clone(),
+                cartesian: three.clone(),
+                cartesian_gradient: three.clone(),
+                gradient: three.clone(),
+                r: three.clone(),
+                p: three,
+            },
+            evaluations: 0,
+            iterations: 0,
+        })
+    }
+
+    /// Number of stages s (the order is 2s).
+    pub fn stages(&self) -> usize {
+        self.s
+    }
+
+    /// Fixed-point iterations of the stage equations so far (each one evaluation of (1) at
+    /// every stage).
+    pub fn iterations(&self) -> usize {
+        self.iterations
+    }
+
+    /// The right-hand side of (1) at every stage value into `fq`, `fp`: per stage, the Kepler
+    /// drifts of the planets over c_j h, the interaction gradient at the drifted positions,
+    /// and the pulled-back kick (0, −∂H_I/∂r′).
+    fn evaluate(&mut self) -> std::result::Result<(), (usize, DriftError)> {
+        let (s, h) = (self.s, self.h);
+        let st = &mut self.stages;
+        let n = st.n;
+        for j in 0..s {
+            st.drifts.clear();
+            for i in 0..n {
+                let (body, k) = (i + 1, j * n + i);
+                let m = self.jacobi.jacobi_mass(body);
+                let guess = st.anomaly[k];
+                let drift = KeplerDrift::new(
+                    self.jacobi.mu(body),
+                    st.zq[k],
+                    scale(1.0 / m, st.zp[k]),
+                    self.c[j] * h,
+                    guess.is_finite().then_some(guess),
+                )
+                .map_err(|e| (body, e))?;
+                st.anomaly[k] = drift.anomaly();
+                st.positions[body] = drift.position();
+                st.drifts.push(drift);
+            }
+            st.positions[0] = [0.0; 3];
+            self.jacobi.interaction_gradient(
+                &st.positions,
+                &mut st.cartesian,
+                &mut st.cartesian_gradient,
+                &mut st.gradient,
+            );
+            for i in 0..n {
+                let (body, k) = (i + 1, j * n + i);
+                let m = self.jacobi.jacobi_mass(body);
+                let kick = scale(-1.0 / m, st.gradient[body]);
+                let (dr, dv) = st.drifts[i].pull_back([0.0; 3], kick);
+                st.fq[k] = dr;
+                st.fp[k] = scale(m, dv);
+            }
+        }
+        self.evaluations += s;
+        Ok(())
+    }
+
+    /// One fixed-point update Z_j ← z_k + h Σ_l a_jl F_l; returns the largest change relative
+    /// to each planet's Jacobi position and momentum.
+    fn update(&mut self) -> f64 {
+        let (s, h) = (self.s, self.h);
+        let st = &mut self.stages;
+        let n = st.n;
+        let mut change = 0.0f64;
+        for j in 0..s {
+            for i in 0..n {
+                let (body, k) = (i + 1, j * n + i);
+                let (mut dq, mut dp) = ([0.0; 3], [0.0; 3]);
+                for l in 0..s {
+                    let w = h * self.a[j * s + l];
+                    dq = add(dq, scale(w, st.fq[l * n + i]));
+                    dp = add(dp, scale(w, st.fp[l * n + i]));
+                }
+                let (q0, p0) = (st.rj[body], st.pj[body]);
+                let (qn, pn) = (add(q0, dq), add(p0, dp));
+                let (sq, sp) = (norm_max(q0), norm_max(p0));
+                for c in 0..3 {
+                    change = change.max((qn[c] - st.zq[k][c]).abs() / sq);
+                    change = change.max((pn[c] - st.zp[k][c]).abs() / sp);
+                }
+                st.zq[k] = qn;
+                st.zp[k] = pn;
+            }
+        }
+        change
+    }
+
+    /// The step in Jacobi coordinates: `stages.rj`, `stages.pj` hold z_k on entry and
+    /// y_{k+1} on return.
+    fn advance_jacobi(&mut self, t: f64) -> Result<()> {
+        let (s, h) = (self.s, self.h);
+        let n = self.stages.n;
+        for j in 0..s {
+            for i in 0..n {
+                self.stages.zq[j * n + i] = self.stages.rj[i + 1];
+                self.stages.zp[j * n + i] = self.stages.pj[i + 1];
+            }
+        }
+        let step = (t / h).round().max(0.0) as usize;
+        let fail = |residual: f64, iterations: usize, reason: String| GviError::NewtonFailure {
+            step,
+            t,
+            residual,
+            iterations,
+            reason: format!("Kepler-adapted Galerkin (s = {s}): {reason}"),
+        };
+        let mut solve = StageIteration { m: self, last: 0.0 };
+        let first = termination(0);
+        drive(&mut solve, &first).map_err(|f| fail(f.residual, f.iterations, f.reason))?;
+        // z_{k+1} = z_k + h Σ b_j F_j, then the Kepler flow over the whole step.
+        let st = &mut self.stages;
+        for i in 0..n {
+            let body = i + 1;
+            let (mut dq, mut dp) = ([0.0; 3], [0.0; 3]);
+            for j in 0..s {
+                let w = h * self.b[j];
+                dq = add(dq, scale(w, st.fq[j * n + i]));
+                dp = add(dp, scale(w, st.fp[j * n + i]));
+            }
+            let m = self.jacobi.jacobi_mass(body);
+            let (q1, p1) = (add(st.rj[body], dq), add(st.pj[body], dp));
+            let guess = st.full_anomaly[i];
+            let drift = KeplerDrift::new(
+                self.jacobi.mu(body),
+                q1,
+                scale(1.0 / m, p1),
+                h,
+                guess.is_finite().then_some(guess),
+            )
+            .map_err(|e| fail(f64::NAN, 0, format!("Kepler drift of body {body}: {e}")))?;
+            st.full_anomaly[i] = drift.anomaly();
+            st.rj[body] = drift.position();
+            st.pj[body] = scale(m, drift.velocity());
+        }
+        // The centre of mass drifts freely.
+        let total = self.jacobi.jacobi_mass(0);
+        st.rj[0] = add(st.rj[0], scale(h / total, st.pj[0]));
+        Ok(())
+    }
+}
+
+/// The termination of the stage iteration after `corrections` corrections: converged when the
+/// update is exactly zero, or — from the third correction on — when it stopped shrinking at
+/// the round-off floor; failed when, after 6 corrections, one is more than twice the last.
+fn termination(corrections: usize) -> Termination {
+    let floor = if corrections > 2 { FLOOR } else { 0.0 };
+    Termination {
+        divergence: Some(Divergence {
+            after: 6,
+            growth: 2.0,
+        }),
+        ..Termination::new(
+            MAX_ITERATIONS,
+            0.0,
+            None,
+            floor,
+            f64::from_bits(1f64.to_bits() - 1),
+        )
+    }
+}
+
+/// max |xᵢ| (at least the smallest positive normal).
+fn norm_max(x: [f64; 3]) -> f64 {
+    x.iter().fold(f64::MIN_POSITIVE, |m, v| m.max(v.abs()))
+}
+
+/// The fixed-point iteration of the stage equations as a [`NewtonIteration`] (the identity for
+/// its linear solve) run by the crate's one driver.
+struct StageIteration<'m> {
+    m: &'m mut KeplerAdaptedGalerkin,
+    /// The last update's relative size (0 before the first).
+    last: f64,
+}
+
+impl NewtonIteration for StageIteration<'_> {
+    /// The update is the residual of the iterate before it; this reports the last one.
+    fn residual(&mut self, _: usize) -> f64 {
+        self.last
+    }
+
+    fn correct(
+        &mut self,
+        iteration: usize,
+    ) -> std::result::Result<(Correction, Termination), NewtonFailure> {
+        self.m.evaluate().map_err(|(body, e)| NewtonFailure {
+            residual: self.last,
+            iterations: iteration + 1,
+            reason: format!("Kepler drift of body {body}: {e}"),
+        })?;
+        self.m.iterations += 1;
+        self.last = self.m.update();
+        if !self.last.is_finite() {
+            return Err(NewtonFailure {
+                residual: self.last,
+                iterations: iteration + 1,
+                reason: "non-finite stage value".into(),
+            });
+        }
+        let correction = Correction {
+            size: self.last,
+            scale: 1.0,
+        };
+        Ok((correction, termination(iteration + 1)))
+    }
+}
+
+impl OneStepMethod for KeplerAdaptedGalerkin {
+    fn name(&self) -> String {
+        format!("kepler-adapted galerkin (s = {}, h = {})", self.s, self.h)
+    }
+
+    fn step_size(&self) -> f64 {
+        self.h
+    }
+
+    fn force_evaluations(&self) -> usize {
+        self.evaluations
+    }
+
+    fn step(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        p: &[f64],
+        q_next: &mut [f64],
+        p_next: &mut [f64],
+    ) -> Result<()> {
+        let (k, nb) = (self.dim, self.jacobi.bodies());
+        for (name, len) in [
+            ("q", q.len()),
+            ("p", p.len()),
+            ("q_next", q_next.len()),
+            ("p_next", p_next.len()),
+        ] {
+            crate::error::ensure_len(name, nb * k, len)?;
+        }
+        crate::error::ensure_finite("q", q)?;
+        crate::error::ensure_finite("p", p)?;
+        let st = &mut self.stages;
+        for b in 0..nb {
+            st.r[b] = [0.0; 3];
+            st.p[b] = [0.0; 3];
+            st.r[b][..k].copy_from_slice(&q[b * k..b * k + k]);
+            st.p[b][..k].copy_from_slice(&p[b * k..b * k + k]);
+        }
+        self.jacobi.positions_to_jacobi(&st.r, &mut st.rj);
+        self.jacobi.covector_to_jacobi(&st.p, &mut st.pj);
+        self.advance_jacobi(t)?;
+        let st = &mut self.stages;
+        self.jacobi.positions_from_jacobi(&st.rj, &mut st.r);
+        self.jacobi.covector_from_jacobi(&st.pj, &mut st.p);
+        for b in 0..nb {
+            q_next[b * k..b * k + k].copy_from_slice(&st.r[b][..k]);
+            p_next[b * k..b * k + k].copy_from_slice(&st.p[b][..k]);
+        }
+        if q_next.iter().chain(p_next.iter()).any(|x| !x.is_finite()) {
+            return Err(GviError::NewtonFailure {
+                step: (t / self.h).round().max(0.0) as usize,
+                t,
+                residual: f64::NAN,
+                iterations: 0,
+                reason: "Kepler-adapted Galerkin: non-finite state".into(),
+            });
+        }
+        Ok(())
+    }
+}
