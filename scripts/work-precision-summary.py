@@ -56,7 +56,9 @@ def main():
         "The fastest configuration reaching each error, per scene: the fastest Galerkin "
         "configuration (any basis, n, h, stage solver `auto`, the paper's 2n Gauss points or "
         "the economical ⌈3n/2⌉ or the compact n, families `galerkin-BASIS-econ` and "
-        "`galerkin-BASIS-compact`), the fastest peer (in-process "
+        "`galerkin-BASIS-compact`; on the N-body scenes also the Kepler-adapted Galerkin "
+        "integrator, Gauss collocation with S stages in the interaction picture of the Jacobi "
+        "splitting, families `galerkin-kepler-S`), the fastest peer (in-process "
         "baselines at their best, DOP853 on a half-decade tolerance grid, and REBOUND 5.2.2 "
         "timed in its own process: IAS15, WHFast with symplectic correctors 11 and 17 in Jacobi "
         "coordinates, WHCKL, SABA(10,6,4) and SABA(8,6,4), swept over dt), "
@@ -88,6 +90,7 @@ def main():
             peer = fastest(pts, lambda p: not p["method"].startswith("galerkin"), t)
             local = fastest(pts, lambda p: not p["method"].startswith("galerkin") and not p.get("external"), t)
             paper = fastest(pts, lambda p: p["method"].startswith("galerkin")
+                            and not p["method"].startswith("galerkin-kepler")
                             and not p["method"].endswith(("-econ", "-compact")), t)
             ias = fastest(pts, lambda p: p["method"] == "rebound-ias15", t)
 

@@ -4,8 +4,16 @@
 //! sampled runner, the work–precision study's error (the largest position error at the sample
 //! times against the study's reference) and the fixed-point iterations per step.
 //!
+//! With `PER_BODY=1` in the environment it also prints each body's largest position error.
+//!
+//! `eccentric` is its favourable case, built here: a unit star, a planet of 1e-5 at a = 1,
+//! e = 0.7 and a companion of 1e-3 on a circular orbit at a = 6, over 20 of the planet's
+//! orbits, against the Chebyshev–Lagrange Galerkin integrator (n Gauss points), errors at the
+//! end against 8-stage Gauss collocation with 40 000 steps.
+//!
 //! ```text
 //! cargo run --release -p galerkin-vi-lab --example kepler_adapted -- j2000 4,6,8 1,2,4 5
+//! cargo run --release -p galerkin-vi-lab --example kepler_adapted -- eccentric 4,6,8 50,100,200,400 5
 //! ```
 use galerkin_vi_lab::scene::Scene;
 use galerkin_vi_lab::studies::peers::{Peer, run_peer};
@@ -21,14 +29,15 @@ fn list(arg: Option<&String>, default: &str) -> Result<Vec<usize>, std::num::Par
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
-    let scene = match args.get(1).map_or("j2000", String::as_str) {
-        "outer" => "outer-solar-system",
-        "j2000" => "solar-system",
-        other => return Err(format!("unknown scene {other} (outer or j2000)").into()),
-    };
     let stages = list(args.get(2), "4,6,8")?;
     let divisors = list(args.get(3), "1,2,4")?;
     let repeats: usize = args.get(4).map(|s| s.parse()).transpose()?.unwrap_or(5);
+    let scene = match args.get(1).map_or("j2000", String::as_str) {
+        "outer" => "outer-solar-system",
+        "j2000" => "solar-system",
+        "eccentric" => return eccentric(&stages, &divisors, repeats),
+        other => return Err(format!("unknown scene {other} (outer, j2000, eccentric)").into()),
+    };
     let scene = Scene::load(scene)?.build()?;
     let reference = reference_csv(&scene, &WorkPrecisionConfig::full())?;
     let dt = scene.method.h;
@@ -85,6 +94,85 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 times[times.len() / 2] * 1e3,
                 times[0] * 1e3,
                 run.force_evaluations as f64 / (steps * s as f64),
+            );
+        }
+    }
+    Ok(())
+}
+
+/// The median of `repeats` timed runs of `f` and its last result.
+fn timed<T>(
+    repeats: usize,
+    mut f: impl FnMut() -> Result<T, galerkin_vi::GviError>,
+) -> Result<(f64, T), galerkin_vi::GviError> {
+    let mut times = Vec::new();
+    let mut last = None;
+    for _ in 0..repeats.max(1) {
+        let start = Instant::now();
+        last = Some(f()?);
+        times.push(start.elapsed().as_secs_f64());
+    }
+    times.sort_by(f64::total_cmp);
+    let last = last.ok_or(galerkin_vi::GviError::Unsupported("no run".into()))?;
+    Ok((times[times.len() / 2], last))
+}
+
+/// The eccentric planet with a distant companion (see the file's documentation).
+fn eccentric(
+    stages: &[usize],
+    step_counts: &[usize],
+    repeats: usize,
+) -> Result<(), Box<dyn std::error::Error>> {
+    use galerkin_vi::baselines::{GalerkinMethod, GaussCollocationBaseline, integrate_one_step};
+    use galerkin_vi::basis::BasisKind;
+    use galerkin_vi::kepler_adapted::KeplerAdaptedGalerkin;
+    use galerkin_vi::quadrature::QuadratureKind;
+    use galerkin_vi::systems::NBody;
+    let nb = NBody::new(vec![1.0, 1e-5, 1e-3], 1.0, 3)?;
+    let (apo, v_apo, v_circ) = (1.7, (2.0f64 / 1.7 - 1.0).sqrt(), (1.0f64 / 6.0).sqrt());
+    let mut q = vec![0.0, 0.0, 0.0, apo, 0.0, 0.0, 0.0, 6.0, 0.1];
+    let mut v = vec![0.0, 0.0, 0.0, 0.0, v_apo, 0.01, -v_circ, 0.0, 0.0];
+    nb.to_barycentric(&mut q, &mut v)?;
+    let p = nb.momenta(&v);
+    let t = 20.0 * std::f64::consts::TAU;
+    let mut reference = GaussCollocationBaseline::new(&nb, 8, t / 40_000.0)?;
+    let exact = integrate_one_step(&mut reference, &q, &p, 40_000)?.0[40_000].clone();
+    let error = |q1: &[f64]| {
+        q1.iter()
+            .zip(&exact)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max)
+    };
+    for &s in stages {
+        for &steps in step_counts {
+            let (time, q1) = timed(repeats, || {
+                let mut m = KeplerAdaptedGalerkin::new(&nb, s, t / steps as f64)?;
+                Ok(integrate_one_step(&mut m, &q, &p, steps)?.0[steps].clone())
+            })?;
+            println!(
+                "kepler-adapted s = {s:2}, {steps:5} steps: {:8.3} ms, error {:.2e}",
+                time * 1e3,
+                error(&q1)
+            );
+        }
+    }
+    for n in [12, 16] {
+        for steps in [400, 800, 1600] {
+            let (time, q1) = timed(repeats, || {
+                let gvi = galerkin_vi::GalerkinIntegrator::from_kinds(
+                    BasisKind::Chebyshev,
+                    n,
+                    QuadratureKind::default(),
+                    Some(n),
+                    t / steps as f64,
+                )?;
+                let mut m = GalerkinMethod::new(&gvi, &nb)?;
+                Ok(integrate_one_step(&mut m, &q, &p, steps)?.0[steps].clone())
+            })?;
+            println!(
+                "galerkin chebyshev n = {n:2}, {steps:5} steps: {:8.3} ms, error {:.2e}",
+                time * 1e3,
+                error(&q1)
             );
         }
     }

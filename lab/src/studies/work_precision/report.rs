@@ -65,6 +65,8 @@ impl WorkPrecisionStudy {
             let external = self.points.iter().any(|p| p.method == k && p.external);
             chart.push(if external {
                 Series::line_markers(format!("{k} (external)"), pts)
+            } else if k.starts_with("galerkin-kepler") {
+                Series::markers(format!("{k} (all h)"), pts)
             } else if k.starts_with("galerkin") && k.ends_with("-econ") {
                 Series::markers(format!("{k} (all n, h; ⌈3n/2⌉ Gauss points)"), pts)
             } else if k.starts_with("galerkin") && k.ends_with("-compact") {
