@@ -61,6 +61,10 @@ use jacobi::{Jacobi, add, scale};
 /// The largest number of stages accepted.
 pub const MAX_KEPLER_ADAPTED_STAGES: usize = 16;
 
+/// The contraction below which the estimate θ/(1 − θ)·|δ| of the remaining error ends the
+/// iteration.
+const ESTIMATE_BELOW: f64 = 0.05;
+
 /// Iteration cap of the stage equations' fixed-point iteration.
 const MAX_ITERATIONS: usize = 40;
 
@@ -342,11 +346,19 @@ impl KeplerAdaptedGalerkin {
     }
 }
 
-/// The termination of the stage iteration after `corrections` corrections: converged when the
-/// update is exactly zero, or — from the third correction on — when it stopped shrinking at
-/// the round-off floor; failed when, after 6 corrections, one is more than twice the last.
+/// The termination of the stage iteration after `corrections` corrections: converged when an
+/// update is at most one ulp of the stage values (relative, per planet), or — from the third
+/// correction on — when the contraction estimate bounds the remaining error by that,
+/// θ/(1 − θ)·|δ| ≤ ε with θ < 0.05, or when the updates stopped shrinking at the round-off
+/// floor; failed when, after 6 corrections, one is more than twice the last. The iteration
+/// contracts by O(ε h²ω²) per step, so it ends after about three corrections (measured: 3.0 per
+/// step on J2000 at h = 12.5–25 d, s = 8, against 4.7–4.8 when iterating to an exactly zero
+/// update; the end states agree within the scene's round-off sensitivity).
 fn termination(corrections: usize) -> Termination {
-    let floor = if corrections > 2 { FLOOR } else { 0.0 };
+    // The first update is the stage increment itself, not a correction of it, so the first
+    // ratio θ compares unlike quantities: θ is trusted from the third correction on.
+    let trusted = corrections > 2;
+    let floor = if trusted { FLOOR } else { 0.0 };
     Termination {
         divergence: Some(Divergence {
             after: 6,
@@ -354,8 +366,8 @@ fn termination(corrections: usize) -> Termination {
         }),
         ..Termination::new(
             MAX_ITERATIONS,
-            0.0,
-            None,
+            f64::EPSILON,
+            trusted.then_some(ESTIMATE_BELOW),
             floor,
             f64::from_bits(1f64.to_bits() - 1),
         )
