@@ -85,16 +85,19 @@ const FLOOR: f64 = 1e-14;
 /// use galerkin_vi::kepler_adapted::KeplerAdaptedGalerkin;
 /// use galerkin_vi::systems::NBody;
 ///
-/// // A star and one light planet on a circular orbit: nearly pure Kepler motion.
-/// let nb = NBody::new(vec![1.0, 1e-6], 1.0, 2)?;
-/// let v = (1.0f64 + 1e-6).sqrt();
-/// let (q, p) = ([0.0, 0.0, 1.0, 0.0], [0.0, -1e-6 * v, 0.0, 1e-6 * v]);
+/// // A star and a planet on a circular relative orbit of radius 1: μ = G(m₀ + m₁), relative
+/// // speed √μ, momenta ±m′√μ with the reduced mass m′ = m₀m₁/(m₀ + m₁).
+/// let (m0, m1) = (1.0, 1e-3);
+/// let nb = NBody::new(vec![m0, m1], 1.0, 2)?;
+/// let mu: f64 = m0 + m1;
+/// let pr = m0 * m1 / mu * mu.sqrt();
+/// let (q, p) = ([0.0, 0.0, 1.0, 0.0], [0.0, -pr, 0.0, pr]);
 /// let mut m = KeplerAdaptedGalerkin::new(&nb, 4, 0.5)?;
 /// let (mut q1, mut p1) = ([0.0; 4], [0.0; 4]);
 /// m.step(0.0, &q, &p, &mut q1, &mut p1)?;
-/// // The two-body problem is a pure Kepler motion in Jacobi coordinates: exact.
-/// let r = q1[2] - q1[0];
-/// assert!((r - 0.5f64.cos()).abs() < 1e-12);
+/// // Two bodies are one Kepler problem in Jacobi coordinates: the step is exact.
+/// let x = q1[2] - q1[0];
+/// assert!((x - (0.5 * mu.sqrt()).cos()).abs() < 1e-14);
 /// # Ok::<(), galerkin_vi::GviError>(())
 /// ```
 #[derive(Debug, Clone)]
