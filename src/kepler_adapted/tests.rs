@@ -311,3 +311,34 @@ fn bad_input_gets_typed_errors() {
     let err = m.step(0.0, &clash, &p, &mut q1, &mut p1).unwrap_err();
     assert!(matches!(err, GviError::NewtonFailure { .. }), "{err}");
 }
+
+/// Round-off over a long run: a two-body orbit about the J2000 Sun's GM (a = 0.29 AU,
+/// e = 0.25, period 58 d), 600 steps of 16.7 d (173 orbits), against the exact solution. Every step is the exact
+/// flow, so the error is the drift's and the coordinate changes' rounding: measured 6.2e-11
+/// (s = 1 and 8 alike), of which 5.5e-11 is the drift's own (600 drifts alone). The drift's
+/// energy error per call has a mean of 3.3e-16 relative (rms 8.7e-16), which grows linearly
+/// into the phase: this bounds the method's accuracy on long runs (docs/guide/kepler-adapted.md).
+#[test]
+fn two_body_round_off_over_a_long_run() {
+    let (m0, m1) = (0.2959122082855911e-03, 0.4912547451450812e-10);
+    let nb = NBody::new(vec![m0, m1], 1.0, 2).unwrap();
+    let mu: f64 = m0 + m1;
+    let (r0, v0) = ([0.3, -0.2], [0.012, 0.022]);
+    let mj = m0 * m1 / mu;
+    let q = [0.0, 0.0, r0[0], r0[1]];
+    let p = [-mj * v0[0], -mj * v0[1], mj * v0[0], mj * v0[1]];
+    let orbit = crate::systems::kepler_orbit::KeplerOrbit::from_state(mu, r0, v0, 0.0).unwrap();
+    let h = 100.0 / 6.0;
+    let mut m = KeplerAdaptedGalerkin::new(&nb, 8, h).unwrap();
+    let (qs, _) = integrate_one_step(&mut m, &q, &p, 600).unwrap();
+    let mut worst = 0.0f64;
+    for (k, qk) in qs.iter().enumerate() {
+        let (e, _) = orbit.state_at(k as f64 * h);
+        worst = worst.max(
+            (qk[2] - qk[0] - e[0])
+                .abs()
+                .max((qk[3] - qk[1] - e[1]).abs()),
+        );
+    }
+    assert!(worst < 1.5e-10, "two-body error after 600 steps: {worst:e}");
+}
