@@ -356,7 +356,8 @@ impl KeplerAdaptedGalerkin {
 /// floor; failed when, after 6 corrections, one is more than twice the last. The iteration
 /// contracts by O(ε h²ω²) per step, so it ends after about three corrections (measured: 3.0 per
 /// step on J2000 at h = 12.5–25 d, s = 8, against 4.7–4.8 when iterating to an exactly zero
-/// update; the end states agree within the scene's round-off sensitivity).
+/// update; the end states differ by less than the run's own round-off scatter, see
+/// docs/guide/kepler-adapted.md).
 fn termination(corrections: usize) -> Termination {
     // The first update is the stage increment itself, not a correction of it, so the first
     // ratio θ compares unlike quantities: θ is trusted from the third correction on.
