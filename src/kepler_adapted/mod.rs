@@ -47,6 +47,7 @@
 
 pub mod drift;
 mod jacobi;
+mod stumpff;
 #[cfg(test)]
 mod tests;
 
