@@ -259,89 +259,93 @@ const ROWS: usize = 4;
 /// Columns of C the wide kernel keeps in one register block (one AVX-512 register, two AVX2).
 const LANES: usize = 8;
 
+/// Rows of C the wide kernel holds in registers at once. With AVX-512 two rows of [`GROUP`]
+/// blocks are 8 of the 32 vector registers; four rows (16) made LLVM spill accumulators to
+/// the stack (the 10×9 by 9×30 product of the J2000 step: 230 ns at two rows, 800–1 800 ns at
+/// four). With 256-bit vectors a block takes two registers of 16, and one row is fastest
+/// (300 ns, against 380 ns at two rows; `x86-64-v3` build).
+const WIDE_ROWS: usize = if cfg!(target_feature = "avx512f") {
+    2
+} else {
+    1
+};
+
+/// Column blocks of [`LANES`] the wide kernel holds per row.
+const GROUP: usize = 4;
+
 /// The general product for contiguous rows of B and C with at least [`LANES`] columns: C is
-/// cut into blocks of [`ROWS`] × [`LANES`] entries held in registers over the whole k-loop
-/// (the i-k-j loop instead loads and stores its row of C at every k, a chain through memory
-/// that bounds it by latency: the GMRES products of the 10-body step spent 41 % there). The
-/// t = n mod [`LANES`] columns left over take a block of 1, 2 or 4 lanes (t ≤ 4; D = 18, an
-/// outer-solar-system state, is 8 + 8 + 2) or one of [`LANES`] that overlaps the block before
-/// it, of which only the new columns are stored. Every entry sees the operations of the i-k-j
-/// loop in the same order — the β-scaled C, then α·a_ik·b_kj for k ascending, a zero α·a_ik
-/// skipped — so the results are the same bits.
+/// cut into blocks of [`WIDE_ROWS`] rows × [`GROUP`] column blocks of [`LANES`] entries, held
+/// in registers over the whole k-loop (the i-k-j loop instead loads and stores its row of C at
+/// every k, a chain through memory that bounds it by latency: the GMRES products of the
+/// 10-body step spent 41 % there). The t = n mod [`LANES`] columns left over take one block of
+/// [`LANES`] ending at column n, which overlaps the block before it; the two are always in one
+/// group (groups are taken from the last block back), and a group reads its entries of C
+/// before it stores any, so the overlapping lanes repeat the same operations on the same
+/// values and store the same bits. D = 30, a 10-body state, is one group: columns 0, 8, 16
+/// and 22.
+///
+/// Each a_ik is read and scaled once per row and k for all of the group's blocks. Issue 35's
+/// profile of the J2000 run put 28 % of its time in these products when each row took one
+/// block at a time, with that scalar work and a test for a zero α·a_ik per vector
+/// multiply–add: 410 ns for the 10×9 by 9×30 product of the curve at the nodes on the
+/// AVX-512 machine of the studies, now 230 ns (`x86-64-v3` build: 650 → 300 ns).
+///
+/// Every entry sees the i-k-j loop's operations in its order — the β-scaled C, then α·a_ik·b_kj
+/// for k ascending — except that zero coefficients are not skipped: adding a zero product
+/// leaves a finite sum unchanged bit for bit, except that an exactly zero sum −0 becomes +0
+/// (and a non-finite b_kj now propagates, as IEEE arithmetic has it).
 fn wide(args: ThinArgs<'_>, n: usize, c: &mut [f64], sc: Strided) {
-    let m = args.0;
-    let full = n - n % LANES;
-    let mut blocks = (0..full).step_by(LANES);
-    let blocked_rows = m - m % ROWS;
-    // Four rows × one column block, or one row × four column blocks: four independent sums
-    // in flight either way (one sum alone is bound by the latency of its additions).
-    let mut group = [0; ROWS];
-    loop {
-        let mut len = 0;
-        for slot in group.iter_mut() {
-            match blocks.next() {
-                Some(j0) => {
-                    *slot = j0;
-                    len += 1;
-                }
-                None => break,
-            }
+    let full = n / LANES;
+    let count = n.div_ceil(LANES);
+    // First columns of the blocks: the full ones, then the block ending at column n.
+    let block = |g: usize| if g < full { g * LANES } else { n - LANES };
+    // Groups from the last block back, so that the overlapping block and the one before it
+    // are in one group: each group reads its entries of C before it stores any, so the
+    // overlapping lanes repeat the same operations on the same values and store the same bits.
+    let mut end = count;
+    while end > 0 {
+        let g = end.saturating_sub(GROUP);
+        match end - g {
+            1 => wide_rows::<1>(args, [block(g)], c, sc),
+            2 => wide_rows::<2>(args, [block(g), block(g + 1)], c, sc),
+            3 => wide_rows::<3>(args, [block(g), block(g + 1), block(g + 2)], c, sc),
+            _ => wide_rows::<GROUP>(
+                args,
+                [block(g), block(g + 1), block(g + 2), block(g + 3)],
+                c,
+                sc,
+            ),
         }
-        if len == 0 {
-            break;
-        }
-        for &j0 in &group[..len] {
-            for i in (0..blocked_rows).step_by(ROWS) {
-                wide_block::<ROWS, 1, LANES>(args, i, [(j0, 0)], c, sc);
-            }
-        }
-        for i in blocked_rows..m {
-            let b = |g: usize| (group[g], 0);
-            match len {
-                4 => wide_block::<1, 4, LANES>(args, i, [b(0), b(1), b(2), b(3)], c, sc),
-                3 => wide_block::<1, 3, LANES>(args, i, [b(0), b(1), b(2)], c, sc),
-                2 => wide_block::<1, 2, LANES>(args, i, [b(0), b(1)], c, sc),
-                _ => wide_block::<1, 1, LANES>(args, i, [b(0)], c, sc),
-            }
-        }
-    }
-    match n - full {
-        0 => {}
-        1 => wide_tail::<1>(args, n, c, sc),
-        2 => wide_tail::<2>(args, n, c, sc),
-        3 | 4 => wide_tail::<4>(args, n, c, sc),
-        _ => wide_tail::<LANES>(args, n, c, sc),
+        end = g;
     }
 }
 
-/// The last t ≤ L columns of C with blocks of L lanes ending at column n (L ≤ n), storing only
-/// the t columns [`wide`]'s full blocks left.
-fn wide_tail<const L: usize>(args: ThinArgs<'_>, n: usize, c: &mut [f64], sc: Strided) {
+/// [`wide`] on every row for one group of G column blocks: [`WIDE_ROWS`] rows at a time, then
+/// the remaining rows one by one.
+fn wide_rows<const G: usize>(args: ThinArgs<'_>, blocks: [usize; G], c: &mut [f64], sc: Strided) {
     let m = args.0;
-    let block = (n - L, L - n % LANES);
-    let blocked_rows = m - m % ROWS;
-    for i in (0..blocked_rows).step_by(ROWS) {
-        wide_block::<ROWS, 1, L>(args, i, [block], c, sc);
+    let blocked = m - m % WIDE_ROWS;
+    for i in (0..blocked).step_by(WIDE_ROWS) {
+        wide_block::<WIDE_ROWS, G, LANES>(args, i, blocks, c, sc);
     }
-    for i in blocked_rows..m {
-        wide_block::<1, 1, L>(args, i, [block], c, sc);
+    for i in blocked..m {
+        wide_block::<1, G, LANES>(args, i, blocks, c, sc);
     }
 }
 
-/// [`wide`] on rows i … i + R − 1 and G column blocks of L lanes (start, lanes to skip when
-/// storing).
+/// [`wide`] on rows i … i + R − 1 and the G column blocks of L lanes starting at `blocks`.
 #[inline(always)]
 fn wide_block<const R: usize, const G: usize, const L: usize>(
     args: ThinArgs<'_>,
     i: usize,
-    blocks: [(usize, usize); G],
+    blocks: [usize; G],
     c: &mut [f64],
     sc: Strided,
 ) {
     let (_, k, alpha, a, sa, b, sb, beta) = args;
     let mut acc = [[[0.0f64; L]; G]; R];
     for (r, acc) in acc.iter_mut().enumerate() {
-        for (acc, &(j0, _)) in acc.iter_mut().zip(&blocks) {
+        for (acc, &j0) in acc.iter_mut().zip(&blocks) {
             let c0 = sc.offset + (i + r) * sc.row_stride + j0;
             for (x, &cij) in acc.iter_mut().zip(&c[c0..c0 + L]) {
                 *x = scaled_start(beta, cij);
@@ -352,10 +356,7 @@ fn wide_block<const R: usize, const G: usize, const L: usize>(
         let o = sb.offset + kk * sb.row_stride;
         for (r, acc) in acc.iter_mut().enumerate() {
             let aik = alpha * a[sa.offset + (i + r) * sa.row_stride + kk * sa.col_stride];
-            if aik == 0.0 {
-                continue;
-            }
-            for (acc, &(j0, _)) in acc.iter_mut().zip(&blocks) {
+            for (acc, &j0) in acc.iter_mut().zip(&blocks) {
                 let br = &b[o + j0..o + j0 + L];
                 for l in 0..L {
                     acc[l] += aik * br[l];
@@ -364,9 +365,9 @@ fn wide_block<const R: usize, const G: usize, const L: usize>(
         }
     }
     for (r, acc) in acc.iter().enumerate() {
-        for (acc, &(j0, skip)) in acc.iter().zip(&blocks) {
+        for (acc, &j0) in acc.iter().zip(&blocks) {
             let c0 = sc.offset + (i + r) * sc.row_stride + j0;
-            c[c0 + skip..c0 + L].copy_from_slice(&acc[skip..]);
+            c[c0..c0 + L].copy_from_slice(acc);
         }
     }
 }
@@ -456,9 +457,10 @@ mod gemm_tests {
         assert_eq!(c[0], 1.0);
     }
 
-    /// The register-blocked wide kernel gives the i-k-j loop's bits: shapes with row and
-    /// column remainders, A row-major and transposed (with zeros, which both skip), offsets
-    /// into B and C, and every beta case.
+    /// The register-blocked wide kernel gives the bits of the i-k-j loop that adds every
+    /// product (zeros too): shapes with row and column remainders, more than one group of
+    /// column blocks (n > 32, with and without an overlapping block), A row-major and
+    /// transposed, offsets into B and C, and every beta case.
     #[test]
     fn wide_kernel_gives_the_bits_of_the_ikj_loop() {
         for (m, k, n) in [
@@ -473,6 +475,10 @@ mod gemm_tests {
             (9, 10, 20),
             (5, 9, 27),
             (10, 9, 16),
+            (10, 9, 30),
+            (3, 5, 70),
+            (11, 9, 36),
+            (6, 4, 64),
         ] {
             let a: Vec<f64> = (0..m * k)
                 .map(|x| {
@@ -507,15 +513,17 @@ mod gemm_tests {
                         }
                         for kk in 0..k {
                             let aik = alpha * a[i * sa.row_stride + kk * sa.col_stride];
-                            if aik == 0.0 {
-                                continue;
-                            }
                             for j in 0..n {
                                 r[2 + i * n + j] += aik * b[3 + kk * n + j];
                             }
                         }
                     }
-                    assert_eq!(c, r, "m = {m}, k = {k}, n = {n}, beta = {beta}");
+                    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                    assert_eq!(
+                        bits(&c),
+                        bits(&r),
+                        "m = {m}, k = {k}, n = {n}, beta = {beta}"
+                    );
                 }
             }
         }
