@@ -39,8 +39,6 @@
 
 use std::f64::consts::TAU;
 
-#[cfg(test)]
-use super::stumpff::stumpff;
 use super::stumpff::{beta_derivatives, g_functions};
 
 /// The solve has converged when the correction is at most this relative to `X`.

@@ -128,3 +128,7 @@ pub(super) fn beta_derivatives(beta: f64, x: f64, gs: &[f64; 6]) -> [f64; 4] {
     };
     [-0.5 * x * g1, 0.5 * (g3 - x * g2), b2, b3]
 }
+
+#[cfg(test)]
+#[path = "stumpff_tests.rs"]
+mod tests;

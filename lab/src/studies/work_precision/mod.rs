@@ -36,7 +36,6 @@ use super::{Reference, max_norm_diff, write_file};
 use crate::error::LabError;
 use crate::error::Result;
 use crate::scene::BuiltScene;
-use galerkin_vi::baselines::CompositionScheme;
 use galerkin_vi::basis::BasisKind;
 use galerkin_vi::systems::System;
 use serde::Serialize;
@@ -44,6 +43,8 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 mod external;
+mod plan;
+use plan::sweep_plan;
 mod report;
 
 pub use external::{EXTERNAL_COLUMNS, ExternalRows, SkippedRow, read_external, read_external_csv};
@@ -347,63 +348,7 @@ fn study_system<S: System + 'static>(
     config: &WorkPrecisionConfig,
 ) -> Result<WorkPrecisionStudy> {
     let (dt, samples) = sample_grid(scene, config)?;
-    // (peer, divisor) in sweep order; fixed-step families stop refining once converged.
-    // The paper's quadrature first, so that its rows keep their order in the outputs.
-    let mut plan: Vec<Vec<(Peer, usize)>> = Vec::new();
-    for &points in &config.quad_points {
-        for &basis in &config.bases {
-            for &m in &config.galerkin_divisors {
-                plan.push(
-                    config
-                        .ns
-                        .iter()
-                        .map(|&n| (Peer::Galerkin { basis, n, points }, m))
-                        .collect(),
-                );
-            }
-        }
-    }
-    // The Kepler-adapted integrator on N-body scenes: one family per stage count, over its
-    // own step grid (its steps are longer than the polynomial bases').
-    if crate::studies::peers::nbody_of(system).is_some() {
-        for &s in &config.kepler_stages {
-            plan.push(
-                config
-                    .kepler_divisors
-                    .iter()
-                    .map(|&m| (Peer::KeplerAdapted { s }, m))
-                    .collect(),
-            );
-        }
-    }
-    let mut fixed = vec![Peer::StormerVerlet, Peer::Rk4];
-    fixed.extend(config.gauss_stages.iter().map(|&s| Peer::Gauss { s }));
-    fixed.extend(CompositionScheme::ALL.map(|scheme| Peer::Composition { scheme }));
-    // The classical peers need L = ½ vᵀ M v − V(q); a non-separable Lagrangian (expression
-    // scenes `magnetic`, `double-pendulum`) is swept with the Galerkin families only.
-    let mechanical = system.mass_matrix().is_some();
-    if !mechanical {
-        fixed.clear();
-    }
-    for peer in fixed {
-        plan.push(
-            config
-                .baseline_divisors
-                .iter()
-                .filter(|&&m| m.saturating_mul(samples) <= config.max_steps)
-                .map(|&m| (peer, m))
-                .collect(),
-        );
-    }
-    if cfg!(feature = "dop853") && mechanical {
-        plan.push(
-            config
-                .tolerances
-                .iter()
-                .map(|&tolerance| (Peer::Dop853 { tolerance }, 1))
-                .collect(),
-        );
-    }
+    let plan = sweep_plan(system, config, samples);
     // Predicted cost: every run takes samples · m steps (DOP853 at least one per sample).
     let steps: f64 = plan
         .iter()
