@@ -291,28 +291,28 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             // The force terms, eight coordinates side by side with their (hi, lo) pairs in
             // registers: each sum runs over j in order (the same bits as one coordinate at a
             // time), independent sums hide each other's latency, and they vectorise for large
-            // D. The row is their sum hi + lo.
-            const LANES: usize = 8;
-            for r0 in (0..d).step_by(LANES) {
-                let w_lanes = LANES.min(d - r0);
-                let (mut hi, mut lo) = ([0.0f64; LANES], [0.0f64; LANES]);
-                hi[..w_lanes].copy_from_slice(&ws.stage.dd_hi[r0..r0 + w_lanes]);
-                lo[..w_lanes].copy_from_slice(&ws.stage.dd_lo[r0..r0 + w_lanes]);
-                for j in 0..m {
-                    let (w, psi) = (t.weights[j] * h, vt.psi[j * k]);
-                    let f = &ws.stage.lq[j * d + r0..j * d + r0 + w_lanes];
-                    for ((hi, lo), &f) in hi.iter_mut().zip(lo.iter_mut()).zip(f) {
-                        let g = w * f;
-                        dd_acc(hi, lo, psi, g);
-                        *lo += psi * w.mul_add(f, -g);
-                    }
-                }
-                for (row, (&hi, &lo)) in ws.stage.dd_hi[r0..r0 + w_lanes]
-                    .iter_mut()
-                    .zip(hi.iter().zip(&lo))
-                {
-                    *row = hi + lo;
-                }
+            // D. The row is their sum hi + lo. The lanes are a constant (8, then 4, 2, 1 for
+            // the rest), so the pairs stay in registers: with the lanes a run-time count they
+            // went through the stack (issue 35's J2000 profile).
+            let weights = &t.weights;
+            let (hi, lo, lq) = (&mut ws.stage.dd_hi, &ws.stage.dd_lo, &ws.stage.lq);
+            let mut r0 = 0;
+            while r0 < d {
+                let terms = ForceTerms {
+                    weights,
+                    psi: &vt.psi,
+                    k,
+                    h,
+                    lq,
+                    d,
+                    r0,
+                };
+                r0 += match d - r0 {
+                    8.. => terms.add::<8>(hi, lo),
+                    4..=7 => terms.add::<4>(hi, lo),
+                    2 | 3 => terms.add::<2>(hi, lo),
+                    _ => terms.add::<1>(hi, lo),
+                };
             }
         }
         let row0 = &ws.stage.dd_hi;
@@ -427,6 +427,40 @@ fn momentum_row(
     }
     let (s, e) = two_sum(hi, -p_k[r]);
     (s, lo + (e - momentum_lo[r]))
+}
+
+/// The double-double momentum row's force terms Σ_j ψ_j0 (h b_j f_j) for the coordinates
+/// r0 … r0 + L − 1 (`velocity_residual_general`).
+struct ForceTerms<'a> {
+    weights: &'a [f64],
+    psi: &'a [f64],
+    k: usize,
+    h: f64,
+    lq: &'a [f64],
+    d: usize,
+    r0: usize,
+}
+
+impl ForceTerms<'_> {
+    /// hi + lo of each coordinate from its (hi, lo) start in `hi`, `lo`, into `hi`; returns L.
+    fn add<const L: usize>(&self, hi: &mut [f64], lo: &[f64]) -> usize {
+        let (r0, d) = (self.r0, self.d);
+        let mut h_acc: [f64; L] = std::array::from_fn(|l| hi[r0 + l]);
+        let mut l_acc: [f64; L] = std::array::from_fn(|l| lo[r0 + l]);
+        for (j, &b) in self.weights.iter().enumerate() {
+            let (w, psi) = (b * self.h, self.psi[j * self.k]);
+            let f = &self.lq[j * d + r0..j * d + r0 + L];
+            for l in 0..L {
+                let g = w * f[l];
+                dd_acc(&mut h_acc[l], &mut l_acc[l], psi, g);
+                l_acc[l] += psi * w.mul_add(f[l], -g);
+            }
+        }
+        for l in 0..L {
+            hi[r0 + l] = h_acc[l] + l_acc[l];
+        }
+        L
+    }
 }
 
 /// −F into `delta` (k×D): row 0 the momentum row `row0(r)`, rows b ≥ 1 M c_b plus the
