@@ -35,7 +35,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Some(m),
         h,
     )?;
-    let mut options = gvi.options().clone();
+    let mut options = *gvi.options();
     if let Some(x) = args.get(4) {
         options.structured.velocity_fixed_point_handover = x.parse()?;
     }
