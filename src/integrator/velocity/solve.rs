@@ -212,7 +212,7 @@ impl VelocityState {
 /// [`VelocityState::correct_fixed_point`] for a diagonal mass matrix tiled over the modes, in
 /// one pass: δ = −F/m (`DIVIDE`; M = I leaves δ = −F), c ← c + δ (row 0 compensated, as
 /// [`VelocityState::apply_correction`]), and the maxima of |δ| and |c|. The same operations on
-/// each entry as the three passes it replaces (the division, the correction, then `max_abs`
+/// each entry as the four passes it replaces (the division, the correction, then `max_abs`
 /// of each), and a maximum does not depend on its order, so the bits are the same; measured
 /// (issue 35, J2000 10-body): the passes were 8.5 % of the run.
 fn fused_correction<const DIVIDE: bool>(
