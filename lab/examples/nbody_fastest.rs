@@ -4,10 +4,12 @@
 //! - `outer`: the outer solar system, 500 years (Δ = 1825 d), Chebyshev n = 10, h = 912.5 d,
 //!   15 Gauss points (the economical rule);
 //! - `j2000`: the J2000 10-body scene, T = 10 000 d (Δ = 100 d), Chebyshev n = 10,
-//!   h = 12.5 d, 10 Gauss points (the compact rule).
+//!   h = 12.5 d, 10 Gauss points (the compact rule);
+//! - `j2000-14`: the same scene at the frontier of the study of 2026-11-27, Legendre n = 14,
+//!   h = 25 d, 14 Gauss points.
 //!
 //! ```text
-//! cargo run --release -p galerkin-vi-lab --example nbody_fastest [outer|j2000] [REPEATS]
+//! cargo run --release -p galerkin-vi-lab --example nbody_fastest [outer|j2000|j2000-14] [REPEATS]
 //! valgrind --tool=callgrind target/release/examples/nbody_fastest outer 1
 //! ```
 use galerkin_vi::basis::BasisKind;
@@ -19,17 +21,37 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
     let which = args.get(1).map(String::as_str).unwrap_or("outer");
     let repeats: usize = args.get(2).map(|s| s.parse()).transpose()?.unwrap_or(10);
-    let (scene, interval, divisor, points) = match which {
-        "outer" => ("outer-solar-system", 1825.0, 2, QuadPoints::Economical),
-        "j2000" => ("solar-system", 100.0, 8, QuadPoints::Compact),
-        other => return Err(format!("unknown configuration {other} (outer or j2000)").into()),
+    let (scene, interval, divisor, points, basis, n) = match which {
+        "outer" => (
+            "outer-solar-system",
+            1825.0,
+            2,
+            QuadPoints::Economical,
+            BasisKind::Chebyshev,
+            10,
+        ),
+        "j2000" => (
+            "solar-system",
+            100.0,
+            8,
+            QuadPoints::Compact,
+            BasisKind::Chebyshev,
+            10,
+        ),
+        "j2000-14" => (
+            "solar-system",
+            100.0,
+            4,
+            QuadPoints::Compact,
+            BasisKind::Legendre,
+            14,
+        ),
+        other => {
+            return Err(format!("unknown configuration {other} (outer, j2000 or j2000-14)").into());
+        }
     };
     let scene = Scene::load(scene)?.build()?;
-    let peer = Peer::Galerkin {
-        basis: BasisKind::Chebyshev,
-        n: 10,
-        points,
-    };
+    let peer = Peer::Galerkin { basis, n, points };
     let mut times = Vec::new();
     let mut last = None;
     for _ in 0..repeats {

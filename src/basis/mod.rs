@@ -380,6 +380,9 @@ pub(crate) fn check_size(basis: &str, n: usize, min: usize, max: usize) -> Resul
 pub struct CurveFit {
     nodes: Vec<f64>,
     lu: crate::linalg::Lu,
+    /// The collocation matrix is exactly the identity (a Lagrange basis at its own nodes):
+    /// values are coefficients, and the solves are skipped.
+    identity: bool,
 }
 
 impl CurveFit {
@@ -395,12 +398,18 @@ impl CurveFit {
             basis.eval(x, &mut v, &mut dv);
             a[k * n..(k + 1) * n].copy_from_slice(&v);
         }
+        let identity =
+            (0..n).all(|k| (0..n).all(|i| a[k * n + i] == if i == k { 1.0 } else { 0.0 }));
         let lu = crate::linalg::Lu::factor(a, n).map_err(|_| GviError::InvalidBasisSize {
             n,
             basis: basis.name().to_string(),
             reason: "collocation matrix at the interpolation nodes is singular".into(),
         })?;
-        Ok(CurveFit { nodes, lu })
+        Ok(CurveFit {
+            nodes,
+            lu,
+            identity,
+        })
     }
 
     /// The interpolation nodes x_k.
@@ -409,8 +418,14 @@ impl CurveFit {
     }
 
     /// Turn values `f` (n × D, row k = f(x_k)) into coefficients in place (row i = Q_i).
+    ///
+    /// When the collocation matrix is exactly the identity (the Chebyshev–Lagrange basis at
+    /// its own nodes) the values are the coefficients and nothing is done: the LU solve of
+    /// the identity gives the same bits for finite values (x − 0·y = x, x/1 = x).
     pub fn values_to_coefficients(&self, values: &mut [f64], dim: usize) {
-        self.lu.solve_columns_in_place(values, dim);
+        if !self.identity {
+            self.lu.solve_columns_in_place(values, dim);
+        }
     }
 
     /// As [`values_to_coefficients`](CurveFit::values_to_coefficients), with two scratch
@@ -422,7 +437,9 @@ impl CurveFit {
         col: &mut [f64],
         scratch: &mut [f64],
     ) {
-        self.lu.solve_columns_with(values, dim, col, scratch);
+        if !self.identity {
+            self.lu.solve_columns_with(values, dim, col, scratch);
+        }
     }
 }
 

@@ -23,6 +23,29 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
     /// The RK4 predictor into the candidate guess; false when unavailable (non-separable Lagrangian) or
     /// not finite.
     fn predict<L: Lagrangian>(&self, lag: &L, ws: &mut Workspace, q: &[f64], p: &[f64]) -> bool {
+        if !self.predict_values(lag, ws, q, p) {
+            return false;
+        }
+        self.tables().fit.values_to_coefficients_with(
+            &mut ws.guess.cand,
+            ws.d,
+            &mut ws.guess.fit_col,
+            &mut ws.guess.fit_scratch,
+        );
+        true
+    }
+
+    /// The RK4 predictor's increments from q_k at the basis's interpolation nodes (n×D) into
+    /// the candidate guess, before the fit to coefficients: the velocity form maps them to
+    /// its modes with the fit folded into one table. False when unavailable (non-separable
+    /// Lagrangian).
+    pub(super) fn predict_values<L: Lagrangian>(
+        &self,
+        lag: &L,
+        ws: &mut Workspace,
+        q: &[f64],
+        p: &[f64],
+    ) -> bool {
         let Some(sep) = &ws.separable else {
             return false;
         };
@@ -91,12 +114,6 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                     + h11 * dt * b[d + r];
             }
         }
-        t.fit.values_to_coefficients_with(
-            &mut ws.guess.cand,
-            d,
-            &mut ws.guess.fit_col,
-            &mut ws.guess.fit_scratch,
-        );
         true
     }
 

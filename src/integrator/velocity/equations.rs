@@ -58,20 +58,20 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             }
             return InitialGuess::Extrapolate;
         }
-        let predicted = self.make_guess(lag, ws, InitialGuess::Predictor, q, p);
+        let predicted = self.predict_values(lag, ws, q, p);
         let Some(vs) = ws.velocity.as_mut() else {
             return InitialGuess::Constant;
         };
         if predicted {
             let (rn, rd) = (Strided::rows(0, n), Strided::rows(0, d));
             let cand = ws.guess.candidate();
-            if !panel_times(&vt.from_basis_cols, cand, n, k, d, 1.0 / h, &mut vs.c) {
+            if !panel_times(&vt.from_values_cols, cand, n, k, d, 1.0 / h, &mut vs.c) {
                 gemm(
                     k,
                     n,
                     d,
                     1.0 / h,
-                    &vt.from_basis,
+                    &vt.from_values,
                     rn,
                     cand,
                     rd,

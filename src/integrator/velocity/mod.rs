@@ -71,19 +71,23 @@ pub(crate) struct VelocityTables {
     /// Extrapolation of the velocity to the next step, k×k: c_next = E c (the previous
     /// step's q̇(τ + 1) projected on the modes, exact for polynomials).
     pub extrapolate: Vec<f64>,
-    /// The columns of E, of B (`to_basis`) and of F (`from_basis`) padded to [`PANEL`] rows
+    /// The columns of E, of B (`to_basis`) and of F A⁻¹ (`from_values`) padded to [`PANEL`] rows
     /// (empty when there are more rows): the guess and the step's end as register panels
     /// ([`panel_times`]).
     pub extrapolate_cols: Vec<f64>,
     /// See [`extrapolate_cols`](Self::extrapolate_cols).
     pub to_basis_cols: Vec<f64>,
     /// See [`extrapolate_cols`](Self::extrapolate_cols).
-    pub from_basis_cols: Vec<f64>,
+    pub from_values_cols: Vec<f64>,
     /// The basis coefficients of the curve: ΔQ_i = h Σ_a B_ia c_a, n×k (row 0 is zero and
     /// row n − 1 is (1, 0, …, 0), both set exactly).
     pub to_basis: Vec<f64>,
-    /// The modes of a curve given by increments ΔQ (n×D): c = (1/h) F ΔQ, k×n.
-    pub from_basis: Vec<f64>,
+    /// The modes of a curve given by its increments from q_k at the basis's interpolation
+    /// nodes (n×D values V): c = (1/h) F A⁻¹ V, k×n, with F the modes of a curve given by its
+    /// coefficients ΔQ (c = (1/h) F ΔQ) and A the collocation matrix of the fit (ΔQ = A⁻¹ V):
+    /// the RK4 predictor's curve without its n×n solve per coordinate (issue 35: the solves
+    /// were 5 % of Kepler's fastest run).
+    pub from_values: Vec<f64>,
     /// C = Σ_j b_j ψ(c_j) I(c_j)ᵀ, k×k: the pencil of the frozen Newton matrix.
     pencil: Vec<f64>,
     /// The Schur form of C for the frozen-Hessian solve, built when first asked for
@@ -274,7 +278,22 @@ impl VelocityTables {
                 }
             }
         }
-        let finite = [&it, &psi, &extrapolate, &to_basis, &from_basis]
+        // F A⁻¹: the fit's inverse, A⁻¹ = the coefficients of the identity's columns.
+        let mut inverse = vec![0.0; n * n];
+        for i in 0..n {
+            inverse[i * n + i] = 1.0;
+        }
+        t.fit.values_to_coefficients(&mut inverse, n);
+        let mut from_values = vec![0.0; k * n];
+        for b in 0..k {
+            for l in 0..n {
+                let f = from_basis[b * n + l];
+                for i in 0..n {
+                    from_values[b * n + i] += f * inverse[l * n + i];
+                }
+            }
+        }
+        let finite = [&it, &psi, &extrapolate, &to_basis, &from_values]
             .iter()
             .all(|v| v.iter().all(|x| x.is_finite()));
         if !finite {
@@ -302,14 +321,14 @@ impl VelocityTables {
             psi_rows,
             extrapolate_cols: panel_columns(&extrapolate, k, k),
             to_basis_cols: panel_columns(&to_basis, n, k),
-            from_basis_cols: panel_columns(&from_basis, k, n),
+            from_values_cols: panel_columns(&from_values, k, n),
             pencil: c,
             kron: OnceLock::new(),
             iota: it,
             psi,
             extrapolate,
             to_basis,
-            from_basis,
+            from_values,
         })
     }
 
