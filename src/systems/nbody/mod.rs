@@ -354,6 +354,16 @@ impl Mechanical for NBody {
     fn potential_hessian_diagonal_blocks_at_points(&self, q: &[f64], out: &mut [f64]) -> bool {
         let d = self.degrees_of_freedom();
         let per_point = self.masses.len() * self.dim * self.dim;
+        // The nodes side by side in vector lanes (the same bits as node by node), unless
+        // there are enough bodies for one rayon task per node.
+        if self.masses.len() < PARALLEL_BODIES || !cfg!(feature = "parallel") {
+            if self.dim == 2 {
+                pairwise::hessian_blocks_at_points::<2>(self.g, &self.masses, q, d, out);
+            } else {
+                pairwise::hessian_blocks_at_points::<3>(self.g, &self.masses, q, d, out);
+            }
+            return true;
+        }
         for (qj, oj) in q.chunks_exact(d).zip(out.chunks_exact_mut(per_point)) {
             self.potential_hessian_diagonal_blocks(qj, oj);
         }

@@ -173,3 +173,42 @@ fn gradient_in_lanes_is_the_pointwise_gradient_bit_for_bit() {
         }
     }
 }
+
+/// The Hessian's diagonal blocks at many points, the nodes in vector lanes, are the
+/// point-by-point blocks bit for bit, in 2D and 3D, for full and partial lane groups.
+/// Negative control: moving one coordinate of the last point by an ulp changes that point's
+/// blocks and no other's.
+#[test]
+fn hessian_blocks_in_lanes_are_the_pointwise_blocks_bit_for_bit() {
+    for dim in [2usize, 3] {
+        let nb = NBody::new(vec![1.0, 1e-3, 3e-4, 5e-5, 4e-5, 7e-9], 2.9591e-4, dim).unwrap();
+        let d = 6 * dim;
+        let per = 6 * dim * dim;
+        for points in [1usize, 7, 8, 9, 17] {
+            let q: Vec<f64> = (0..points * d)
+                .map(|i| ((i * 37 % 23) as f64 - 11.0) * 0.7 + (i as f64 * 0.37).sin())
+                .collect();
+            let mut lanes = vec![f64::NAN; points * per];
+            assert!(nb.potential_hessian_diagonal_blocks_at_points(&q, &mut lanes));
+            let mut one = vec![0.0; per];
+            for j in 0..points {
+                nb.potential_hessian_diagonal_blocks(&q[j * d..(j + 1) * d], &mut one);
+                let got = &lanes[j * per..(j + 1) * per];
+                assert!(
+                    got.iter()
+                        .zip(&one)
+                        .all(|(a, b)| a.to_bits() == b.to_bits()),
+                    "dim {dim}, {points} points, point {j}"
+                );
+            }
+            let mut moved = q.clone();
+            let last = (points - 1) * d;
+            moved[last] = f64::from_bits(moved[last].to_bits() + 1);
+            let mut other = vec![0.0; points * per];
+            assert!(nb.potential_hessian_diagonal_blocks_at_points(&moved, &mut other));
+            let split = (points - 1) * per;
+            assert_eq!(other[..split], lanes[..split]);
+            assert_ne!(other[split..], lanes[split..]);
+        }
+    }
+}
