@@ -90,29 +90,14 @@ fn gradient_in_lanes<const K: usize>(
     let (qt, ot) = scratch.split_at_mut(d);
     for first in (0..nodes).step_by(LANES) {
         let valid = (nodes - first).min(LANES);
-        // qt[x][l]: coordinate x at node first + l (the last node again in spare lanes).
-        for l in 0..LANES {
-            let node = &q[(first + l.min(valid - 1)) * d..][..d];
-            for (row, &v) in qt.iter_mut().zip(node) {
-                row[l] = v;
-            }
-        }
+        transpose_nodes(q, d, first, valid, qt);
         ot.iter_mut().for_each(|row| *row = [0.0; LANES]);
         for i in 0..nb {
             let qi: [[f64; LANES]; K] = std::array::from_fn(|c| qt[i * K + c]);
             let mut acc: [[f64; LANES]; K] = std::array::from_fn(|c| ot[i * K + c]);
             let gmi = g * masses[i];
             for j in i + 1..nb {
-                let sep: [[f64; LANES]; K] = std::array::from_fn(|c| {
-                    let qj = &qt[j * K + c];
-                    std::array::from_fn(|l| qi[c][l] - qj[l])
-                });
-                let mut r2 = [0.0f64; LANES];
-                for row in &sep {
-                    for (r, x) in r2.iter_mut().zip(row) {
-                        *r += x * x;
-                    }
-                }
+                let (sep, r2) = separation(&qi, &qt[j * K..(j + 1) * K]);
                 let gm = gmi * masses[j];
                 let f: [f64; LANES] = std::array::from_fn(|l| gm / (r2[l] * r2[l].sqrt()));
                 for (c, row) in sep.iter().enumerate() {
@@ -126,12 +111,7 @@ fn gradient_in_lanes<const K: usize>(
             }
             ot[i * K..i * K + K].copy_from_slice(&acc);
         }
-        for l in 0..valid {
-            let node = &mut out[(first + l) * d..][..d];
-            for (o, row) in node.iter_mut().zip(ot.iter()) {
-                *o = row[l];
-            }
-        }
+        untranspose_nodes(ot, d, first, valid, out);
     }
 }
 
@@ -163,12 +143,7 @@ pub(super) fn hessian_blocks_at_points<const K: usize>(
         let (qt, ht) = buf.split_at_mut(d);
         for first in (0..nodes).step_by(LANES) {
             let valid = (nodes - first).min(LANES);
-            for l in 0..LANES {
-                let node = &q[(first + l.min(valid - 1)) * d..][..d];
-                for (row, &v) in qt.iter_mut().zip(node) {
-                    row[l] = v;
-                }
-            }
+            transpose_nodes(q, d, first, valid, qt);
             ht.iter_mut().for_each(|row| *row = [0.0; LANES]);
             for i in 0..nb {
                 let qi: [[f64; LANES]; K] = std::array::from_fn(|c| qt[i * K + c]);
@@ -177,16 +152,7 @@ pub(super) fn hessian_blocks_at_points<const K: usize>(
                     std::array::from_fn(|r| std::array::from_fn(|c| ht[base + r * K + c]));
                 let gmi = g * masses[i];
                 for j in i + 1..nb {
-                    let sep: [[f64; LANES]; K] = std::array::from_fn(|c| {
-                        let qj = &qt[j * K + c];
-                        std::array::from_fn(|l| qi[c][l] - qj[l])
-                    });
-                    let mut r2 = [0.0f64; LANES];
-                    for row in &sep {
-                        for (r, x) in r2.iter_mut().zip(row) {
-                            *r += x * x;
-                        }
-                    }
+                    let (sep, r2) = separation(&qi, &qt[j * K..(j + 1) * K]);
                     let gm = gmi * masses[j];
                     let a: [f64; LANES] = std::array::from_fn(|l| gm / (r2[l] * r2[l].sqrt()));
                     let b: [f64; LANES] = std::array::from_fn(|l| 3.0 * a[l] / r2[l]);
@@ -208,12 +174,7 @@ pub(super) fn hessian_blocks_at_points<const K: usize>(
                     }
                 }
             }
-            for l in 0..valid {
-                let node = &mut out[(first + l) * per_point..][..per_point];
-                for (o, row) in node.iter_mut().zip(ht.iter()) {
-                    *o = row[l];
-                }
-            }
+            untranspose_nodes(ht, per_point, first, valid, out);
         }
     });
 }
@@ -254,6 +215,54 @@ pub(super) fn hessian_diagonal_blocks<const K: usize>(
             out[base + r * K..base + r * K + K].copy_from_slice(row);
         }
     }
+}
+
+/// qt[x][l] = coordinate x of node first + l of `q` (nodes of `d` coordinates), the last
+/// valid node again in the spare lanes.
+#[inline(always)]
+fn transpose_nodes(q: &[f64], d: usize, first: usize, valid: usize, qt: &mut [[f64; LANES]]) {
+    for l in 0..LANES {
+        let node = &q[(first + l.min(valid - 1)) * d..][..d];
+        for (row, &v) in qt.iter_mut().zip(node) {
+            row[l] = v;
+        }
+    }
+}
+
+/// Rows of `width` values of `out` for the `valid` nodes from `first`, from the lanes of `t`.
+#[inline(always)]
+fn untranspose_nodes(
+    t: &[[f64; LANES]],
+    width: usize,
+    first: usize,
+    valid: usize,
+    out: &mut [f64],
+) {
+    for l in 0..valid {
+        let node = &mut out[(first + l) * width..][..width];
+        for (o, row) in node.iter_mut().zip(t.iter()) {
+            *o = row[l];
+        }
+    }
+}
+
+/// The separation qᵢ − qⱼ of two bodies at each lane's node (`qj`: body j's K rows of the
+/// transposed positions) and |qᵢ − qⱼ|² summed from zero in coordinate order (the bits of
+/// [`squared_norm`]).
+#[inline(always)]
+fn separation<const K: usize>(
+    qi: &[[f64; LANES]; K],
+    qj: &[[f64; LANES]],
+) -> ([[f64; LANES]; K], [f64; LANES]) {
+    let sep: [[f64; LANES]; K] =
+        std::array::from_fn(|c| std::array::from_fn(|l| qi[c][l] - qj[c][l]));
+    let mut r2 = [0.0f64; LANES];
+    for row in &sep {
+        for (r, x) in r2.iter_mut().zip(row) {
+            *r += x * x;
+        }
+    }
+    (sep, r2)
 }
 
 /// |d|² summed from zero in coordinate order (the run-time loop's bits).

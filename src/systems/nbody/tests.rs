@@ -137,62 +137,27 @@ fn constant_dimension_gradient_is_the_runtime_loop_bit_for_bit() {
     }
 }
 
-/// The gradient at many points, the nodes in vector lanes, is the point-by-point gradient bit
-/// for bit, in 2D and 3D, for full and partial lane groups (1, 7, 8, 9 and 17 points).
-/// Negative control: the same points with one coordinate of the last point moved by an ulp
-/// change that point's gradient and no other.
-#[test]
-fn gradient_in_lanes_is_the_pointwise_gradient_bit_for_bit() {
+/// Evaluations at many points (`at_points`, the nodes in vector lanes) against the same
+/// evaluation point by point (`pointwise`), `width` values per point, bit for bit, in 2D and
+/// 3D, for full and partial lane groups (1, 7, 8, 9 and 17 points). Negative control: moving
+/// one coordinate of the last point by an ulp changes that point's values and no other's.
+fn lanes_match_pointwise(
+    width: impl Fn(usize) -> usize,
+    at_points: impl Fn(&NBody, &[f64], &mut [f64]),
+    pointwise: impl Fn(&NBody, &[f64], &mut [f64]),
+) {
     for dim in [2usize, 3] {
         let nb = NBody::new(vec![1.0, 1e-3, 3e-4, 5e-5, 4e-5, 7e-9], 2.9591e-4, dim).unwrap();
-        let d = 6 * dim;
-        for points in [1usize, 7, 8, 9, 17] {
-            let q: Vec<f64> = (0..points * d)
-                .map(|i| ((i * 37 % 23) as f64 - 11.0) * 0.7 + (i as f64 * 0.37).sin())
-                .collect();
-            let mut lanes = vec![f64::NAN; points * d];
-            nb.potential_gradient_at_points(&q, &mut lanes);
-            let mut one = vec![0.0; d];
-            for j in 0..points {
-                nb.potential_gradient(&q[j * d..(j + 1) * d], &mut one);
-                let got = &lanes[j * d..(j + 1) * d];
-                assert!(
-                    got.iter()
-                        .zip(&one)
-                        .all(|(a, b)| a.to_bits() == b.to_bits()),
-                    "dim {dim}, {points} points, point {j}"
-                );
-            }
-            let mut moved = q.clone();
-            let last = (points - 1) * d;
-            moved[last] = f64::from_bits(moved[last].to_bits() + 1);
-            let mut other = vec![0.0; points * d];
-            nb.potential_gradient_at_points(&moved, &mut other);
-            assert_eq!(other[..last], lanes[..last]);
-            assert_ne!(other[last..], lanes[last..]);
-        }
-    }
-}
-
-/// The Hessian's diagonal blocks at many points, the nodes in vector lanes, are the
-/// point-by-point blocks bit for bit, in 2D and 3D, for full and partial lane groups.
-/// Negative control: moving one coordinate of the last point by an ulp changes that point's
-/// blocks and no other's.
-#[test]
-fn hessian_blocks_in_lanes_are_the_pointwise_blocks_bit_for_bit() {
-    for dim in [2usize, 3] {
-        let nb = NBody::new(vec![1.0, 1e-3, 3e-4, 5e-5, 4e-5, 7e-9], 2.9591e-4, dim).unwrap();
-        let d = 6 * dim;
-        let per = 6 * dim * dim;
+        let (d, per) = (6 * dim, width(dim));
         for points in [1usize, 7, 8, 9, 17] {
             let q: Vec<f64> = (0..points * d)
                 .map(|i| ((i * 37 % 23) as f64 - 11.0) * 0.7 + (i as f64 * 0.37).sin())
                 .collect();
             let mut lanes = vec![f64::NAN; points * per];
-            assert!(nb.potential_hessian_diagonal_blocks_at_points(&q, &mut lanes));
+            at_points(&nb, &q, &mut lanes);
             let mut one = vec![0.0; per];
             for j in 0..points {
-                nb.potential_hessian_diagonal_blocks(&q[j * d..(j + 1) * d], &mut one);
+                pointwise(&nb, &q[j * d..(j + 1) * d], &mut one);
                 let got = &lanes[j * per..(j + 1) * per];
                 assert!(
                     got.iter()
@@ -205,10 +170,32 @@ fn hessian_blocks_in_lanes_are_the_pointwise_blocks_bit_for_bit() {
             let last = (points - 1) * d;
             moved[last] = f64::from_bits(moved[last].to_bits() + 1);
             let mut other = vec![0.0; points * per];
-            assert!(nb.potential_hessian_diagonal_blocks_at_points(&moved, &mut other));
+            at_points(&nb, &moved, &mut other);
             let split = (points - 1) * per;
             assert_eq!(other[..split], lanes[..split]);
             assert_ne!(other[split..], lanes[split..]);
         }
     }
+}
+
+/// The gradient at many points, the nodes in vector lanes, is the point-by-point gradient bit
+/// for bit ([`lanes_match_pointwise`]).
+#[test]
+fn gradient_in_lanes_is_the_pointwise_gradient_bit_for_bit() {
+    lanes_match_pointwise(
+        |dim| 6 * dim,
+        |nb, q, out| nb.potential_gradient_at_points(q, out),
+        |nb, q, out| nb.potential_gradient(q, out),
+    );
+}
+
+/// The Hessian's diagonal blocks at many points, the nodes in vector lanes, are the
+/// point-by-point blocks bit for bit ([`lanes_match_pointwise`]).
+#[test]
+fn hessian_blocks_in_lanes_are_the_pointwise_blocks_bit_for_bit() {
+    lanes_match_pointwise(
+        |dim| 6 * dim * dim,
+        |nb, q, out| assert!(nb.potential_hessian_diagonal_blocks_at_points(q, out)),
+        |nb, q, out| nb.potential_hessian_diagonal_blocks(q, out),
+    );
 }
