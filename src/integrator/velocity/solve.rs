@@ -45,6 +45,14 @@ const VELOCITY_STALL: f64 = 0.5;
 /// from residuals of O(10), where the frozen Hessian (taken at that guess) contracts slowly and
 /// one step stopped at its noise floor with an angular-momentum error of 2e-15; 1e-6 tries
 /// the predictor too often (+13 % time); 1e-3 costs +4 % and had no such step.
+///
+/// The residual is max |F|, in momentum units, against max |c| in velocity units: for
+/// Kepler (M = I) the two agree, but an N-body system with small masses (J2000 in GM units,
+/// 1e-10 … 3e-4) passes the test on almost every step, so its steps keep their
+/// extrapolations even where a fast planet's is far off (Mercury at h = 25 d: 10² relative,
+/// mostly in the top modes, which the first correction removes). Measured there (issue 35,
+/// docs/solvers.md), a closer guess saves about two corrections and the RK4 predictor costs
+/// about four residuals, so the test is left as it is.
 const EXTRAPOLATION_TRUST: f64 = 1e-3;
 
 /// Contraction per iteration above which the fixed-point start hands the step over to the
