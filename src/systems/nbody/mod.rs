@@ -364,9 +364,15 @@ impl Mechanical for NBody {
             }
             return true;
         }
-        for (qj, oj) in q.chunks_exact(d).zip(out.chunks_exact_mut(per_point)) {
-            self.potential_hessian_diagonal_blocks(qj, oj);
-        }
+        for_each_node(
+            self.masses.len(),
+            q,
+            d,
+            None,
+            out,
+            per_point,
+            |qj, _, oj| self.potential_hessian_diagonal_blocks(qj, oj),
+        );
         true
     }
 
