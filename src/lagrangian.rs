@@ -112,6 +112,20 @@ pub trait Lagrangian {
         }
     }
 
+    /// [`force_at_points`](Lagrangian::force_at_points) where only some coordinate blocks'
+    /// forces are wanted: `active[i]` marks block i (coordinates i·b … i·b + b − 1, b from
+    /// [`coordinate_blocks`](Lagrangian::coordinate_blocks)); rows of the other blocks may be
+    /// left holding anything. The velocity form's fixed-point iteration asks for this once
+    /// some blocks have converged and the others iterate on (the inner planets of a planetary
+    /// system after the outer ones), so a system whose forces on a few blocks cost less than
+    /// all of them (an N-body system: the pairs with an active body) overrides it. The active
+    /// blocks' forces must be those of `force_at_points`, bit for bit. The default computes
+    /// all of them.
+    fn force_at_points_on_blocks(&self, q: &[f64], active: &[bool], out: &mut [f64]) {
+        let _ = active;
+        self.force_at_points(q, out);
+    }
+
     /// [`force_jacobian`](Lagrangian::force_jacobian) at many points: row j of `q` (D values)
     /// into block j of `out` (D×D values), as [`force_at_points`](Lagrangian::force_at_points).
     fn force_jacobian_at_points(&self, q: &[f64], out: &mut [f64]) {
@@ -299,6 +313,14 @@ pub trait Mechanical {
             self.potential_gradient(qj, oj);
         }
     }
+    /// ∇V at many points for the coordinate blocks marked in `active` only, for
+    /// [`Lagrangian::force_at_points_on_blocks`] (the same contract: the active blocks' rows
+    /// bit for bit those of `potential_gradient_at_points`, the others unspecified). Default:
+    /// all of them.
+    fn potential_gradient_at_points_on_blocks(&self, q: &[f64], active: &[bool], out: &mut [f64]) {
+        let _ = active;
+        self.potential_gradient_at_points(q, out);
+    }
     /// ∇²V at many points (row j of `q` into block j of `out`, D×D each), for
     /// [`Lagrangian::force_jacobian_at_points`]. Default: point by point.
     fn potential_hessian_at_points(&self, q: &[f64], out: &mut [f64]) {
@@ -397,6 +419,11 @@ impl<S: Mechanical> Lagrangian for S {
 
     fn force_at_points(&self, q: &[f64], out: &mut [f64]) {
         self.potential_gradient_at_points(q, out);
+        out.iter_mut().for_each(|x| *x = -*x);
+    }
+
+    fn force_at_points_on_blocks(&self, q: &[f64], active: &[bool], out: &mut [f64]) {
+        self.potential_gradient_at_points_on_blocks(q, active, out);
         out.iter_mut().for_each(|x| *x = -*x);
     }
 

@@ -43,6 +43,12 @@ pub struct StepStats {
     /// point, plus the force evaluations of the RK4 predictor guess: the "right-hand-side
     /// evaluations" of the step.
     pub gradient_evaluations: usize,
+    /// Evaluations of the forces on some coordinate blocks only, per quadrature point: the
+    /// velocity form's fixed-point iterations after some blocks converged
+    /// (`StructuredOptions::velocity_freeze_converged_blocks`); not counted in
+    /// `gradient_evaluations`.
+    #[serde(default)]
+    pub partial_gradient_evaluations: usize,
     /// Evaluations of second derivatives, per quadrature point.
     pub hessian_evaluations: usize,
     /// LU factorisations of the Newton matrix (for the Kronecker solver: freezes of the

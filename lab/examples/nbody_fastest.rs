@@ -5,11 +5,13 @@
 //!   15 Gauss points (the economical rule);
 //! - `j2000`: the J2000 10-body scene, T = 10 000 d (Δ = 100 d), Chebyshev n = 10,
 //!   h = 12.5 d, 10 Gauss points (the compact rule);
+//! - `j2000-12`: the same scene at the frontier of the study of 2026-11-27 04:11, Legendre
+//!   n = 12, h = 20 d, 12 Gauss points;
 //! - `j2000-14`: the same scene at the frontier of the study of 2026-11-27, Legendre n = 14,
 //!   h = 25 d, 14 Gauss points.
 //!
 //! ```text
-//! cargo run --release -p galerkin-vi-lab --example nbody_fastest [outer|j2000|j2000-14] [REPEATS]
+//! cargo run --release -p galerkin-vi-lab --example nbody_fastest [outer|j2000|j2000-12|j2000-14] [REPEATS]
 //! valgrind --tool=callgrind target/release/examples/nbody_fastest outer 1
 //! ```
 use galerkin_vi::basis::BasisKind;
@@ -38,6 +40,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             BasisKind::Chebyshev,
             10,
         ),
+        "j2000-12" => (
+            "solar-system",
+            100.0,
+            5,
+            QuadPoints::Compact,
+            BasisKind::Legendre,
+            12,
+        ),
         "j2000-14" => (
             "solar-system",
             100.0,
@@ -47,7 +57,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             14,
         ),
         other => {
-            return Err(format!("unknown configuration {other} (outer, j2000 or j2000-14)").into());
+            return Err(format!(
+                "unknown configuration {other} (outer, j2000, j2000-12 or j2000-14)"
+            )
+            .into());
         }
     };
     let scene = Scene::load(scene)?.build()?;

@@ -160,6 +160,15 @@ pub struct StructuredOptions {
     /// tolerance).
     #[serde(default = "default_velocity_fixed_point_handover")]
     pub velocity_fixed_point_handover: f64,
+    /// In the fixed-point iteration, stop iterating the coordinate blocks
+    /// (`Lagrangian::coordinate_blocks`: the bodies of an N-body system) whose corrections
+    /// pass the iteration's own convergence test, and evaluate the residual and the forces
+    /// (`Lagrangian::force_at_points_on_blocks`) on the others only; once every block is
+    /// frozen, one correction of all of them decides convergence as usual. For a diagonal
+    /// mass matrix and at least two blocks. The map does not change beyond round-off (the
+    /// iteration stops at the same tolerance, on a correction of every block). Default on.
+    #[serde(default = "default_true")]
+    pub velocity_freeze_converged_blocks: bool,
 }
 
 impl Default for StructuredOptions {
@@ -168,6 +177,7 @@ impl Default for StructuredOptions {
             self_block_rate: default_self_block_rate(),
             velocity_self_block_rate: default_velocity_self_block_rate(),
             velocity_fixed_point_handover: default_velocity_fixed_point_handover(),
+            velocity_freeze_converged_blocks: true,
         }
     }
 }

@@ -36,6 +36,7 @@
 //! h[½ Σ_a c_aᵀMc_a − Σ_j b_j V(q_k + h Σ_a ι_ja c_a)] that these tables define.
 
 mod equations;
+mod freeze;
 mod solve;
 
 pub(crate) use solve::{FIXED_POINT_HANDOVER, VelocityState};

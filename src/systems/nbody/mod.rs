@@ -336,6 +336,21 @@ impl Mechanical for NBody {
         });
     }
 
+    fn potential_gradient_at_points_on_blocks(&self, q: &[f64], active: &[bool], out: &mut [f64]) {
+        let d = self.degrees_of_freedom();
+        // The pairs with an active body, in vector lanes; the parallel evaluation of many
+        // bodies computes them all.
+        if self.masses.len() < PARALLEL_BODIES || !cfg!(feature = "parallel") {
+            if self.dim == 2 {
+                pairwise::gradient_at_points_on::<2>(self.g, &self.masses, q, d, active, out);
+            } else {
+                pairwise::gradient_at_points_on::<3>(self.g, &self.masses, q, d, active, out);
+            }
+            return;
+        }
+        self.potential_gradient_at_points(q, out);
+    }
+
     fn potential_hessian_at_points(&self, q: &[f64], out: &mut [f64]) {
         let d = self.degrees_of_freedom();
         for_each_node(self.masses.len(), q, d, None, out, d * d, |qj, _, oj| {

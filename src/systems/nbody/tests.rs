@@ -199,3 +199,45 @@ fn hessian_blocks_in_lanes_are_the_pointwise_blocks_bit_for_bit() {
         |nb, q, out| nb.potential_hessian_diagonal_blocks(q, out),
     );
 }
+
+/// The gradient on some bodies only (`potential_gradient_at_points_on_blocks`): the active
+/// bodies' rows are the full gradient's bit for bit, whichever bodies are active (the Sun
+/// alone, the innermost pair, a scattered set). Negative control: an inactive body's row,
+/// which misses its pairs with the other inactive bodies, differs from its full gradient.
+#[test]
+fn gradient_on_active_bodies_is_the_full_gradient_there() {
+    for dim in [2usize, 3] {
+        let nb = NBody::new(vec![1.0, 1e-3, 3e-4, 5e-5, 4e-5, 7e-9], 2.9591e-4, dim).unwrap();
+        let d = 6 * dim;
+        let points = 9;
+        let q: Vec<f64> = (0..points * d)
+            .map(|i| ((i * 37 % 23) as f64 - 11.0) * 0.7 + (i as f64 * 0.37).sin())
+            .collect();
+        let mut full = vec![0.0; points * d];
+        nb.potential_gradient_at_points(&q, &mut full);
+        for active in [
+            [true, false, false, false, false, false],
+            [true, true, false, false, false, false],
+            [false, true, false, true, false, true],
+        ] {
+            let mut some = vec![f64::NAN; points * d];
+            nb.potential_gradient_at_points_on_blocks(&q, &active, &mut some);
+            let mut inactive_differs = false;
+            for j in 0..points {
+                for (b, &on) in active.iter().enumerate() {
+                    let rows = j * d + b * dim..j * d + (b + 1) * dim;
+                    let same = some[rows.clone()]
+                        .iter()
+                        .zip(&full[rows])
+                        .all(|(x, y)| x.to_bits() == y.to_bits());
+                    if on {
+                        assert!(same, "dim {dim}, active {active:?}, point {j}, body {b}");
+                    } else {
+                        inactive_differs |= !same;
+                    }
+                }
+            }
+            assert!(inactive_differs, "negative control: {active:?}");
+        }
+    }
+}
