@@ -3,10 +3,12 @@
 //! double-double, the dense exact Newton matrix, and the converged modes written back as the
 //! basis's coefficients, the impulse and the state the next step extrapolates from.
 
+use super::solve::VelocityState;
 use super::{VelocityTables, panel_times};
 use crate::basis::Basis;
 use crate::integrator::dd::{dd_acc, dd_acc_columns, max_abs_or_infinite, two_sum};
 use crate::integrator::separable::Separable;
+use crate::integrator::stage_scratch::StageScratch;
 use crate::integrator::{GalerkinIntegrator, InitialGuess, Workspace};
 use crate::lagrangian::Lagrangian;
 use crate::linalg::{Lu, Strided, gemm, gemm_transposed, panel_product};
@@ -285,44 +287,8 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         self.weighted_forces(lag, &mut ws.stage);
         // Σ_j ψ_jb (h b_j f_j).
         gemm_transposed(k, m, d, &vt.psi, &ws.stage.scaled, 0.0, &mut vs.delta);
-        // Row 0, the momentum condition, into `dd_hi`: rounded from its projection, or in
-        // double-double (`momentum_row`) with the force terms added below.
-        if momentum == MomentumRow::Rounded {
-            for r in 0..d {
-                ws.stage.dd_hi[r] = rounded_momentum_row(sep, &vs.c, p_k, vs.delta[r], r);
-            }
-        } else {
-            for r in 0..d {
-                (ws.stage.dd_hi[r], ws.stage.dd_lo[r]) =
-                    momentum_row(sep, &vs.c, &vs.c0_lo, p_k, ws.iterate.momentum_lo(), r);
-            }
-            // The force terms, eight coordinates side by side with their (hi, lo) pairs in
-            // registers: each sum runs over j in order (the same bits as one coordinate at a
-            // time), independent sums hide each other's latency, and they vectorise for large
-            // D. The row is their sum hi + lo. The lanes are a constant (8, then 4, 2, 1 for
-            // the rest), so the pairs stay in registers: with the lanes a run-time count they
-            // went through the stack (issue 35's J2000 profile).
-            let weights = &t.weights;
-            let (hi, lo, lq) = (&mut ws.stage.dd_hi, &ws.stage.dd_lo, &ws.stage.lq);
-            let mut r0 = 0;
-            while r0 < d {
-                let terms = ForceTerms {
-                    weights,
-                    psi: &vt.psi,
-                    k,
-                    h,
-                    lq,
-                    d,
-                    r0,
-                };
-                r0 += match d - r0 {
-                    8.. => terms.add::<8>(hi, lo),
-                    4..=7 => terms.add::<4>(hi, lo),
-                    2 | 3 => terms.add::<2>(hi, lo),
-                    _ => terms.add::<1>(hi, lo),
-                };
-            }
-        }
+        let (stage, momentum_lo) = (&mut ws.stage, ws.iterate.momentum_lo());
+        self.momentum_rows(vt, sep, vs, stage, (p_k, momentum_lo), &[(0, d)], momentum);
         let row0 = &ws.stage.dd_hi;
         close_rows(
             sep,
@@ -434,48 +400,45 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
                 v,
             );
         }
-        // Row 0, the momentum condition, into `dd_hi`: rounded from its projection, or in
-        // double-double (`momentum_row`) with the force terms added below.
-        let rows = || runs.iter().flat_map(|&(a, b)| a..b);
-        if momentum == MomentumRow::Rounded {
-            for r in rows() {
-                ws.stage.dd_hi[r] = rounded_momentum_row(sep, &vs.c, p_k, vs.delta[r], r);
-            }
-        } else {
-            for r in rows() {
-                (ws.stage.dd_hi[r], ws.stage.dd_lo[r]) =
-                    momentum_row(sep, &vs.c, &vs.c0_lo, p_k, ws.iterate.momentum_lo(), r);
-            }
-            // The force terms, eight coordinates side by side with their (hi, lo) pairs in
-            // registers: each sum runs over j in order (the same bits as one coordinate at a
-            // time), independent sums hide each other's latency, and they vectorise for large
-            // D. The row is their sum hi + lo. The lanes are a constant (8, then 4, 2, 1 for
-            // the rest), so the pairs stay in registers: with the lanes a run-time count they
-            // went through the stack (issue 35's J2000 profile).
-            let weights = &t.weights;
-            let (hi, lo, lq) = (&mut ws.stage.dd_hi, &ws.stage.dd_lo, &ws.stage.lq);
-            for &(a, b) in runs {
-                let mut r0 = a;
-                while r0 < b {
-                    let terms = ForceTerms {
-                        weights,
-                        psi: &vt.psi,
-                        k,
-                        h,
-                        lq,
-                        d,
-                        r0,
-                    };
-                    r0 += match b - r0 {
-                        8.. => terms.add::<8>(hi, lo),
-                        4..=7 => terms.add::<4>(hi, lo),
-                        2 | 3 => terms.add::<2>(hi, lo),
-                        _ => terms.add::<1>(hi, lo),
-                    };
-                }
-            }
-        }
+        let (stage, momentum_lo) = (&mut ws.stage, ws.iterate.momentum_lo());
+        self.momentum_rows(vt, sep, vs, stage, (p_k, momentum_lo), runs, momentum);
         close_rows_on(runs, tiled, &vs.c, &mut vs.delta, &ws.stage.dd_hi, d)
+    }
+
+    /// Row 0 of F, the momentum condition, for the coordinates of `columns` into the stage's
+    /// `dd_hi` ([`MomentumRows::fill`]), from the projections in the state's `delta`, the
+    /// stage's forces and p_k with its low part (`momentum`).
+    #[allow(clippy::too_many_arguments)]
+    fn momentum_rows(
+        &self,
+        vt: &VelocityTables,
+        sep: &Separable,
+        vs: &VelocityState,
+        stage: &mut StageScratch,
+        (p_k, momentum_lo): (&[f64], &[f64]),
+        columns: &[(usize, usize)],
+        momentum: MomentumRow,
+    ) {
+        let rows = MomentumRows {
+            sep,
+            c: &vs.c,
+            c0_lo: &vs.c0_lo,
+            p_k,
+            momentum_lo,
+            weights: &self.tables().weights,
+            psi: &vt.psi,
+            lq: &stage.lq,
+            k: vt.k,
+            h: self.step_size(),
+            d: vs.c0_lo.len(),
+        };
+        rows.fill(
+            columns,
+            momentum,
+            &vs.delta,
+            &mut stage.dd_hi,
+            &mut stage.dd_lo,
+        );
     }
 
     /// The converged modes as the nodal solve leaves its result: increments ΔQ_i = h Σ_a B_ia
@@ -581,22 +544,67 @@ fn momentum_row(
     (s, lo + (e - momentum_lo[r]))
 }
 
-/// The double-double momentum row's force terms Σ_j ψ_j0 (h b_j f_j) for the coordinates
-/// r0 … r0 + L − 1 (`velocity_residual_general`).
-struct ForceTerms<'a> {
+/// What row 0, the momentum condition F_0 = M c_0 + h Σ_j b_j ψ_j0 f_j − p_k, is made of:
+/// the mass matrix, the modes (c_0 with its low part), the momentum (with its low part), and
+/// the forces at the nodes with the rule's weights and the test function ψ_0.
+struct MomentumRows<'a> {
+    sep: &'a Separable,
+    c: &'a [f64],
+    c0_lo: &'a [f64],
+    p_k: &'a [f64],
+    momentum_lo: &'a [f64],
     weights: &'a [f64],
     psi: &'a [f64],
+    lq: &'a [f64],
     k: usize,
     h: f64,
-    lq: &'a [f64],
     d: usize,
-    r0: usize,
 }
 
-impl ForceTerms<'_> {
-    /// hi + lo of each coordinate from its (hi, lo) start in `hi`, `lo`, into `hi`; returns L.
-    fn add<const L: usize>(&self, hi: &mut [f64], lo: &[f64]) -> usize {
-        let (r0, d) = (self.r0, self.d);
+impl MomentumRows<'_> {
+    /// Row 0 for the coordinates of `columns` (runs [a, b)) into `hi`: rounded from its
+    /// projection (row 0 of `projections`), or in double-double (`momentum_row`) with the
+    /// force terms added eight coordinates side by side, their (hi, lo) pairs in registers:
+    /// each sum runs over j in order (the same bits as one coordinate at a time), independent
+    /// sums hide each other's latency, and they vectorise for large D. The row is their sum
+    /// hi + lo. The lanes are a constant (8, then 4, 2, 1 for the rest), so the pairs stay in
+    /// registers: with the lanes a run-time count they went through the stack (issue 35's
+    /// J2000 profile).
+    fn fill(
+        &self,
+        columns: &[(usize, usize)],
+        momentum: MomentumRow,
+        projections: &[f64],
+        hi: &mut [f64],
+        lo: &mut [f64],
+    ) {
+        for &(a, b) in columns {
+            if momentum == MomentumRow::Rounded {
+                for r in a..b {
+                    hi[r] = rounded_momentum_row(self.sep, self.c, self.p_k, projections[r], r);
+                }
+                continue;
+            }
+            for r in a..b {
+                (hi[r], lo[r]) =
+                    momentum_row(self.sep, self.c, self.c0_lo, self.p_k, self.momentum_lo, r);
+            }
+            let mut r0 = a;
+            while r0 < b {
+                r0 += match b - r0 {
+                    8.. => self.add_force_terms::<8>(r0, hi, lo),
+                    4..=7 => self.add_force_terms::<4>(r0, hi, lo),
+                    2 | 3 => self.add_force_terms::<2>(r0, hi, lo),
+                    _ => self.add_force_terms::<1>(r0, hi, lo),
+                };
+            }
+        }
+    }
+
+    /// The force terms Σ_j ψ_j0 (h b_j f_j) of coordinates r0 … r0 + L − 1 added to their
+    /// (hi, lo) starts in `hi`, `lo`, the sum hi + lo into `hi`; returns L.
+    fn add_force_terms<const L: usize>(&self, r0: usize, hi: &mut [f64], lo: &[f64]) -> usize {
+        let d = self.d;
         let mut h_acc: [f64; L] = std::array::from_fn(|l| hi[r0 + l]);
         let mut l_acc: [f64; L] = std::array::from_fn(|l| lo[r0 + l]);
         for (j, &b) in self.weights.iter().enumerate() {
