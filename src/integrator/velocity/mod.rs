@@ -37,9 +37,12 @@
 
 mod equations;
 mod freeze;
+mod masked;
 mod solve;
+mod state;
 
-pub(crate) use solve::{FIXED_POINT_HANDOVER, VelocityState};
+pub(crate) use solve::FIXED_POINT_HANDOVER;
+pub(crate) use state::VelocityState;
 
 use std::sync::OnceLock;
 
