@@ -60,10 +60,11 @@ pub(crate) const FIXED_POINT_HANDOVER: f64 = 0.5;
 
 /// Relative correction up to which the fixed-point iteration converges, once it confirmed its
 /// frozen blocks ([`super::freeze`]), when a correction is no smaller than half the one
-/// before: the round-off floor of the whole residual. Measured on J2000 (Legendre n = 12, h = 20 d): the
-/// confirmations' corrections are 1–3e-16 of the iterate where the frozen blocks kept still
-/// (the slowest block's floor), and up to 2.5e-15 where a block frozen early drifted with the
-/// Sun's later corrections (the iteration then continues with every block).
+/// before: the round-off floor of the whole residual. Measured on J2000 (Legendre n = 12,
+/// h = 20 d): the confirmations' corrections are 1–3e-16 of the iterate where the frozen
+/// blocks kept still (the slowest block's floor), and up to 2.5e-15 where a block frozen
+/// early drifted with the Sun's later corrections (the iteration then continues with every
+/// block).
 const CONFIRMATION_FLOOR: f64 = 1e-15;
 
 /// Relative increment below which an iteration that stops contracting is at the round-off
