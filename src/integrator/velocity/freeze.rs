@@ -13,11 +13,13 @@
 //! block that passes stops being iterated: the residual, the forces
 //! (`Lagrangian::force_at_points_on_blocks`) and the correction are evaluated on the active
 //! blocks' columns only. A frozen block is not exactly converged where the blocks are coupled:
-//! the others' later corrections move its residual by the coupling (for the planets, their
-//! masses relative to the Sun's). So the iteration never ends on a masked correction: once
-//! every block is frozen, one correction of all of them follows, and the executor decides on
-//! it with the usual test; if that one does not pass, the step continues without freezing.
-//! The map is therefore the one the unfrozen iteration converges to, within its tolerance.
+//! the others' later corrections move its residual by the coupling (a planet's with the
+//! Sun's later corrections, at full strength: up to 2.5e-15 of the modes on J2000). So the
+//! iteration never ends on a masked correction: once every block is frozen, one correction of
+//! all of them follows, and the executor decides on it with the usual tests (and a round-off
+//! floor, the slowest block having frozen at its own); if that one does not pass, the step
+//! continues without freezing. That confirmation is also the step's finishing pass. The map is
+//! therefore the one the unfrozen iteration converges to, within its tolerance.
 
 /// Where a step's fixed-point iteration is in freezing its converged blocks.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
