@@ -17,6 +17,7 @@ mod errors;
 mod expression;
 mod expression_allocation;
 mod external;
+mod freezing;
 mod geometry;
 mod ignored_flags;
 mod interruption;

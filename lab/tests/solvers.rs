@@ -58,7 +58,7 @@ fn with_solver_rate(
 }
 
 /// A built-in N-body scene: the system, its initial state and the scene's step.
-fn scene_nbody(name: &str) -> (NBody, InitialState, f64) {
+pub(crate) fn scene_nbody(name: &str) -> (NBody, InitialState, f64) {
     let scene = Scene::load(name).unwrap();
     let built = scene.build().unwrap();
     let nbody = built.euclidean().unwrap().as_nbody().unwrap().clone();
@@ -66,7 +66,7 @@ fn scene_nbody(name: &str) -> (NBody, InitialState, f64) {
 }
 
 /// Allocations in `steps` steps after a first one that warms the workspace up.
-fn allocations_per_run<L: Lagrangian>(
+pub(crate) fn allocations_per_run<L: Lagrangian>(
     gvi: &GalerkinIntegrator<AnyBasis, QuadratureRule>,
     lag: &L,
     init: &InitialState,
@@ -564,71 +564,4 @@ fn velocity_form_self_blocks_of_the_fast_bodies_cut_the_iterations() {
     assert!(dw <= 1e-10 && dn <= 1e-10, "{dw:e} {dn:e}");
     let gvi = integrator(StageSolver::Auto, rate);
     assert_eq!(allocations_per_run(&gvi, &nbody, &init, 5), 0);
-}
-
-/// The fixed-point iteration's converged blocks frozen
-/// (`StructuredOptions::velocity_freeze_converged_blocks`): on J2000 at h = 20 d (Legendre
-/// n = 12, 12 Gauss points: the study's frontier at 1e-9) the outer planets converge in 2–4
-/// corrections and Mercury in about 10, so most corrections evaluate the forces on a few
-/// bodies only. Both runs give the exact-Newton map to round-off (bound 1e-10, as above; its
-/// negative control is `agreement_bound_catches_a_loosely_solved_map`). Measured (25 steps):
-/// frozen 5.1e-16 and unfrozen 6.2e-17 from exact Newton; 3.7 full and 7.0 partial force
-/// evaluations per node and step against 10.4 full; no allocation per step.
-#[test]
-fn freezing_converged_bodies_keeps_the_map_and_skips_their_forces() {
-    let (nbody, init, _) = scene_nbody("solar-system");
-    let steps = 25;
-    let integrator = |solver, freeze: bool| {
-        let gvi = GalerkinIntegrator::from_kinds(
-            BasisKind::Legendre,
-            12,
-            QuadratureKind::default(),
-            Some(12),
-            20.0,
-        )
-        .unwrap();
-        let mut options = NewtonOptions {
-            solver,
-            ..*gvi.options()
-        };
-        options.structured.velocity_freeze_converged_blocks = freeze;
-        gvi.with_options(options)
-    };
-    let run = |solver, freeze| {
-        integrator(solver, freeze)
-            .integrate(&nbody, init.t0, &init.q, &init.p, steps)
-            .unwrap()
-    };
-    let reference = run(StageSolver::Exact, false);
-    let frozen = run(StageSolver::Auto, true);
-    let plain = run(StageSolver::Auto, false);
-    let sum = |t: &Trajectory, f: fn(&galerkin_vi::stats::StepStats) -> usize| {
-        t.stats.iter().map(f).sum::<usize>()
-    };
-    let full = |t: &Trajectory| sum(t, |s| s.gradient_evaluations) as f64 / (12 * steps) as f64;
-    let partial = sum(&frozen, |s| s.partial_gradient_evaluations);
-    let (df, dp) = (
-        final_state_distance(&reference, &frozen),
-        final_state_distance(&reference, &plain),
-    );
-    println!(
-        "J2000 n = 12, h = 20 d: frozen {:.1} full + {:.1} partial evaluations per node and \
-         step ({df:.1e}); unfrozen {:.1} ({dp:.1e})",
-        full(&frozen),
-        partial as f64 / (12 * steps) as f64,
-        full(&plain),
-    );
-    assert_eq!(sum(&plain, |s| s.partial_gradient_evaluations), 0);
-    assert!(partial > 0);
-    assert!(
-        full(&frozen) < 0.6 * full(&plain),
-        "{} {}",
-        full(&frozen),
-        full(&plain)
-    );
-    assert!(df <= 1e-10 && dp <= 1e-10, "{df:e} {dp:e}");
-    assert_eq!(
-        allocations_per_run(&integrator(StageSolver::Auto, true), &nbody, &init, 5),
-        0
-    );
 }

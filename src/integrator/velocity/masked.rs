@@ -2,7 +2,7 @@
 //! iteration has frozen some blocks ([`super::freeze`]).
 
 use super::VelocityTables;
-use super::equations::MomentumRow;
+use super::momentum::MomentumRow;
 use crate::basis::Basis;
 use crate::integrator::{GalerkinIntegrator, Workspace};
 use crate::lagrangian::Lagrangian;

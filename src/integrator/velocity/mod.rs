@@ -38,6 +38,7 @@
 mod equations;
 mod freeze;
 mod masked;
+mod momentum;
 mod solve;
 mod state;
 

@@ -19,8 +19,9 @@
 //! the next steps ([`VelocityState::record`]).
 
 use super::VelocityTables;
-use super::equations::{MomentumRow, assemble_dense};
+use super::equations::assemble_dense;
 use super::freeze::correct_on_blocks;
+use super::momentum::MomentumRow;
 use crate::basis::Basis;
 use crate::integrator::dd::max_abs;
 use crate::integrator::kronecker::KroneckerWorkParts;
