@@ -9,6 +9,7 @@ mod enriched_checks;
 #[path = "common/kepler_periapsis.rs"]
 mod kepler_periapsis;
 
+mod collocation;
 mod counts;
 mod dependencies;
 mod enriched;

@@ -216,6 +216,17 @@ impl QuadratureKind {
         }
     }
 
+    /// The Gauss collocation rule: n − 1 points for Gauss–Legendre (degree 2n − 3, the least
+    /// that is exact for the kinetic term of n basis functions, degree 2n − 4), with which the
+    /// Galerkin step of a polynomial space is Gauss collocation with n − 1 stages (order
+    /// 2n − 2, as for the n-point rule). Other rules: their default.
+    pub fn collocation_points(self, n: usize) -> usize {
+        match self {
+            QuadratureKind::GaussLegendre => n.saturating_sub(1).max(1),
+            other => other.default_points(n),
+        }
+    }
+
     /// Build the rule with m points.
     pub fn build(self, points: usize) -> Result<QuadratureRule> {
         match self {

@@ -164,7 +164,7 @@ pub fn run_work_precision(args: WorkPrecisionArgs) -> Result<(), LabError> {
         config.kepler_divisors = m.clone();
     }
     if let Some(q) = &args.quadratures {
-        config.quad_points = QuadPoints::ALL
+        config.quad_points = QuadPoints::CHOICES
             .into_iter()
             .filter(|p| q.contains(p))
             .collect();

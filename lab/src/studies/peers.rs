@@ -27,14 +27,24 @@ pub enum QuadPoints {
     Economical,
     /// n points ([`QuadratureKind::compact_points`]).
     Compact,
+    /// n − 1 points ([`QuadratureKind::collocation_points`]): Gauss collocation.
+    Collocation,
 }
 
 impl QuadPoints {
-    /// Every choice, paper first.
+    /// The choices the studies sweep by default, paper first.
     pub const ALL: [QuadPoints; 3] = [
         QuadPoints::Paper,
         QuadPoints::Economical,
         QuadPoints::Compact,
+    ];
+
+    /// Every choice (the default ones and Gauss collocation).
+    pub const CHOICES: [QuadPoints; 4] = [
+        QuadPoints::Paper,
+        QuadPoints::Economical,
+        QuadPoints::Compact,
+        QuadPoints::Collocation,
     ];
 
     /// The name on the command line (`paper`, `economical`, `compact`).
@@ -43,6 +53,7 @@ impl QuadPoints {
             QuadPoints::Paper => "paper",
             QuadPoints::Economical => "economical",
             QuadPoints::Compact => "compact",
+            QuadPoints::Collocation => "collocation",
         }
     }
 
@@ -52,6 +63,7 @@ impl QuadPoints {
             QuadPoints::Paper => "",
             QuadPoints::Economical => "-econ",
             QuadPoints::Compact => "-compact",
+            QuadPoints::Collocation => "-colloc",
         }
     }
 
@@ -62,6 +74,7 @@ impl QuadPoints {
             QuadPoints::Paper => rule.default_points(n),
             QuadPoints::Economical => rule.economical_points(n),
             QuadPoints::Compact => rule.compact_points(n),
+            QuadPoints::Collocation => rule.collocation_points(n),
         }
     }
 }
@@ -75,12 +88,12 @@ impl std::fmt::Display for QuadPoints {
 impl std::str::FromStr for QuadPoints {
     type Err = String;
     fn from_str(s: &str) -> std::result::Result<Self, String> {
-        QuadPoints::ALL
+        QuadPoints::CHOICES
             .into_iter()
             .find(|q| q.as_str() == s.trim())
             .ok_or_else(|| {
                 format!(
-                    "unknown quadrature point count '{s}' (expected paper, economical or compact)"
+                    "unknown quadrature point count '{s}' (expected paper, economical, compact or collocation)"
                 )
             })
     }
