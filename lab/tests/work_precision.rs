@@ -165,9 +165,10 @@ fn long_preset_at_a_short_horizon() {
     }
 }
 
-/// Every Galerkin basis gains an economical family `galerkin-BASIS-econ` and a compact one
-/// `galerkin-BASIS-compact`; every row records its quadrature points (2n paper, ⌈3n/2⌉
-/// economical, n compact, none for the classical peers), in the
+/// Every Galerkin basis gains an economical family `galerkin-BASIS-econ`, a compact one
+/// `galerkin-BASIS-compact` and a Gauss collocation one `galerkin-BASIS-colloc`; every row
+/// records its quadrature points (2n paper, ⌈3n/2⌉ economical, n compact, n − 1 collocation,
+/// none for the classical peers), in the
 /// JSON and in the CSV (which reads back); `quad_points = [Paper]` sweeps the paper rule only,
 /// with the rows and labels of the paper-only study.
 #[test]
@@ -190,11 +191,13 @@ fn economical_family_and_its_point_counts() {
         );
         assert_eq!(count(&econ), count(&paper), "{econ}");
         assert_eq!(count(&format!("{paper}-compact")), count(&paper));
+        assert_eq!(count(&format!("{paper}-colloc")), count(&paper));
     }
     for p in &study.points {
         let expected = match (p.method.starts_with("galerkin"), p.n) {
             (true, Some(n)) if p.method.ends_with("-econ") => Some((3 * n).div_ceil(2)),
             (true, Some(n)) if p.method.ends_with("-compact") => Some(n),
+            (true, Some(n)) if p.method.ends_with("-colloc") => Some(n - 1),
             (true, Some(n)) => Some(2 * n),
             (true, None) => panic!("Galerkin row without n: {}", p.parameters),
             (false, _) => None,

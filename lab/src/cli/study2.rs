@@ -62,8 +62,9 @@ pub struct WorkPrecisionArgs {
     #[arg(long, value_delimiter = ',', value_parser = super::values::count)]
     pub divisors: Option<Vec<usize>>,
     /// Galerkin quadrature point counts, comma-separated: `paper` (2n Gauss–Legendre points,
-    /// families galerkin-BASIS), `economical` (⌈3n/2⌉ points, families galerkin-BASIS-econ)
-    /// and `compact` (n points, families galerkin-BASIS-compact). Default: all three.
+    /// families galerkin-BASIS), `economical` (⌈3n/2⌉ points, families galerkin-BASIS-econ),
+    /// `compact` (n points, families galerkin-BASIS-compact) and `collocation` (n − 1 points:
+    /// Gauss collocation, families galerkin-BASIS-colloc). Default: all four.
     #[arg(long, value_delimiter = ',', value_parser = super::values::parsed::<QuadPoints>)]
     pub quadratures: Option<Vec<QuadPoints>>,
     /// Stage counts of the Kepler-adapted Galerkin integrator, comma-separated (N-body scenes;
@@ -164,7 +165,7 @@ pub fn run_work_precision(args: WorkPrecisionArgs) -> Result<(), LabError> {
         config.kepler_divisors = m.clone();
     }
     if let Some(q) = &args.quadratures {
-        config.quad_points = QuadPoints::CHOICES
+        config.quad_points = QuadPoints::ALL
             .into_iter()
             .filter(|p| q.contains(p))
             .collect();

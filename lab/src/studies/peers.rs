@@ -32,22 +32,15 @@ pub enum QuadPoints {
 }
 
 impl QuadPoints {
-    /// The choices the studies sweep by default, paper first.
-    pub const ALL: [QuadPoints; 3] = [
-        QuadPoints::Paper,
-        QuadPoints::Economical,
-        QuadPoints::Compact,
-    ];
-
-    /// Every choice (the default ones and Gauss collocation).
-    pub const CHOICES: [QuadPoints; 4] = [
+    /// Every choice, paper first.
+    pub const ALL: [QuadPoints; 4] = [
         QuadPoints::Paper,
         QuadPoints::Economical,
         QuadPoints::Compact,
         QuadPoints::Collocation,
     ];
 
-    /// The name on the command line (`paper`, `economical`, `compact`).
+    /// The name on the command line (`paper`, `economical`, `compact`, `collocation`).
     pub fn as_str(self) -> &'static str {
         match self {
             QuadPoints::Paper => "paper",
@@ -57,7 +50,7 @@ impl QuadPoints {
         }
     }
 
-    /// The suffix of the method family (`""`, `-econ`, `-compact`).
+    /// The suffix of the method family (`""`, `-econ`, `-compact`, `-colloc`).
     pub fn family_suffix(self) -> &'static str {
         match self {
             QuadPoints::Paper => "",
@@ -88,7 +81,7 @@ impl std::fmt::Display for QuadPoints {
 impl std::str::FromStr for QuadPoints {
     type Err = String;
     fn from_str(s: &str) -> std::result::Result<Self, String> {
-        QuadPoints::CHOICES
+        QuadPoints::ALL
             .into_iter()
             .find(|q| q.as_str() == s.trim())
             .ok_or_else(|| {
