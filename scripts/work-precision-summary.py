@@ -55,8 +55,9 @@ def main():
     out.append(
         "The fastest configuration reaching each error, per scene: the fastest Galerkin "
         "configuration (any basis, n, h, stage solver `auto`, the paper's 2n Gauss points or "
-        "the economical ⌈3n/2⌉ or the compact n, families `galerkin-BASIS-econ` and "
-        "`galerkin-BASIS-compact`; on the N-body scenes also the Kepler-adapted Galerkin "
+        "the economical ⌈3n/2⌉ or the compact n or Gauss collocation's n − 1, families "
+        "`galerkin-BASIS-econ`, `galerkin-BASIS-compact` and `galerkin-BASIS-colloc`; on the "
+        "N-body scenes also the Kepler-adapted Galerkin "
         "integrator, Gauss collocation with S stages in the interaction picture of the Jacobi "
         "splitting, families `galerkin-kepler-S`), the fastest peer (in-process "
         "baselines at their best, DOP853 on a half-decade tolerance grid, and REBOUND 5.2.2 "
