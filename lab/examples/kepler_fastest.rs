@@ -1,6 +1,7 @@
-//! Profile harness for issue 35: the fastest Galerkin configuration at 1e-9 on Kepler T = 200
-//! (n = 12, h = 1/3, 12 Gauss points; the work-precision study's row, 2026-11-26) beside DOP853 at the
-//! tolerance that reaches 1e-9 there, both through the study's own sampled runner.
+//! Profile harness for issue 35: the fastest Galerkin configurations at 1e-9 on Kepler T = 200
+//! (n = 12, h = 1/3 with the compact rule's 12 Gauss points and with Gauss collocation's 11; the
+//! work-precision study's rows of 2026-11-26 and 2026-11-27) beside DOP853 at the tolerance that
+//! reaches 1e-9 there, all through the study's own sampled runner, interleaved.
 //!
 //!     cargo run --release -p galerkin-vi-lab --example kepler_fastest [galerkin|dop853|both] [REPEATS]
 use galerkin_vi::basis::BasisKind;
@@ -13,17 +14,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let which = args.get(1).map(String::as_str).unwrap_or("both");
     let repeats: usize = args.get(2).map(|s| s.parse()).transpose()?.unwrap_or(20);
     let scene = Scene::load("kepler")?.build()?;
-    let galerkin = Peer::Galerkin {
+    let galerkin = |points| Peer::Galerkin {
         basis: BasisKind::Legendre,
         n: 12,
-        points: QuadPoints::Compact,
+        points,
     };
     let dop = Peer::Dop853 {
         tolerance: 10f64.powf(-13.5),
     };
     let mut peers = Vec::new();
     if which != "dop853" {
-        peers.push(("galerkin n=12 h=1/3 m=12", galerkin, 6));
+        peers.push(("galerkin n=12 h=1/3 m=12", galerkin(QuadPoints::Compact), 6));
+        peers.push(("galerkin n=12 h=1/3 m=11", galerkin(QuadPoints::Collocation), 6));
     }
     if which != "galerkin" {
         peers.push(("dop853 tol=10^-13.5", dop, 1));
@@ -53,8 +55,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         );
         medians.push(median);
     }
-    if medians.len() == 2 {
-        println!("ratio galerkin / dop853: {:.2}", medians[0] / medians[1]);
+    if let (Some(&dop853), true) = (medians.last(), which == "both") {
+        for ((label, _, _), median) in peers.iter().zip(&medians).take(medians.len() - 1) {
+            println!("ratio {label} / dop853: {:.3}", median / dop853);
+        }
     }
     Ok(())
 }
