@@ -71,6 +71,8 @@ impl WorkPrecisionStudy {
                 Series::markers(format!("{k} (all n, h; ⌈3n/2⌉ Gauss points)"), pts)
             } else if k.starts_with("galerkin") && k.ends_with("-compact") {
                 Series::markers(format!("{k} (all n, h; n Gauss points)"), pts)
+            } else if k.starts_with("galerkin") && k.ends_with("-colloc") {
+                Series::markers(format!("{k} (all n, h; n − 1 Gauss points)"), pts)
             } else if k.starts_with("galerkin") {
                 Series::markers(format!("{k} (all n, h)"), pts)
             } else {
