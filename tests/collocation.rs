@@ -29,7 +29,8 @@ fn kepler_gap(n: usize, points: usize, h: f64, steps: usize) -> f64 {
     let mut gap = 0.0f64;
     for k in 0..steps {
         let (mut q1, mut p1) = ([0.0; 2], [0.0; 2]);
-        gvi.step(&kepler, &mut ws, &q, &p, &mut q1, &mut p1).unwrap();
+        gvi.step(&kepler, &mut ws, &q, &p, &mut q1, &mut p1)
+            .unwrap();
         let (mut qg1, mut pg1) = ([0.0; 2], [0.0; 2]);
         gauss
             .step(k as f64 * h, &qg, &pg, &mut qg1, &mut pg1)
@@ -67,10 +68,16 @@ fn collocation_points_are_n_minus_one_gauss_points() {
 fn the_galerkin_step_with_n_minus_one_gauss_points_is_gauss_collocation() {
     for n in [3, 5, 7, 9] {
         let gap = kepler_gap(n, n - 1, 0.25, 10);
-        assert!(gap < 1e-14, "n = {n}: Galerkin against collocation {gap:.2e}");
+        assert!(
+            gap < 1e-14,
+            "n = {n}: Galerkin against collocation {gap:.2e}"
+        );
         // Negative control: the n-point rule is another map, at the size of its truncation
         // error.
         let compact = kepler_gap(n, n, 0.25, 10);
-        assert!(compact > 1e-12, "n = {n}: compact rule only {compact:.2e} from collocation");
+        assert!(
+            compact > 1e-12,
+            "n = {n}: compact rule only {compact:.2e} from collocation"
+        );
     }
 }

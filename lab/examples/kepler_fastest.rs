@@ -25,7 +25,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut peers = Vec::new();
     if which != "dop853" {
         peers.push(("galerkin n=12 h=1/3 m=12", galerkin(QuadPoints::Compact), 6));
-        peers.push(("galerkin n=12 h=1/3 m=11", galerkin(QuadPoints::Collocation), 6));
+        peers.push((
+            "galerkin n=12 h=1/3 m=11",
+            galerkin(QuadPoints::Collocation),
+            6,
+        ));
     }
     if which != "galerkin" {
         peers.push(("dop853 tol=10^-13.5", dop, 1));
