@@ -27,24 +27,25 @@ use trajectory::{Integrator, Trajectory};
 
 /// The keyword options of `run_scene`, the method and initial-state flags of `gvi run`.
 const RUN_OPTIONS: &str = "n, h, steps, basis, quadrature, quad_points, economical, compact, \
-                           solver, retraction, tol, control, ladder, auto_h, q0, p0, \
+                           collocation, solver, retraction, tol, control, ladder, auto_h, q0, p0, \
                            time_transform, alpha, energy_level, t_end or every";
 
 /// The options of `run_scene` beyond the lab's [`Overrides`]: `tol=None` (which `Overrides`
-/// cannot say: it turns a scene's own tolerance off), `compact`, and a whole
+/// cannot say: it turns a scene's own tolerance off), `compact`, `collocation`, and a whole
 /// `TimeTransform` (`Overrides` names only the monitor).
 #[derive(Default)]
 struct Extra {
     tol: Option<Option<f64>>,
     compact: bool,
+    collocation: bool,
     time_transform: Option<galerkin_vi::time_transform::TimeTransformSpec>,
 }
 
 /// `run_scene`'s keyword options as the lab's [`Overrides`] (what `gvi run`'s flags become)
 /// and the [`Extra`] ones, each value checked for its type. Combinations `gvi run` refuses
 /// before it builds the scene are refused here the same way (`InvalidInputError`): n,
-/// quad_points, economical or compact with tol; control, ladder or auto_h without it; and
-/// more than one of quad_points, economical and compact.
+/// quad_points, economical, compact or collocation with tol; control, ladder or auto_h
+/// without it; and more than one of quad_points, economical, compact and collocation.
 fn overrides_of(options: &Bound<'_, PyDict>) -> PyResult<(Overrides, Extra)> {
     let mut o = Overrides::default();
     let mut extra = Extra::default();
@@ -72,6 +73,9 @@ fn overrides_of(options: &Bound<'_, PyDict>) -> PyResult<(Overrides, Extra)> {
             }
             "economical" => o.economical = value.extract().map_err(|_| bad("True or False"))?,
             "compact" => extra.compact = value.extract().map_err(|_| bad("True or False"))?,
+            "collocation" => {
+                extra.collocation = value.extract().map_err(|_| bad("True or False"))?
+            }
             "auto_h" => o.auto_h = value.extract().map_err(|_| bad("True or False"))?,
             "h" => o.h = Some(finite("h", value.extract().map_err(|_| bad("a number"))?)?),
             "tol" => {
@@ -142,6 +146,7 @@ fn overrides_of(options: &Bound<'_, PyDict>) -> PyResult<(Overrides, Extra)> {
         ("quad_points", o.quad_points.is_some()),
         ("economical", o.economical),
         ("compact", extra.compact),
+        ("collocation", extra.collocation),
     ];
     let chosen: Vec<&str> = rules.iter().filter(|r| r.1).map(|r| r.0).collect();
     if chosen.len() > 1 {
@@ -226,6 +231,8 @@ fn refuse_unused_time_options(scene: &BuiltScene, o: &Overrides) -> PyResult<()>
 /// basis, quadrature, quad_points (an explicit number of quadrature points), economical
 /// (True: the quadrature's economical number of points for n, ⌈3n/2⌉ Gauss–Legendre points),
 /// compact (True: the compact rule, n Gauss–Legendre points; `gvi run --quad-points n`),
+/// collocation (True: n − 1 Gauss–Legendre points, with which the step is Gauss collocation;
+/// `gvi run --quad-points n-1`),
 /// solver, retraction (rigid bodies: "exp" or "cayley"), tol (choose n per step; None turns a
 /// scene's own tol off), control, ladder and auto_h (with tol), q0, p0; and the Poincaré
 /// time transformation: time_transform (a monitor name, replacing the scene's monitor, or a
@@ -288,6 +295,10 @@ fn run_scene<'py>(
     if extra.compact {
         let m = &mut scene.method;
         m.quad_points = Some(m.quadrature.compact_points(m.n));
+    }
+    if extra.collocation {
+        let m = &mut scene.method;
+        m.quad_points = Some(m.quadrature.collocation_points(m.n));
     }
     let scene = scene.build().py_err()?;
     refuse_unused(&scene, &overrides)?;

@@ -27,14 +27,15 @@ pub(crate) enum Frequencies {
 
 /// A Galerkin variational integrator: `Integrator(basis="chebyshev", n=16,
 /// quadrature="gauss-legendre", h=1.0, solver="auto", quad_points=None, economical=False,
-/// compact=False, omega=None, harmonics=None)`. `basis="enriched"` takes the enrichment
+/// compact=False, collocation=False, omega=None, harmonics=None)`. `basis="enriched"` takes the enrichment
 /// frequency `omega` (and optionally `harmonics`, default 1): polynomials of degree
 /// n − 1 − 2·harmonics plus sin/cos of ωh; `omega` may be a list (`omega=[50.0, 20.0]`),
 /// with sin/cos of each frequency in the space (degree n − 1 − 2·harmonics·len(omega)).
 /// `quad_points` is an explicit number of quadrature points;
 /// `economical=True` takes the quadrature's economical number for n (⌈3n/2⌉ Gauss–Legendre
 /// points, as `gvi run --economical`), `compact=True` its compact rule (n Gauss–Legendre
-/// points); at most one of the three. `time_transform` (a `TimeTransform` or a monitor name)
+/// points), `collocation=True` n − 1 Gauss–Legendre points (the step is then Gauss
+/// collocation with n − 1 stages); at most one of the four. `time_transform` (a `TimeTransform` or a monitor name)
 /// makes `h` the fictitious step of a Poincaré time transformation: `integrate` then takes at
 /// most `steps` fictitious steps (to the transformation's `t_end`, if it has one) and returns
 /// a `TimeTransformedTrajectory` in physical time; only exact Newton applies (`solver` "auto"
@@ -76,8 +77,8 @@ impl Integrator {
     #[new]
     #[pyo3(signature = (basis = "chebyshev", n = 16, quadrature = "gauss-legendre", h = 1.0,
                         solver = "auto", quad_points = None, economical = false,
-                        compact = false, omega = None, harmonics = None,
-                        time_transform = None))]
+                        compact = false, collocation = false, omega = None,
+                        harmonics = None, time_transform = None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         basis: &str,
@@ -88,6 +89,7 @@ impl Integrator {
         quad_points: Option<usize>,
         economical: bool,
         compact: bool,
+        collocation: bool,
         omega: Option<Frequencies>,
         harmonics: Option<usize>,
         time_transform: Option<&Bound<'_, PyAny>>,
@@ -110,16 +112,21 @@ impl Integrator {
         method.solver = solver
             .parse::<galerkin_vi::integrator::StageSolver>()
             .py_err()?;
-        method.quad_points = match (quad_points, economical, compact) {
-            (q, false, false) => q,
-            (None, true, false) => Some(method.quadrature.economical_points(n)),
-            (None, false, true) => Some(method.quadrature.compact_points(n)),
-            _ => {
-                return Err(crate::errors::InvalidInputError::new_err(
-                    "quad_points, economical and compact: give one way of choosing the \
-                     quadrature points",
-                ));
-            }
+        let rules = [quad_points.is_some(), economical, compact, collocation];
+        if rules.iter().filter(|&&given| given).count() > 1 {
+            return Err(crate::errors::InvalidInputError::new_err(
+                "quad_points, economical, compact and collocation: give one way of choosing the \
+                 quadrature points",
+            ));
+        }
+        method.quad_points = if economical {
+            Some(method.quadrature.economical_points(n))
+        } else if compact {
+            Some(method.quadrature.compact_points(n))
+        } else if collocation {
+            Some(method.quadrature.collocation_points(n))
+        } else {
+            quad_points
         };
         method.time_transform = time_transform
             .map(crate::time_transform::spec_of)

@@ -1,5 +1,5 @@
 """run_scene takes every method option of `gvi run` (quadrature points: explicit, economical,
-compact; basis, quadrature, solver; tol with control, ladder and auto_h), each equal to the
+compact, collocation; basis, quadrature, solver; tol with control, ladder and auto_h), each equal to the
 Integrator with the same method, and refuses bad values and combinations with typed
 exceptions naming the option."""
 
@@ -21,6 +21,8 @@ Q0, P0 = [0.4, 0.0], [0.0, 2.0]
         (dict(compact=True), dict(quad_points=32)),
         (dict(economical=True), dict(economical=True)),
         (dict(compact=True), dict(compact=True)),
+        (dict(collocation=True), dict(quad_points=31)),
+        (dict(collocation=True), dict(collocation=True)),
     ],
 )
 def test_quadrature_points_equal_the_integrator(options, integrator):
@@ -45,6 +47,14 @@ def test_economical_keeps_the_accuracy_and_compact_costs_accuracy_at_h2():
     assert 30 * err["paper"] < err["compact"] < 1e-3
     assert gv.Integrator(n=32, economical=True).quad_points == 48
     assert gv.Integrator(n=13, compact=True).quad_points == 13
+    assert gv.Integrator(n=13, collocation=True).quad_points == 12
+
+
+def test_one_way_of_choosing_the_integrators_quadrature_points():
+    with pytest.raises(gv.InvalidInputError, match="give one way"):
+        gv.Integrator(n=13, compact=True, collocation=True)
+    with pytest.raises(gv.InvalidInputError, match="give one way"):
+        gv.Integrator(n=13, quad_points=20, collocation=True)
 
 
 def test_basis_quadrature_and_solver_options():
@@ -80,6 +90,8 @@ def test_tolerance_options():
         (dict(control="indicator"), gv.InvalidInputError, "control"),
         (dict(auto_h=True), gv.InvalidInputError, "auto_h"),
         (dict(economical=True, compact=True), gv.InvalidInputError, "economical and compact"),
+        (dict(compact=True, collocation=True), gv.InvalidInputError, "compact and collocation"),
+        (dict(tol=1e-6, collocation=True), gv.InvalidInputError, "collocation: with tol"),
         (dict(economical="yes"), gv.InvalidInputError, "economical: expected True or False"),
         (dict(quad_points=2.5), gv.InvalidInputError, "quad_points"),
         (dict(quad_points=3), gv.InvalidMethodError, "quadrature"),
