@@ -4,7 +4,7 @@
 # (docs/studies/work-precision-long/), the outer solar system
 # (docs/studies/work-precision-outer-solar-system/) and the J2000 10-body scene
 # (docs/studies/work-precision-solar-system/). Run it on a quiet machine: every timing is
-# wall-clock, one configuration after another. About 6 minutes on a 2-core machine
+# wall-clock, one configuration after another. About 8 minutes on a 2-core machine
 # (REBOUND 5.2.2 runs and the economical and compact families included).
 #
 # Needs the REBOUND venv: python3 -m venv .venv-rebound &&
