@@ -18,6 +18,7 @@
 //! expression Lagrangians shows the same without Rust, from text in a scene file.
 
 use crate::ad;
+pub use crate::by_coordinate::ByCoordinate;
 use nalgebra::DMatrix;
 use num_dual::DualNum;
 
@@ -124,6 +125,28 @@ pub trait Lagrangian {
     fn force_at_points_on_blocks(&self, q: &[f64], active: &[bool], out: &mut [f64]) {
         let _ = active;
         self.force_at_points(q, out);
+    }
+
+    /// [`force_at_points_on_blocks`](Lagrangian::force_at_points_on_blocks) with the points
+    /// laid out by coordinate ([`ByCoordinate`]: row r of `q` holds coordinate r at every
+    /// point), the forces into the active blocks' rows of `out` (the same layout; the other
+    /// rows are left as they were). The velocity form's fixed-point iteration evaluates its
+    /// masked residuals this way: the converged bodies' rows stay in place between
+    /// iterations and only the active ones are recomputed, so a system whose kernel works on
+    /// coordinates side by side (an N-body system: the nodes in vector lanes) reads and
+    /// writes them without transposing. The forces must be those of `force_at_points`, bit
+    /// for bit. The default transposes the points and calls `force_at_points_on_blocks`.
+    fn force_at_points_by_coordinate_on_blocks(
+        &self,
+        q: &[f64],
+        layout: ByCoordinate,
+        active: &[bool],
+        out: &mut [f64],
+    ) {
+        let blocks = self.coordinate_blocks().unwrap_or(self.dim().max(1));
+        layout.through_points(self.dim(), blocks, q, active, out, |qp, op| {
+            self.force_at_points_on_blocks(qp, active, op)
+        });
     }
 
     /// [`force_jacobian`](Lagrangian::force_jacobian) at many points: row j of `q` (D values)
@@ -321,6 +344,22 @@ pub trait Mechanical {
         let _ = active;
         self.potential_gradient_at_points(q, out);
     }
+    /// ∇V at many points laid out by coordinate for the active blocks' rows only, for
+    /// [`Lagrangian::force_at_points_by_coordinate_on_blocks`] (the same contract). Default:
+    /// the points transposed, through `potential_gradient_at_points_on_blocks`.
+    fn potential_gradient_at_points_by_coordinate_on_blocks(
+        &self,
+        q: &[f64],
+        layout: ByCoordinate,
+        active: &[bool],
+        out: &mut [f64],
+    ) {
+        let d = self.degrees_of_freedom();
+        let blocks = Mechanical::coordinate_blocks(self).unwrap_or(d.max(1));
+        layout.through_points(d, blocks, q, active, out, |qp, op| {
+            self.potential_gradient_at_points_on_blocks(qp, active, op)
+        });
+    }
     /// ∇²V at many points (row j of `q` into block j of `out`, D×D each), for
     /// [`Lagrangian::force_jacobian_at_points`]. Default: point by point.
     fn potential_hessian_at_points(&self, q: &[f64], out: &mut [f64]) {
@@ -425,6 +464,20 @@ impl<S: Mechanical> Lagrangian for S {
     fn force_at_points_on_blocks(&self, q: &[f64], active: &[bool], out: &mut [f64]) {
         self.potential_gradient_at_points_on_blocks(q, active, out);
         out.iter_mut().for_each(|x| *x = -*x);
+    }
+
+    fn force_at_points_by_coordinate_on_blocks(
+        &self,
+        q: &[f64],
+        layout: ByCoordinate,
+        active: &[bool],
+        out: &mut [f64],
+    ) {
+        self.potential_gradient_at_points_by_coordinate_on_blocks(q, layout, active, out);
+        let blocks = Mechanical::coordinate_blocks(self).unwrap_or(self.degrees_of_freedom());
+        layout.for_active_rows(self.degrees_of_freedom(), blocks, active, out, |row| {
+            row.iter_mut().for_each(|x| *x = -*x)
+        });
     }
 
     fn force_jacobian_at_points(&self, q: &[f64], out: &mut [f64]) {

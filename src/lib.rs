@@ -33,6 +33,7 @@ pub mod ad;
 pub mod adaptive;
 pub mod baselines;
 pub mod basis;
+mod by_coordinate;
 pub mod curve;
 pub mod error;
 pub mod events;

@@ -189,6 +189,16 @@ impl Lagrangian for AnySystem {
     fn force_at_points_on_blocks(&self, q: &[f64], active: &[bool], out: &mut [f64]) {
         dispatch!(self, s => s.force_at_points_on_blocks(q, active, out))
     }
+
+    fn force_at_points_by_coordinate_on_blocks(
+        &self,
+        q: &[f64],
+        layout: crate::lagrangian::ByCoordinate,
+        active: &[bool],
+        out: &mut [f64],
+    ) {
+        dispatch!(self, s => s.force_at_points_by_coordinate_on_blocks(q, layout, active, out))
+    }
     #[inline]
     fn force_jacobian_at_points(&self, q: &[f64], out: &mut [f64]) {
         dispatch!(self, s => s.force_jacobian_at_points(q, out))

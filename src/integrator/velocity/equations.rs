@@ -110,6 +110,14 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         p_k: &[f64],
         momentum: MomentumRow,
     ) -> f64 {
+        if let Some(vs) = ws.velocity.as_mut()
+            && let Some(rows) = vs.masked.as_mut()
+        {
+            if vs.freeze.as_ref().is_some_and(|f| f.masked()) {
+                return self.velocity_residual_on_blocks(lag, ws, vt, p_k, momentum);
+            }
+            rows.forget();
+        }
         match ws.d {
             1 => self.velocity_residual_small::<1, L>(lag, ws, vt, p_k, momentum),
             2 => self.velocity_residual_small::<2, L>(lag, ws, vt, p_k, momentum),
@@ -252,14 +260,6 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
     ) -> f64 {
         let t = self.tables();
         let (m, k, d, h) = (t.m, vt.k, ws.d, self.step_size());
-        if ws
-            .velocity
-            .as_ref()
-            .and_then(|v| v.freeze.as_ref())
-            .is_some_and(|f| f.masked())
-        {
-            return self.velocity_residual_on_blocks(lag, ws, vt, p_k, momentum);
-        }
         let (Some(vs), Some(sep)) = (ws.velocity.as_mut(), ws.separable.as_ref()) else {
             return f64::NAN;
         };

@@ -279,6 +279,79 @@ pub(crate) fn correct_on_blocks(
             }
         }
     }
+    fold_blocks(
+        runs,
+        block,
+        column_delta,
+        column_scale,
+        block_delta,
+        block_scale,
+    )
+}
+
+/// [`correct_on_blocks`] from −F laid out by coordinate, as the masked residual leaves it
+/// ([`super::masked`]: `residual` holds D rows of `kstride` entries, the first k of them the
+/// modes, the active rows written): the same
+/// operations on each entry, a coordinate's k modes in one contiguous row.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn correct_on_rows(
+    c: &mut [f64],
+    c0_lo: &mut [f64],
+    residual: &[f64],
+    (k, kstride): (usize, usize),
+    tiled: &[f64],
+    divide: bool,
+    d: usize,
+    maxima: BlockMaxima<'_>,
+) -> (f64, f64) {
+    use crate::integrator::dd::two_sum;
+    let BlockMaxima {
+        runs,
+        block,
+        block_delta,
+        block_scale,
+        column_delta,
+        column_scale,
+    } = maxima;
+    let step = |x: f64, m: f64| if divide { x / m } else { x };
+    for r in runs.iter().flat_map(|&(a, b)| a..b) {
+        let (m, res) = (tiled[r], &residual[r * kstride..r * kstride + k]);
+        let v = step(res[0], m);
+        let (s, e) = two_sum(c[r], v);
+        c[r] = s;
+        c0_lo[r] += e;
+        let (mut cd, mut cs) = (v.abs(), s.abs());
+        for (b, &x) in res.iter().enumerate().skip(1) {
+            let v = step(x, m);
+            let y = &mut c[b * d + r];
+            *y += v;
+            let (av, ac) = (v.abs(), y.abs());
+            cd = if av > cd { av } else { cd };
+            cs = if ac > cs { ac } else { cs };
+        }
+        column_delta[r] = cd;
+        column_scale[r] = cs;
+    }
+    fold_blocks(
+        runs,
+        block,
+        column_delta,
+        column_scale,
+        block_delta,
+        block_scale,
+    )
+}
+
+/// Each active block's largest |δ| and |c| from its columns' maxima; returns the largest over
+/// the active blocks.
+fn fold_blocks(
+    runs: &[(usize, usize)],
+    block: usize,
+    column_delta: &[f64],
+    column_scale: &[f64],
+    block_delta: &mut [f64],
+    block_scale: &mut [f64],
+) -> (f64, f64) {
     let (mut size, mut scale) = (0.0f64, 0.0f64);
     for &(a, b) in runs {
         for i in a / block..b / block {

@@ -1,21 +1,119 @@
-//! The velocity form's residual on the active blocks' columns only, while the fixed-point
-//! iteration has frozen some blocks ([`super::freeze`]).
+//! The velocity form's residual on the active blocks only, while the fixed-point iteration has
+//! frozen some blocks ([`super::freeze`]), with the curve and the forces laid out by
+//! coordinate ([`ByCoordinate`]).
+//!
+//! Once most blocks have converged (on J2000: everything but Mercury and the Sun, for about
+//! seven of a step's ten residuals) a residual's work should scale with the active columns.
+//! In the point-by-point layout of the unmasked residual it did not: each masked residual
+//! transposed all D coordinates at the m nodes into the force kernel's lanes and back, and
+//! its products and passes ran over short strided runs of columns (issue 35's timing: 1.80 µs
+//! for a masked residual on 6 of 30 columns against 2.47 µs for all of them). Here the
+//! converged blocks' rows stay in place between iterations — filled once from the last
+//! unmasked residual's curve — and only the active rows are recomputed: each a contiguous row
+//! of the curve at the nodes (Σ_a c_a,r ι_·a over the rows of ιᵀ), of the forces, and of the
+//! residual (its k modes). Every entry sees the operations of the unmasked residual in the
+//! same order, so the iteration is the same.
 
 use super::VelocityTables;
-use super::momentum::MomentumRow;
+use super::momentum::{MomentumRow, momentum_row, rounded_momentum_row};
 use crate::basis::Basis;
+use crate::by_coordinate::ByCoordinate;
+use crate::integrator::dd::dd_acc;
 use crate::integrator::{GalerkinIntegrator, Workspace};
 use crate::lagrangian::Lagrangian;
-use crate::linalg::{Strided, gemm};
 use crate::quadrature::Quadrature;
 
+/// Nodes per vector of the by-coordinate rows: rows are padded to a multiple of this, so that
+/// a kernel reads and writes whole vectors.
+const LANES: usize = 8;
+
+/// The by-coordinate buffers of the masked residual (owned by the velocity form's state:
+/// nothing is allocated per step).
+#[derive(Debug, Clone)]
+pub(crate) struct MaskedRows {
+    /// m nodes in rows padded to a multiple of [`LANES`].
+    layout: ByCoordinate,
+    /// ιᵀ (k rows of the padded length; row a: ι_ja at the nodes, the last node's value in the
+    /// padding, so that the padding lanes hold the curve at the last node).
+    iota_t: Vec<f64>,
+    /// The curve at the nodes by coordinate (D rows).
+    q: Vec<f64>,
+    /// The forces at the nodes by coordinate (D rows; the active ones written).
+    f: Vec<f64>,
+    /// The rows of ψ (m of them) padded with zeros to `kstride` modes.
+    psi_pad: Vec<f64>,
+    /// k rounded up to a multiple of [`LANES`].
+    kstride: usize,
+    /// −F of each coordinate's k modes (D rows of `kstride`; the active ones written).
+    residual: Vec<f64>,
+    /// `q` holds every coordinate's curve as of the last residual it was active in (filled
+    /// from the unmasked residual's curve on the first masked residual after it).
+    current: bool,
+    /// The last residual was this one, in `residual`: the correction reads it there.
+    holds_residual: bool,
+}
+
+impl MaskedRows {
+    /// Buffers for the tables `vt` (m nodes, k modes) and D coordinates.
+    pub(crate) fn new(vt: &VelocityTables, d: usize) -> Self {
+        let k = vt.k.max(1);
+        let m = vt.iota.len() / k;
+        let stride = m.div_ceil(LANES).max(1) * LANES;
+        let mut iota_t = vec![0.0; k * stride];
+        for (a, row) in iota_t.chunks_exact_mut(stride).enumerate() {
+            for (j, x) in row.iter_mut().enumerate() {
+                *x = vt.iota[j.min(m.saturating_sub(1)) * k + a];
+            }
+        }
+        let kstride = k.div_ceil(LANES) * LANES;
+        let mut psi_pad = vec![0.0; m * kstride];
+        for (row, psi) in psi_pad
+            .chunks_exact_mut(kstride)
+            .zip(vt.psi.chunks_exact(k))
+        {
+            row[..k].copy_from_slice(psi);
+        }
+        MaskedRows {
+            layout: ByCoordinate::new(m, stride),
+            iota_t,
+            q: vec![0.0; d * stride],
+            f: vec![0.0; d * stride],
+            psi_pad,
+            kstride,
+            residual: vec![0.0; d * kstride],
+            current: false,
+            holds_residual: false,
+        }
+    }
+
+    /// An unmasked residual was evaluated: the rows are stale, the correction reads its own.
+    pub(crate) fn forget(&mut self) {
+        self.current = false;
+        self.holds_residual = false;
+    }
+
+    /// Whether the last residual was the masked one (its −F is in [`Self::residual`]).
+    pub(crate) fn holds_residual(&self) -> bool {
+        self.holds_residual
+    }
+
+    /// −F of the active coordinates: D rows of [`Self::kstride`] entries, the first k of
+    /// them the modes.
+    pub(crate) fn residual(&self) -> &[f64] {
+        &self.residual
+    }
+
+    /// The length of a row of [`Self::residual`].
+    pub(crate) fn kstride(&self) -> usize {
+        self.kstride
+    }
+}
+
 impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
-    /// [`Self::velocity_residual_general`] on the active blocks' columns only, while the
-    /// fixed-point iteration has frozen some blocks ([`super::freeze`]): the curve, the forces
-    /// (`Lagrangian::force_at_points_on_blocks`), the projections and the rows of those
-    /// columns, the others left as they were. The same operations on each active entry as
-    /// the unmasked residual, run by run (a run of columns [a, b) is one strided product);
-    /// kept apart from it so that the unmasked residual keeps its flat loops.
+    /// [`Self::velocity_residual`] on the active blocks only, while the fixed-point iteration
+    /// has frozen some blocks: the curve, the forces
+    /// (`Lagrangian::force_at_points_by_coordinate_on_blocks`) and −F of the active
+    /// coordinates, row by row (module docs); returns max |F| over them.
     pub(super) fn velocity_residual_on_blocks<L: Lagrangian>(
         &self,
         lag: &L,
@@ -26,135 +124,243 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
     ) -> f64 {
         let t = self.tables();
         let (m, k, d, h) = (t.m, vt.k, ws.d, self.step_size());
-        let (Some(vs), Some(sep)) = (ws.velocity.as_mut(), ws.separable.as_ref()) else {
+        let Some(vs) = ws.velocity.as_mut() else {
             return f64::NAN;
         };
-        let (Some(freeze), Some(tiled)) = (vs.freeze.as_ref(), vs.mass_tiled.as_deref()) else {
+        let (Some(sep), Some(freeze), Some(tiled), Some(rows)) = (
+            ws.separable.as_ref(),
+            vs.freeze.as_ref(),
+            vs.mass_tiled.as_deref(),
+            vs.masked.as_mut(),
+        ) else {
             return f64::NAN;
         };
-        let runs = freeze.runs();
-        let rk = Strided::rows(0, k);
-        // Columns a … b − 1 of a row-major matrix of D columns.
-        let columns = |a: usize| Strided {
-            offset: a,
-            row_stride: d,
-            col_stride: 1,
-        };
-        // q_j = q_k + (δq_k + h ι_j0 c_0,lo + h Σ_a ι_ja c_a): the small parts first.
+        let stride = rows.layout.stride;
+        if !rows.current {
+            // The unmasked residual's curve, transposed once (the padding: the last node).
+            for (r, row) in rows.q.chunks_exact_mut(stride).enumerate() {
+                for (j, x) in row.iter_mut().enumerate() {
+                    *x = ws.stage.qj[j.min(m - 1) * d + r];
+                }
+            }
+            rows.current = true;
+        }
         let (origin, origin_lo) = (ws.iterate.origin(), ws.iterate.origin_lo());
-        for (j, row) in ws.stage.qj.chunks_exact_mut(d).enumerate() {
-            let w = h * vt.iota[j * k];
-            for &(a, b) in runs {
-                for ((x, &e), &lo) in row[a..b]
-                    .iter_mut()
-                    .zip(&origin_lo[a..b])
-                    .zip(&vs.c0_lo[a..b])
-                {
-                    *x = e + w * lo;
-                }
+        let runs = freeze.runs();
+        let chunks = stride / LANES;
+        let (iota_t, _) = rows.iota_t.as_chunks::<LANES>();
+        for r in runs.iter().flat_map(|&(a, b)| a..b) {
+            // q_j = q_k + (δq_k + h ι_j0 c_0,lo + h Σ_a ι_ja c_a), the sum over a from zero as
+            // the unmasked residual's product takes it, whole vectors of nodes at a time.
+            let (row, _) = rows.q[r * stride..(r + 1) * stride].as_chunks_mut::<LANES>();
+            let modes = |a: usize| vs.c[a * d + r];
+            match chunks {
+                1 => curve_row::<1>(modes, iota_t, k, row),
+                2 => curve_row::<2>(modes, iota_t, k, row),
+                3 => curve_row::<3>(modes, iota_t, k, row),
+                _ => curve_row_any(modes, iota_t, k, row),
+            }
+            let (o, lo, c0) = (origin[r], origin_lo[r], vs.c0_lo[r]);
+            for (q, i0) in row.iter_mut().zip(iota_t) {
+                *q = std::array::from_fn(|l| (h * q[l] + (lo + (h * i0[l]) * c0)) + o);
             }
         }
-        for (a, b) in product_runs(runs) {
-            let v = columns(a);
-            gemm(
-                m,
-                k,
-                b - a,
-                h,
-                &vt.iota,
-                rk,
-                &vs.c,
-                v,
-                1.0,
-                &mut ws.stage.qj,
-                v,
-            );
-        }
-        for row in ws.stage.qj.chunks_exact_mut(d) {
-            for &(a, b) in runs {
-                for (x, o) in row[a..b].iter_mut().zip(&origin[a..b]) {
-                    *x += o;
-                }
+        lag.force_at_points_by_coordinate_on_blocks(
+            &rows.q,
+            rows.layout,
+            freeze.active(),
+            &mut rows.f,
+        );
+        let momentum_lo = ws.iterate.momentum_lo();
+        let kstride = rows.kstride;
+        let (psi, _) = rows.psi_pad.as_chunks::<LANES>();
+        for r in runs.iter().flat_map(|&(a, b)| a..b) {
+            // Σ_j ψ_jb (h b_j f_j), summed over j from zero as the unmasked projection.
+            let f = &rows.f[r * stride..r * stride + m];
+            let (res, _) = rows.residual[r * kstride..(r + 1) * kstride].as_chunks_mut::<LANES>();
+            let scaled = |j: usize| (t.weights[j] * h) * f[j];
+            match kstride / LANES {
+                1 => project_row::<1>(scaled, psi, m, res),
+                2 => project_row::<2>(scaled, psi, m, res),
+                3 => project_row::<3>(scaled, psi, m, res),
+                _ => project_row_any(scaled, psi, m, res),
             }
         }
-        lag.force_at_points_on_blocks(&ws.stage.qj, freeze.active(), &mut ws.stage.lq);
-        // h b_j f_j, then Σ_j ψ_jb (h b_j f_j).
-        for (j, (s, f)) in ws
-            .stage
-            .scaled
-            .chunks_exact_mut(d)
-            .zip(ws.stage.lq.chunks_exact(d))
-            .enumerate()
-        {
-            let w = t.weights[j] * h;
-            for &(a, b) in runs {
-                for (s, &f) in s[a..b].iter_mut().zip(&f[a..b]) {
-                    *s = w * f;
-                }
-            }
-        }
-        for (a, b) in product_runs(runs) {
-            let v = columns(a);
-            let psi_t = Strided::transposed(k);
-            gemm(
-                k,
-                m,
-                b - a,
-                1.0,
-                &vt.psi,
-                psi_t,
-                &ws.stage.scaled,
-                v,
-                0.0,
-                &mut vs.delta,
-                v,
-            );
-        }
-        let (stage, momentum_lo) = (&mut ws.stage, ws.iterate.momentum_lo());
-        self.momentum_rows(vt, sep, vs, stage, (p_k, momentum_lo), runs, momentum);
-        close_rows_on(runs, tiled, &vs.c, &mut vs.delta, &ws.stage.dd_hi, d)
-    }
-}
-
-/// The runs of columns for the masked products, a run of 5–7 columns cut into 4 and the
-/// rest: `gemm` keeps ≤ 4 columns in registers and takes ≥ 8 as vectors, but 5–7 through its
-/// generic loop (the Sun and Mercury of J2000 are 6 columns).
-fn product_runs(runs: &[(usize, usize)]) -> impl Iterator<Item = (usize, usize)> + '_ {
-    runs.iter().flat_map(|&(a, b)| {
-        let cut = if (5..8).contains(&(b - a)) { a + 4 } else { b };
-        [(a, cut), (cut, b)].into_iter().filter(|(x, y)| x < y)
-    })
-}
-
-/// [`close_rows`] on the active columns `runs` only, for a diagonal M (`tiled`, as there;
-/// freezing blocks needs one): −F into `delta` (row 0 from `row0`), returns max |F| over
-/// those columns (∞ if an entry is not finite).
-fn close_rows_on(
-    runs: &[(usize, usize)],
-    tiled: &[f64],
-    c: &[f64],
-    delta: &mut [f64],
-    row0: &[f64],
-    d: usize,
-) -> f64 {
-    let size = |v: f64| if v.is_nan() { f64::INFINITY } else { v.abs() };
-    let mut max = 0.0f64;
-    for (row, ((x, c), m)) in delta
-        .chunks_exact_mut(d)
-        .zip(c.chunks_exact(d))
-        .zip(tiled.chunks_exact(d))
-        .enumerate()
-    {
+        // Row 0, the momentum condition (`super::momentum`), of up to eight coordinates side
+        // by side; then rows b ≥ 1, M c_b plus the projections.
+        let rows0 = MomentumRows0 {
+            sep,
+            c: &vs.c,
+            c0_lo: &vs.c0_lo,
+            p_k,
+            momentum_lo,
+            weights: &t.weights,
+            psi: &vt.psi,
+            k,
+            h,
+            forces: &rows.f,
+            stride,
+        };
         for &(a, b) in runs {
-            for r in a..b {
-                x[r] = if row == 0 {
-                    -row0[r]
-                } else {
-                    -(m[r] * c[r] + x[r])
+            let mut r0 = a;
+            while r0 < b {
+                r0 += match b - r0 {
+                    8.. => rows0.fill::<8>(r0, momentum, &mut rows.residual, kstride),
+                    4..=7 => rows0.fill::<4>(r0, momentum, &mut rows.residual, kstride),
+                    2 | 3 => rows0.fill::<2>(r0, momentum, &mut rows.residual, kstride),
+                    _ => rows0.fill::<1>(r0, momentum, &mut rows.residual, kstride),
                 };
-                max = max.max(size(x[r]));
             }
         }
+        let size = |v: f64| if v.is_nan() { f64::INFINITY } else { v.abs() };
+        let mut max = 0.0f64;
+        for r in runs.iter().flat_map(|&(a, b)| a..b) {
+            let res = &mut rows.residual[r * kstride..r * kstride + k];
+            max = max.max(size(res[0]));
+            let mass = tiled[r];
+            for (b, x) in res.iter_mut().enumerate().skip(1) {
+                *x = -(mass * vs.c[b * d + r] + *x);
+                max = max.max(size(*x));
+            }
+        }
+        rows.holds_residual = true;
+        max
     }
-    max
+}
+
+/// The curve at the nodes of one coordinate, Σ_a c_a ι_·a over the rows of ιᵀ (`iota_t`, k rows
+/// of `C` vectors), summed over a from zero, with the `C` vectors of the row in registers.
+#[inline(always)]
+fn curve_row<const C: usize>(
+    modes: impl Fn(usize) -> f64,
+    iota_t: &[[f64; LANES]],
+    k: usize,
+    row: &mut [[f64; LANES]],
+) {
+    let mut acc = [[0.0f64; LANES]; C];
+    for (a, it) in iota_t.chunks_exact(C).take(k).enumerate() {
+        let x = modes(a);
+        for (acc, it) in acc.iter_mut().zip(it) {
+            *acc = std::array::from_fn(|l| acc[l] + x * it[l]);
+        }
+    }
+    row[..C].copy_from_slice(&acc);
+}
+
+/// [`curve_row`] for rows of any length (the sums in memory).
+fn curve_row_any(
+    modes: impl Fn(usize) -> f64,
+    iota_t: &[[f64; LANES]],
+    k: usize,
+    row: &mut [[f64; LANES]],
+) {
+    let c = row.len();
+    row.iter_mut().for_each(|x| *x = [0.0; LANES]);
+    for (a, it) in iota_t.chunks_exact(c).take(k).enumerate() {
+        let x = modes(a);
+        for (q, it) in row.iter_mut().zip(it) {
+            *q = std::array::from_fn(|l| q[l] + x * it[l]);
+        }
+    }
+}
+
+/// The projections Σ_j ψ_jb g_j of one coordinate (`scaled(j)` = h b_j f_j; `psi`: the rows
+/// of ψ padded to `C` vectors), summed over j from zero, the row's `C` vectors in registers.
+#[inline(always)]
+fn project_row<const C: usize>(
+    scaled: impl Fn(usize) -> f64,
+    psi: &[[f64; LANES]],
+    m: usize,
+    res: &mut [[f64; LANES]],
+) {
+    let mut acc = [[0.0f64; LANES]; C];
+    for (j, p) in psi.chunks_exact(C).take(m).enumerate() {
+        let g = scaled(j);
+        for (acc, p) in acc.iter_mut().zip(p) {
+            *acc = std::array::from_fn(|l| acc[l] + p[l] * g);
+        }
+    }
+    res[..C].copy_from_slice(&acc);
+}
+
+/// [`project_row`] for rows of any length (the sums in memory).
+fn project_row_any(
+    scaled: impl Fn(usize) -> f64,
+    psi: &[[f64; LANES]],
+    m: usize,
+    res: &mut [[f64; LANES]],
+) {
+    let c = res.len();
+    res.iter_mut().for_each(|x| *x = [0.0; LANES]);
+    for (j, p) in psi.chunks_exact(c).take(m).enumerate() {
+        let g = scaled(j);
+        for (x, p) in res.iter_mut().zip(p) {
+            *x = std::array::from_fn(|l| x[l] + p[l] * g);
+        }
+    }
+}
+
+/// Row 0 of the masked residual, the momentum condition, from the forces by coordinate: what
+/// `MomentumRows` sums from the forces point by point, the same operations in the same order.
+struct MomentumRows0<'a> {
+    sep: &'a crate::integrator::separable::Separable,
+    c: &'a [f64],
+    c0_lo: &'a [f64],
+    p_k: &'a [f64],
+    momentum_lo: &'a [f64],
+    weights: &'a [f64],
+    psi: &'a [f64],
+    k: usize,
+    h: f64,
+    forces: &'a [f64],
+    stride: usize,
+}
+
+impl MomentumRows0<'_> {
+    /// −F_0 of coordinates r0 … r0 + L − 1 into entry 0 of their rows of `residual` (rows of
+    /// `kstride`, whose entry 0 holds the force terms' projection); returns L. Compensated:
+    /// (hi, lo) from `momentum_row`, the force terms added in double-double with the L sums
+    /// side by side (independent chains hide each other's latency).
+    fn fill<const L: usize>(
+        &self,
+        r0: usize,
+        momentum: MomentumRow,
+        residual: &mut [f64],
+        kstride: usize,
+    ) -> usize {
+        let row0: [f64; L] = match momentum {
+            MomentumRow::Rounded => std::array::from_fn(|l| {
+                let r = r0 + l;
+                rounded_momentum_row(self.sep, self.c, self.p_k, residual[r * kstride], r)
+            }),
+            MomentumRow::Compensated => {
+                let mut hi = [0.0f64; L];
+                let mut lo = [0.0f64; L];
+                for l in 0..L {
+                    (hi[l], lo[l]) = momentum_row(
+                        self.sep,
+                        self.c,
+                        self.c0_lo,
+                        self.p_k,
+                        self.momentum_lo,
+                        r0 + l,
+                    );
+                }
+                for (j, &b) in self.weights.iter().enumerate() {
+                    let (w, psi0) = (b * self.h, self.psi[j * self.k]);
+                    for l in 0..L {
+                        let f = self.forces[(r0 + l) * self.stride + j];
+                        let g = w * f;
+                        dd_acc(&mut hi[l], &mut lo[l], psi0, g);
+                        lo[l] += psi0 * w.mul_add(f, -g);
+                    }
+                }
+                std::array::from_fn(|l| hi[l] + lo[l])
+            }
+        };
+        for (l, &x) in row0.iter().enumerate() {
+            residual[(r0 + l) * kstride] = -x;
+        }
+        L
+    }
 }

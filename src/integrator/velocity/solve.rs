@@ -20,7 +20,7 @@
 
 use super::VelocityTables;
 use super::equations::assemble_dense;
-use super::freeze::correct_on_blocks;
+use super::freeze::{correct_on_blocks, correct_on_rows};
 use super::momentum::MomentumRow;
 use crate::basis::Basis;
 use crate::integrator::dd::max_abs;
@@ -264,15 +264,28 @@ impl<B: Basis, Q: Quadrature, L: Lagrangian> NewtonIteration for VelocityNewton<
             let (size, scale, masked, confirmation) =
                 match (vs.freeze.as_mut(), vs.mass_tiled.as_deref()) {
                     (Some(f), Some(tiled)) if f.freezing() => {
-                        let (size, active_scale) = correct_on_blocks(
-                            &mut vs.c,
-                            &mut vs.c0_lo,
-                            &mut vs.delta,
-                            tiled,
-                            !vs.unit_mass,
-                            d,
-                            f.maxima_mut(),
-                        );
+                        let (size, active_scale) = match vs.masked.as_ref() {
+                            // The masked residual's −F, by coordinate.
+                            Some(rows) if rows.holds_residual() => correct_on_rows(
+                                &mut vs.c,
+                                &mut vs.c0_lo,
+                                rows.residual(),
+                                (vt.k, rows.kstride()),
+                                tiled,
+                                !vs.unit_mass,
+                                d,
+                                f.maxima_mut(),
+                            ),
+                            _ => correct_on_blocks(
+                                &mut vs.c,
+                                &mut vs.c0_lo,
+                                &mut vs.delta,
+                                tiled,
+                                !vs.unit_mass,
+                                d,
+                                f.maxima_mut(),
+                            ),
+                        };
                         let scale = f.scale(active_scale).max(f64::MIN_POSITIVE);
                         // A confirmation of every block ends freezing; otherwise the blocks
                         // that pass the test are frozen, and while any is, this correction

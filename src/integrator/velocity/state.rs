@@ -4,6 +4,7 @@
 use super::VelocityTables;
 use super::equations::DenseNewton;
 use super::freeze::BlockFreeze;
+use super::masked::MaskedRows;
 use crate::integrator::auto;
 use crate::integrator::dd::{max_abs, two_sum};
 use crate::integrator::kronecker::KroneckerWork;
@@ -55,6 +56,8 @@ pub(crate) struct VelocityState {
     /// The fixed-point iteration's converged blocks ([`super::freeze`]): for a diagonal mass
     /// matrix and at least two coordinate blocks.
     pub(super) freeze: Option<BlockFreeze>,
+    /// The masked residual's rows by coordinate ([`super::masked`]), where blocks can freeze.
+    pub(super) masked: Option<MaskedRows>,
 }
 
 impl VelocityState {
@@ -133,6 +136,10 @@ impl VelocityState {
     ) -> Option<Self> {
         let size = vt.k * d;
         let mass = sep.mass();
+        let freeze = blocks
+            .filter(|_| sep.mass_diagonal().is_some())
+            .and_then(|b| BlockFreeze::new(d, b));
+        let masked = freeze.as_ref().map(|_| MaskedRows::new(vt, d));
         Some(VelocityState {
             mass_tiled: sep
                 .mass_diagonal()
@@ -155,9 +162,8 @@ impl VelocityState {
                 vt.iota.len() / vt.k.max(1),
                 self_block_rate,
             )?,
-            freeze: blocks
-                .filter(|_| sep.mass_diagonal().is_some())
-                .and_then(|b| BlockFreeze::new(d, b)),
+            freeze,
+            masked,
             dense: (size <= auto::DENSE_SIZE || (d <= 3 && size <= VELOCITY_DENSE_SMALL_D)).then(
                 || DenseNewton {
                     jac: vec![0.0; size * size],

@@ -2,7 +2,7 @@
 
 use super::{System, positive};
 use crate::error::{GviError, Result, ensure_len};
-use crate::lagrangian::Mechanical;
+use crate::lagrangian::{ByCoordinate, Mechanical};
 use crate::symmetries::{NamedMomentumMap, Rotation, Translation};
 use nalgebra::DMatrix;
 use num_dual::DualNum;
@@ -349,6 +349,45 @@ impl Mechanical for NBody {
             return;
         }
         self.potential_gradient_at_points(q, out);
+    }
+
+    fn potential_gradient_at_points_by_coordinate_on_blocks(
+        &self,
+        q: &[f64],
+        layout: ByCoordinate,
+        active: &[bool],
+        out: &mut [f64],
+    ) {
+        let d = self.degrees_of_freedom();
+        // The rows in vector lanes as they lie; many bodies go through the points (the
+        // parallel evaluation).
+        if self.masses.len() < PARALLEL_BODIES || !cfg!(feature = "parallel") {
+            if self.dim == 2 {
+                pairwise::gradient_by_coordinate_on::<2>(
+                    self.g,
+                    &self.masses,
+                    q,
+                    d,
+                    layout,
+                    active,
+                    out,
+                );
+            } else {
+                pairwise::gradient_by_coordinate_on::<3>(
+                    self.g,
+                    &self.masses,
+                    q,
+                    d,
+                    layout,
+                    active,
+                    out,
+                );
+            }
+            return;
+        }
+        layout.through_points(d, self.dim, q, active, out, |qp, op| {
+            self.potential_gradient_at_points(qp, op)
+        });
     }
 
     fn potential_hessian_at_points(&self, q: &[f64], out: &mut [f64]) {

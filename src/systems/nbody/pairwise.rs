@@ -11,6 +11,7 @@
 
 use std::cell::RefCell;
 
+use crate::by_coordinate::ByCoordinate;
 use crate::scratch::with_scratch;
 
 /// ∇V(q) into `out` (N·K): for every pair i < j with d = qᵢ − qⱼ, r² = |d|² and
@@ -71,8 +72,11 @@ pub(super) fn gradient_at_points<const K: usize>(
     }
     // Every row the kernel reads it writes first (each group's transposed nodes and zeroed
     // sums), so the buffer's previous contents do not matter.
+    let nodes = (q.len() / d).min(out.len() / d);
     with_scratch(&LANE_SCRATCH, 2 * d, [0.0; LANES], |buf| {
-        gradient_in_lanes::<K, false>(g, masses, q, d, &[], out, buf)
+        let load = |first, valid, qt: &mut [[f64; LANES]]| transpose_nodes(q, d, first, valid, qt);
+        let store = |first, valid, ot: &[[f64; LANES]]| untranspose_nodes(ot, d, first, valid, out);
+        gradient_in_lanes::<K, false>(g, masses, d, nodes, &[], buf, load, store)
     });
 }
 
@@ -94,54 +98,126 @@ pub(super) fn gradient_at_points_on<const K: usize>(
     if d == 0 {
         return;
     }
+    let nodes = (q.len() / d).min(out.len() / d);
     with_scratch(&LANE_SCRATCH, 2 * d, [0.0; LANES], |buf| {
-        gradient_in_lanes::<K, true>(g, masses, q, d, active, out, buf)
+        let load = |first, valid, qt: &mut [[f64; LANES]]| transpose_nodes(q, d, first, valid, qt);
+        // The active bodies' rows only: the others' sums are not formed.
+        let store = |first: usize, valid: usize, ot: &[[f64; LANES]]| {
+            for l in 0..valid {
+                let node = &mut out[(first + l) * d..][..d];
+                for (b, _) in active.iter().enumerate().filter(|(_, on)| **on) {
+                    for r in b * K..((b + 1) * K).min(d) {
+                        node[r] = ot[r][l];
+                    }
+                }
+            }
+        };
+        gradient_in_lanes::<K, true>(g, masses, d, nodes, active, buf, load, store)
     });
 }
 
-/// [`gradient_at_points`] with its scratch (2·D rows); `MASKED`: only the pairs with a body
-/// marked in `active` ([`gradient_at_points_on`]).
-fn gradient_in_lanes<const K: usize, const MASKED: bool>(
+/// [`gradient_at_points_on`] for points laid out by coordinate ([`ByCoordinate`]): each group
+/// of [`LANES`] nodes is a slice of every row, copied as one vector (no transposition), and
+/// only the active bodies' rows of `out` are written — of each group's nodes, and of the
+/// padding after them where the row has room. The same operations in the same order as
+/// [`gradient_at_points`], so the active rows are its bits.
+pub(super) fn gradient_by_coordinate_on<const K: usize>(
     g: f64,
     masses: &[f64],
     q: &[f64],
     d: usize,
+    layout: ByCoordinate,
     active: &[bool],
     out: &mut [f64],
-    scratch: &mut [[f64; LANES]],
 ) {
-    let is_active = |b: usize| active.get(b).copied().unwrap_or(false);
-    let nodes = (q.len() / d).min(out.len() / d);
+    let (nodes, stride) = (layout.nodes, layout.stride);
+    if d == 0 || nodes == 0 {
+        return;
+    }
+    let load = |first: usize, valid: usize, qt: &mut [[f64; LANES]]| {
+        for (r, row) in qt.iter_mut().enumerate() {
+            let src = &q[r * stride + first..(r + 1) * stride];
+            *row = match src.first_chunk::<LANES>() {
+                Some(lanes) => *lanes,
+                None => std::array::from_fn(|l| src[l.min(valid - 1)]),
+            };
+        }
+    };
+    let store = |first: usize, valid: usize, ot: &[[f64; LANES]]| {
+        for (b, _) in active.iter().enumerate().filter(|(_, on)| **on) {
+            for r in b * K..((b + 1) * K).min(d) {
+                let dst = &mut out[r * stride + first..(r + 1) * stride];
+                match dst.first_chunk_mut::<LANES>() {
+                    Some(lanes) => *lanes = ot[r],
+                    None => dst[..valid].copy_from_slice(&ot[r][..valid]),
+                }
+            }
+        }
+    };
+    with_scratch(&LANE_SCRATCH, 2 * d, [0.0; LANES], |buf| {
+        gradient_in_lanes::<K, true>(g, masses, d, nodes, active, buf, load, store)
+    });
+}
+
+/// The kernel of [`gradient_at_points`] and its variants on its scratch (2·D rows): for each
+/// group of [`LANES`] nodes from `first` (`valid` of them), `load` fills the positions' rows,
+/// the pairs run in lanes, and `store` takes the gradient's rows (of the active bodies, when
+/// masked: the others hold anything). `MASKED`: only
+/// the pairs with a body marked in `active`, and only the active bodies' rows zeroed, summed
+/// and stored.
+#[allow(clippy::too_many_arguments)]
+fn gradient_in_lanes<const K: usize, const MASKED: bool>(
+    g: f64,
+    masses: &[f64],
+    d: usize,
+    nodes: usize,
+    active: &[bool],
+    scratch: &mut [[f64; LANES]],
+    mut load: impl FnMut(usize, usize, &mut [[f64; LANES]]),
+    mut store: impl FnMut(usize, usize, &[[f64; LANES]]),
+) {
+    let is_active = |b: usize| !MASKED || active.get(b).copied().unwrap_or(false);
     let nb = masses.len().min(d / K);
     let (qt, ot) = scratch.split_at_mut(d);
     for first in (0..nodes).step_by(LANES) {
         let valid = (nodes - first).min(LANES);
-        transpose_nodes(q, d, first, valid, qt);
-        ot.iter_mut().for_each(|row| *row = [0.0; LANES]);
+        load(first, valid, qt);
+        for (b, rows) in ot.chunks_exact_mut(K).enumerate().take(nb) {
+            if is_active(b) {
+                rows.iter_mut().for_each(|row| *row = [0.0; LANES]);
+            }
+        }
         for i in 0..nb {
             let qi: [[f64; LANES]; K] = std::array::from_fn(|c| qt[i * K + c]);
             let mut acc: [[f64; LANES]; K] = std::array::from_fn(|c| ot[i * K + c]);
             let gmi = g * masses[i];
-            let i_active = MASKED && is_active(i);
+            let i_active = is_active(i);
             for j in i + 1..nb {
-                if MASKED && !i_active && !is_active(j) {
+                let j_active = is_active(j);
+                if !i_active && !j_active {
                     continue;
                 }
                 let (sep, r2) = separation(&qi, &qt[j * K..(j + 1) * K]);
                 let gm = gmi * masses[j];
                 let f: [f64; LANES] = std::array::from_fn(|l| gm / (r2[l] * r2[l].sqrt()));
                 for (c, row) in sep.iter().enumerate() {
-                    let oj = &mut ot[j * K + c];
+                    let x: [f64; LANES] = std::array::from_fn(|l| f[l] * row[l]);
                     for l in 0..LANES {
-                        let x = f[l] * row[l];
-                        acc[c][l] += x;
-                        oj[l] -= x;
+                        acc[c][l] += x[l];
+                    }
+                    if j_active {
+                        let oj = &mut ot[j * K + c];
+                        for l in 0..LANES {
+                            oj[l] -= x[l];
+                        }
                     }
                 }
             }
-            ot[i * K..i * K + K].copy_from_slice(&acc);
+            if i_active {
+                ot[i * K..i * K + K].copy_from_slice(&acc);
+            }
         }
-        untranspose_nodes(ot, d, first, valid, out);
+        store(first, valid, ot);
     }
 }
 

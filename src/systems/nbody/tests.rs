@@ -241,3 +241,52 @@ fn gradient_on_active_bodies_is_the_full_gradient_there() {
         }
     }
 }
+
+/// The gradient on some bodies with the points laid out by coordinate
+/// (`potential_gradient_at_points_by_coordinate_on_blocks`), in rows padded to whole vectors
+/// and in rows of exactly the points: the active bodies' rows are the full gradient's bit for
+/// bit, and the inactive bodies' rows are left as they were.
+#[test]
+fn gradient_by_coordinate_on_active_bodies_is_the_full_gradient_there() {
+    use crate::lagrangian::ByCoordinate;
+    for dim in [2usize, 3] {
+        let nb = NBody::new(vec![1.0, 1e-3, 3e-4, 5e-5, 4e-5, 7e-9], 2.9591e-4, dim).unwrap();
+        let d = 6 * dim;
+        let points = 9;
+        let q: Vec<f64> = (0..points * d)
+            .map(|i| ((i * 37 % 23) as f64 - 11.0) * 0.7 + (i as f64 * 0.37).sin())
+            .collect();
+        let mut full = vec![0.0; points * d];
+        nb.potential_gradient_at_points(&q, &mut full);
+        for stride in [points, 16] {
+            let layout = ByCoordinate::new(points, stride);
+            let mut qt = vec![0.0; d * stride];
+            for r in 0..d {
+                for j in 0..stride {
+                    qt[r * stride + j] = q[j.min(points - 1) * d + r];
+                }
+            }
+            for active in [
+                [true, false, false, false, false, false],
+                [true, true, false, false, false, false],
+                [false, true, false, true, false, true],
+            ] {
+                let mut some = vec![f64::NAN; d * stride];
+                nb.potential_gradient_at_points_by_coordinate_on_blocks(
+                    &qt, layout, &active, &mut some,
+                );
+                for r in 0..d {
+                    for j in 0..points {
+                        let x = some[r * stride + j];
+                        if active[r / dim] {
+                            let y = full[j * d + r];
+                            assert_eq!(x.to_bits(), y.to_bits(), "dim {dim}, stride {stride}");
+                        } else {
+                            assert!(x.is_nan(), "inactive row {r} written");
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
