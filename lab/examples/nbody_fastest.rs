@@ -7,13 +7,15 @@
 //!   h = 12.5 d, 10 Gauss points (the compact rule);
 //! - `j2000-12`: the same scene at the frontier of the study of 2026-11-27 04:11, Legendre
 //!   n = 12, h = 20 d, 12 Gauss points;
+//! - `j2000-9`: the same scene, Legendre n = 9, h = 11.1 d, 8 Gauss points (the collocation
+//!   rule: one vector of eight nodes in the force kernel);
 //! - `j2000-11`: the same scene at the frontier of the study of 2026-11-27 09:27, Legendre
 //!   n = 11, h = 16.7 d, 10 Gauss points (the collocation rule);
 //! - `j2000-14`: the same scene at the frontier of the study of 2026-11-27, Legendre n = 14,
 //!   h = 25 d, 14 Gauss points.
 //!
 //! ```text
-//! cargo run --release -p galerkin-vi-lab --example nbody_fastest [outer|j2000|j2000-11|j2000-12|j2000-14] [REPEATS]
+//! cargo run --release -p galerkin-vi-lab --example nbody_fastest [outer|j2000|j2000-9|j2000-11|j2000-12|j2000-14] [REPEATS]
 //! valgrind --tool=callgrind target/release/examples/nbody_fastest outer 1
 //! ```
 use galerkin_vi::basis::BasisKind;
@@ -50,6 +52,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             BasisKind::Legendre,
             12,
         ),
+        "j2000-9" => (
+            "solar-system",
+            100.0,
+            9,
+            QuadPoints::Collocation,
+            BasisKind::Legendre,
+            9,
+        ),
         "j2000-11" => (
             "solar-system",
             100.0,
@@ -68,7 +78,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ),
         other => {
             return Err(format!(
-                "unknown configuration {other} (outer, j2000, j2000-11, j2000-12 or j2000-14)"
+                "unknown configuration {other} (outer, j2000, j2000-9, j2000-11, j2000-12 or j2000-14)"
             )
             .into());
         }

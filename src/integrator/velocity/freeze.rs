@@ -313,21 +313,34 @@ pub(crate) fn correct_on_rows(
         column_delta,
         column_scale,
     } = maxima;
-    let step = |x: f64, m: f64| if divide { x / m } else { x };
+    const LANES: usize = 8;
     for r in runs.iter().flat_map(|&(a, b)| a..b) {
-        let (m, res) = (tiled[r], &residual[r * kstride..r * kstride + k]);
-        let v = step(res[0], m);
-        let (s, e) = two_sum(c[r], v);
-        c[r] = s;
-        c0_lo[r] += e;
-        let (mut cd, mut cs) = (v.abs(), s.abs());
-        for (b, &x) in res.iter().enumerate().skip(1) {
-            let v = step(x, m);
-            let y = &mut c[b * d + r];
-            *y += v;
-            let (av, ac) = (v.abs(), y.abs());
-            cd = if av > cd { av } else { cd };
-            cs = if ac > cs { ac } else { cs };
+        // The row's modes divided by m_r in vector lanes (its padding too), then applied
+        // one by one: row 0 compensated, rows b ≥ 1 into their strided entries.
+        let m = tiled[r];
+        let (chunks, _) = residual[r * kstride..(r + 1) * kstride].as_chunks::<LANES>();
+        let (mut cd, mut cs) = (0.0f64, 0.0f64);
+        for (ch, x) in chunks.iter().enumerate() {
+            let v: [f64; LANES] = std::array::from_fn(|l| if divide { x[l] / m } else { x[l] });
+            for (l, &v) in v.iter().enumerate() {
+                let b = ch * LANES + l;
+                if b >= k {
+                    break;
+                }
+                let av = v.abs();
+                if b == 0 {
+                    let (s, e) = two_sum(c[r], v);
+                    c[r] = s;
+                    c0_lo[r] += e;
+                    (cd, cs) = (av, s.abs());
+                    continue;
+                }
+                let y = &mut c[b * d + r];
+                *y += v;
+                let ac = y.abs();
+                cd = if av > cd { av } else { cd };
+                cs = if ac > cs { ac } else { cs };
+            }
         }
         column_delta[r] = cd;
         column_scale[r] = cs;

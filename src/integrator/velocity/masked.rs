@@ -138,10 +138,14 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         let stride = rows.layout.stride;
         if !rows.current {
             // The unmasked residual's curve, transposed once (the padding: the last node).
-            for (r, row) in rows.q.chunks_exact_mut(stride).enumerate() {
-                for (j, x) in row.iter_mut().enumerate() {
-                    *x = ws.stage.qj[j.min(m - 1) * d + r];
+            for (j, point) in ws.stage.qj.chunks_exact(d).take(m).enumerate() {
+                for (x, &v) in rows.q.iter_mut().skip(j).step_by(stride).zip(point) {
+                    *x = v;
                 }
+            }
+            for row in rows.q.chunks_exact_mut(stride) {
+                let last = row[m - 1];
+                row[m..].iter_mut().for_each(|x| *x = last);
             }
             rows.current = true;
         }
@@ -204,25 +208,38 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
         for &(a, b) in runs {
             let mut r0 = a;
             while r0 < b {
+                // Eight lanes for five or more coordinates (the spare lanes sum a neighbour's
+                // row again and are not stored): one pass of independent chains.
                 r0 += match b - r0 {
-                    8.. => rows0.fill::<8>(r0, momentum, &mut rows.residual, kstride),
-                    4..=7 => rows0.fill::<4>(r0, momentum, &mut rows.residual, kstride),
-                    2 | 3 => rows0.fill::<2>(r0, momentum, &mut rows.residual, kstride),
-                    _ => rows0.fill::<1>(r0, momentum, &mut rows.residual, kstride),
+                    5.. => rows0.fill::<8>(r0, b, momentum, &mut rows.residual, kstride),
+                    3 | 4 => rows0.fill::<4>(r0, b, momentum, &mut rows.residual, kstride),
+                    2 => rows0.fill::<2>(r0, b, momentum, &mut rows.residual, kstride),
+                    _ => rows0.fill::<1>(r0, b, momentum, &mut rows.residual, kstride),
                 };
             }
         }
-        let size = |v: f64| if v.is_nan() { f64::INFINITY } else { v.abs() };
-        let mut max = 0.0f64;
+        // Rows b ≥ 1: −(M c_b + projection); then max |F| over each row in vector lanes (its
+        // padding holds zeros: ψ is padded with zeros).
+        let mut lanes = [0.0f64; LANES];
         for r in runs.iter().flat_map(|&(a, b)| a..b) {
-            let res = &mut rows.residual[r * kstride..r * kstride + k];
-            max = max.max(size(res[0]));
+            let row = &mut rows.residual[r * kstride..(r + 1) * kstride];
             let mass = tiled[r];
-            for (b, x) in res.iter_mut().enumerate().skip(1) {
+            for (b, x) in row[..k].iter_mut().enumerate().skip(1) {
                 *x = -(mass * vs.c[b * d + r] + *x);
-                max = max.max(size(*x));
+            }
+            let (chunks, _) = row.as_chunks::<LANES>();
+            for x in chunks {
+                lanes = std::array::from_fn(|l| {
+                    let v = if x[l].is_nan() {
+                        f64::INFINITY
+                    } else {
+                        x[l].abs()
+                    };
+                    if v > lanes[l] { v } else { lanes[l] }
+                });
             }
         }
+        let max = lanes.iter().fold(0.0f64, |a, &b| a.max(b));
         rows.holds_residual = true;
         max
     }
@@ -317,20 +334,24 @@ struct MomentumRows0<'a> {
 }
 
 impl MomentumRows0<'_> {
-    /// −F_0 of coordinates r0 … r0 + L − 1 into entry 0 of their rows of `residual` (rows of
-    /// `kstride`, whose entry 0 holds the force terms' projection); returns L. Compensated:
+    /// −F_0 of coordinates r0 … min(r0 + L, `end`) − 1 into entry 0 of their rows of
+    /// `residual` (rows of `kstride`, whose entry 0 holds the force terms' projection);
+    /// returns how many. Compensated:
     /// (hi, lo) from `momentum_row`, the force terms added in double-double with the L sums
     /// side by side (independent chains hide each other's latency).
     fn fill<const L: usize>(
         &self,
         r0: usize,
+        end: usize,
         momentum: MomentumRow,
         residual: &mut [f64],
         kstride: usize,
     ) -> usize {
+        // Lane l sums row r0 + l, or the run's last row again where there is none.
+        let row = |l: usize| (r0 + l).min(end - 1);
         let row0: [f64; L] = match momentum {
             MomentumRow::Rounded => std::array::from_fn(|l| {
-                let r = r0 + l;
+                let r = row(l);
                 rounded_momentum_row(self.sep, self.c, self.p_k, residual[r * kstride], r)
             }),
             MomentumRow::Compensated => {
@@ -343,13 +364,14 @@ impl MomentumRows0<'_> {
                         self.c0_lo,
                         self.p_k,
                         self.momentum_lo,
-                        r0 + l,
+                        row(l),
                     );
                 }
+                let rows: [usize; L] = std::array::from_fn(|l| row(l) * self.stride);
                 for (j, &b) in self.weights.iter().enumerate() {
                     let (w, psi0) = (b * self.h, self.psi[j * self.k]);
                     for l in 0..L {
-                        let f = self.forces[(r0 + l) * self.stride + j];
+                        let f = self.forces[rows[l] + j];
                         let g = w * f;
                         dd_acc(&mut hi[l], &mut lo[l], psi0, g);
                         lo[l] += psi0 * w.mul_add(f, -g);
@@ -358,9 +380,10 @@ impl MomentumRows0<'_> {
                 std::array::from_fn(|l| hi[l] + lo[l])
             }
         };
-        for (l, &x) in row0.iter().enumerate() {
+        let stored = L.min(end - r0);
+        for (l, &x) in row0.iter().enumerate().take(stored) {
             residual[(r0 + l) * kstride] = -x;
         }
-        L
+        stored
     }
 }
