@@ -18,7 +18,7 @@ use super::VelocityTables;
 use super::momentum::{MomentumRow, momentum_row, rounded_momentum_row};
 use crate::basis::Basis;
 use crate::by_coordinate::ByCoordinate;
-use crate::integrator::dd::dd_acc;
+use crate::integrator::dd::{dd_acc, two_sum};
 use crate::integrator::{GalerkinIntegrator, Workspace};
 use crate::lagrangian::Lagrangian;
 use crate::quadrature::Quadrature;
@@ -357,17 +357,34 @@ impl MomentumRows0<'_> {
             MomentumRow::Compensated => {
                 let mut hi = [0.0f64; L];
                 let mut lo = [0.0f64; L];
-                for l in 0..L {
-                    (hi[l], lo[l]) = momentum_row(
-                        self.sep,
-                        self.c,
-                        self.c0_lo,
-                        self.p_k,
-                        self.momentum_lo,
-                        row(l),
-                    );
+                let r: [usize; L] = std::array::from_fn(row);
+                match self.sep.mass_diagonal() {
+                    // `momentum_row`'s operations for a diagonal M, the lanes side by side.
+                    Some(diag) => {
+                        let m: [f64; L] = std::array::from_fn(|l| diag[r[l]]);
+                        for l in 0..L {
+                            dd_acc(&mut hi[l], &mut lo[l], m[l], self.c[r[l]]);
+                            lo[l] += m[l] * self.c0_lo[r[l]];
+                        }
+                        for l in 0..L {
+                            let (s, e) = two_sum(hi[l], -self.p_k[r[l]]);
+                            (hi[l], lo[l]) = (s, lo[l] + (e - self.momentum_lo[r[l]]));
+                        }
+                    }
+                    None => {
+                        for l in 0..L {
+                            (hi[l], lo[l]) = momentum_row(
+                                self.sep,
+                                self.c,
+                                self.c0_lo,
+                                self.p_k,
+                                self.momentum_lo,
+                                r[l],
+                            );
+                        }
+                    }
                 }
-                let rows: [usize; L] = std::array::from_fn(|l| row(l) * self.stride);
+                let rows: [usize; L] = std::array::from_fn(|l| r[l] * self.stride);
                 for (j, &b) in self.weights.iter().enumerate() {
                     let (w, psi0) = (b * self.h, self.psi[j * self.k]);
                     for l in 0..L {

@@ -187,7 +187,13 @@ fn gradient_in_lanes<const K: usize, const MASKED: bool>(
                 rows.iter_mut().for_each(|row| *row = [0.0; LANES]);
             }
         }
-        for i in 0..nb {
+        // Past the last active body no pair has one (all pairs when not masked).
+        let last = if MASKED {
+            (0..nb).rev().find(|&b| is_active(b)).map_or(0, |b| b + 1)
+        } else {
+            nb
+        };
+        for i in 0..last {
             let qi: [[f64; LANES]; K] = std::array::from_fn(|c| qt[i * K + c]);
             let mut acc: [[f64; LANES]; K] = std::array::from_fn(|c| ot[i * K + c]);
             let gmi = g * masses[i];
