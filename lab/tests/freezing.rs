@@ -73,3 +73,66 @@ fn freezing_converged_bodies_keeps_the_map_and_skips_their_forces() {
         0
     );
 }
+
+/// A user's system with coordinate blocks and its own batched forces, but no kernel for the
+/// points laid out by coordinate (`Lagrangian::force_at_points_by_coordinate_on_blocks`): the
+/// masked residuals go through the trait's default (the points transposed into its own
+/// scratch), and the map is the built-in system's, bit for bit — the forces of the active
+/// blocks are the same numbers either way. No allocation per step.
+#[test]
+fn a_system_without_a_by_coordinate_kernel_gets_the_same_frozen_map() {
+    /// J2000's N-body system through `Mechanical`'s point-by-point kernels only.
+    struct PointsOnly(NBody);
+    impl Mechanical for PointsOnly {
+        fn degrees_of_freedom(&self) -> usize {
+            self.0.degrees_of_freedom()
+        }
+        fn mass(&self) -> nalgebra::DMatrix<f64> {
+            Mechanical::mass(&self.0)
+        }
+        fn potential<T: DualNum<Primitive = f64> + Copy>(&self, q: &[T]) -> T {
+            self.0.potential(q)
+        }
+        fn potential_gradient(&self, q: &[f64], out: &mut [f64]) {
+            self.0.potential_gradient(q, out)
+        }
+        fn coordinate_blocks(&self) -> Option<usize> {
+            Mechanical::coordinate_blocks(&self.0)
+        }
+        fn potential_gradient_at_points(&self, q: &[f64], out: &mut [f64]) {
+            self.0.potential_gradient_at_points(q, out)
+        }
+        fn potential_gradient_at_points_on_blocks(
+            &self,
+            q: &[f64],
+            active: &[bool],
+            out: &mut [f64],
+        ) {
+            self.0.potential_gradient_at_points_on_blocks(q, active, out)
+        }
+        fn potential_hessian(&self, q: &[f64], out: &mut [f64]) {
+            self.0.potential_hessian(q, out)
+        }
+    }
+    let (nbody, init, _) = scene_nbody("solar-system");
+    let gvi = GalerkinIntegrator::from_kinds(
+        BasisKind::Legendre,
+        9,
+        QuadratureKind::default(),
+        Some(8),
+        100.0 / 9.0,
+    )
+    .unwrap();
+    let steps = 40;
+    let built_in = gvi.integrate(&nbody, init.t0, &init.q, &init.p, steps).unwrap();
+    let user = PointsOnly(nbody.clone());
+    let theirs = gvi.integrate(&user, init.t0, &init.q, &init.p, steps).unwrap();
+    let partial: usize = theirs.stats.iter().map(|s| s.partial_gradient_evaluations).sum();
+    assert!(partial > 0, "the masked residuals ran");
+    let bits = |t: &Trajectory| {
+        let (q, p) = (t.q.last().unwrap(), t.p.last().unwrap());
+        q.iter().chain(p).map(|x| x.to_bits()).collect::<Vec<_>>()
+    };
+    assert_eq!(bits(&built_in), bits(&theirs));
+    assert_eq!(allocations_per_run(&gvi, &user, &init, 5), 0);
+}
