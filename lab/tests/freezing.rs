@@ -108,7 +108,8 @@ fn a_system_without_a_by_coordinate_kernel_gets_the_same_frozen_map() {
             active: &[bool],
             out: &mut [f64],
         ) {
-            self.0.potential_gradient_at_points_on_blocks(q, active, out)
+            self.0
+                .potential_gradient_at_points_on_blocks(q, active, out)
         }
         fn potential_hessian(&self, q: &[f64], out: &mut [f64]) {
             self.0.potential_hessian(q, out)
@@ -124,10 +125,18 @@ fn a_system_without_a_by_coordinate_kernel_gets_the_same_frozen_map() {
     )
     .unwrap();
     let steps = 40;
-    let built_in = gvi.integrate(&nbody, init.t0, &init.q, &init.p, steps).unwrap();
+    let built_in = gvi
+        .integrate(&nbody, init.t0, &init.q, &init.p, steps)
+        .unwrap();
     let user = PointsOnly(nbody.clone());
-    let theirs = gvi.integrate(&user, init.t0, &init.q, &init.p, steps).unwrap();
-    let partial: usize = theirs.stats.iter().map(|s| s.partial_gradient_evaluations).sum();
+    let theirs = gvi
+        .integrate(&user, init.t0, &init.q, &init.p, steps)
+        .unwrap();
+    let partial: usize = theirs
+        .stats
+        .iter()
+        .map(|s| s.partial_gradient_evaluations)
+        .sum();
     assert!(partial > 0, "the masked residuals ran");
     let bits = |t: &Trajectory| {
         let (q, p) = (t.q.last().unwrap(), t.p.last().unwrap());

@@ -36,6 +36,10 @@ pub(crate) struct MaskedRows {
     /// ιᵀ (k rows of the padded length; row a: ι_ja at the nodes, the last node's value in the
     /// padding, so that the padding lanes hold the curve at the last node).
     iota_t: Vec<f64>,
+    /// h ιᵀ for the step size `scaled_for` (the coefficients the product multiplies the modes
+    /// by), refreshed when h changes.
+    h_iota_t: Vec<f64>,
+    scaled_for: f64,
     /// The curve at the nodes by coordinate (D rows).
     q: Vec<f64>,
     /// The forces at the nodes by coordinate (D rows; the active ones written).
@@ -75,6 +79,8 @@ impl MaskedRows {
         }
         MaskedRows {
             layout: ByCoordinate::new(m, stride),
+            h_iota_t: vec![0.0; iota_t.len()],
+            scaled_for: f64::NAN,
             iota_t,
             q: vec![0.0; d * stride],
             f: vec![0.0; d * stride],
@@ -149,24 +155,35 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             }
             rows.current = true;
         }
+        if rows.scaled_for != h {
+            for (x, &i) in rows.h_iota_t.iter_mut().zip(&rows.iota_t) {
+                *x = h * i;
+            }
+            rows.scaled_for = h;
+        }
         let (origin, origin_lo) = (ws.iterate.origin(), ws.iterate.origin_lo());
         let runs = freeze.runs();
         let chunks = stride / LANES;
         let (iota_t, _) = rows.iota_t.as_chunks::<LANES>();
+        let (h_iota_t, _) = rows.h_iota_t.as_chunks::<LANES>();
         for r in runs.iter().flat_map(|&(a, b)| a..b) {
-            // q_j = q_k + (δq_k + h ι_j0 c_0,lo + h Σ_a ι_ja c_a), the sum over a from zero as
-            // the unmasked residual's product takes it, whole vectors of nodes at a time.
+            // q_j = q_k + (δq_k + h ι_j0 c_0,lo + Σ_a (h ι_ja) c_a): the small parts first,
+            // then the modes added in order, as the unmasked residual's product adds them,
+            // whole vectors of nodes at a time.
             let (row, _) = rows.q[r * stride..(r + 1) * stride].as_chunks_mut::<LANES>();
-            let modes = |a: usize| vs.c[a * d + r];
-            match chunks {
-                1 => curve_row::<1>(modes, iota_t, k, row),
-                2 => curve_row::<2>(modes, iota_t, k, row),
-                3 => curve_row::<3>(modes, iota_t, k, row),
-                _ => curve_row_any(modes, iota_t, k, row),
-            }
             let (o, lo, c0) = (origin[r], origin_lo[r], vs.c0_lo[r]);
             for (q, i0) in row.iter_mut().zip(iota_t) {
-                *q = std::array::from_fn(|l| (h * q[l] + (lo + (h * i0[l]) * c0)) + o);
+                *q = std::array::from_fn(|l| lo + (h * i0[l]) * c0);
+            }
+            let modes = |a: usize| vs.c[a * d + r];
+            match chunks {
+                1 => curve_row::<1>(modes, h_iota_t, k, row),
+                2 => curve_row::<2>(modes, h_iota_t, k, row),
+                3 => curve_row::<3>(modes, h_iota_t, k, row),
+                _ => curve_row_any(modes, h_iota_t, k, row),
+            }
+            for q in row.iter_mut() {
+                *q = std::array::from_fn(|l| q[l] + o);
             }
         }
         lag.force_at_points_by_coordinate_on_blocks(
@@ -245,20 +262,22 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
     }
 }
 
-/// The curve at the nodes of one coordinate, Σ_a c_a ι_·a over the rows of ιᵀ (`iota_t`, k rows
-/// of `C` vectors), summed over a from zero, with the `C` vectors of the row in registers.
+/// The curve at the nodes of one coordinate (`row`: `C` vectors, holding the small parts
+/// δq_k + h ι_j0 c_0,lo on entry), Σ_a (h ι_ja) c_a,r added over the rows of h ιᵀ (`h_iota_t`,
+/// k rows of `C` vectors) in order, as the unmasked residual's product (`gemm`) adds them to
+/// the same start, with the row's vectors in registers.
 #[inline(always)]
 fn curve_row<const C: usize>(
     modes: impl Fn(usize) -> f64,
-    iota_t: &[[f64; LANES]],
+    h_iota_t: &[[f64; LANES]],
     k: usize,
     row: &mut [[f64; LANES]],
 ) {
-    let mut acc = [[0.0f64; LANES]; C];
-    for (a, it) in iota_t.chunks_exact(C).take(k).enumerate() {
+    let mut acc: [[f64; LANES]; C] = std::array::from_fn(|c| row[c]);
+    for (a, it) in h_iota_t.chunks_exact(C).take(k).enumerate() {
         let x = modes(a);
         for (acc, it) in acc.iter_mut().zip(it) {
-            *acc = std::array::from_fn(|l| acc[l] + x * it[l]);
+            *acc = std::array::from_fn(|l| acc[l] + it[l] * x);
         }
     }
     row[..C].copy_from_slice(&acc);
@@ -267,16 +286,15 @@ fn curve_row<const C: usize>(
 /// [`curve_row`] for rows of any length (the sums in memory).
 fn curve_row_any(
     modes: impl Fn(usize) -> f64,
-    iota_t: &[[f64; LANES]],
+    h_iota_t: &[[f64; LANES]],
     k: usize,
     row: &mut [[f64; LANES]],
 ) {
     let c = row.len();
-    row.iter_mut().for_each(|x| *x = [0.0; LANES]);
-    for (a, it) in iota_t.chunks_exact(c).take(k).enumerate() {
+    for (a, it) in h_iota_t.chunks_exact(c).take(k).enumerate() {
         let x = modes(a);
         for (q, it) in row.iter_mut().zip(it) {
-            *q = std::array::from_fn(|l| q[l] + x * it[l]);
+            *q = std::array::from_fn(|l| q[l] + it[l] * x);
         }
     }
 }
