@@ -172,18 +172,21 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
             // whole vectors of nodes at a time.
             let (row, _) = rows.q[r * stride..(r + 1) * stride].as_chunks_mut::<LANES>();
             let (o, lo, c0) = (origin[r], origin_lo[r], vs.c0_lo[r]);
-            for (q, i0) in row.iter_mut().zip(iota_t) {
-                *q = std::array::from_fn(|l| lo + (h * i0[l]) * c0);
-            }
+            let small = |i0: &[f64; LANES]| std::array::from_fn(|l| lo + (h * i0[l]) * c0);
             let modes = |a: usize| vs.c[a * d + r];
+            let rows = CurveRow {
+                small,
+                modes,
+                h_iota_t,
+                iota_t,
+                k,
+                o,
+            };
             match chunks {
-                1 => curve_row::<1>(modes, h_iota_t, k, row),
-                2 => curve_row::<2>(modes, h_iota_t, k, row),
-                3 => curve_row::<3>(modes, h_iota_t, k, row),
-                _ => curve_row_any(modes, h_iota_t, k, row),
-            }
-            for q in row.iter_mut() {
-                *q = std::array::from_fn(|l| q[l] + o);
+                1 => rows.fill::<1>(row),
+                2 => rows.fill::<2>(row),
+                3 => rows.fill::<3>(row),
+                _ => rows.fill_any(row),
             }
         }
         lag.force_at_points_by_coordinate_on_blocks(
@@ -262,39 +265,50 @@ impl<B: Basis, Q: Quadrature> GalerkinIntegrator<B, Q> {
     }
 }
 
-/// The curve at the nodes of one coordinate (`row`: `C` vectors, holding the small parts
-/// δq_k + h ι_j0 c_0,lo on entry), Σ_a (h ι_ja) c_a,r added over the rows of h ιᵀ (`h_iota_t`,
-/// k rows of `C` vectors) in order, as the unmasked residual's product (`gemm`) adds them to
-/// the same start, with the row's vectors in registers.
-#[inline(always)]
-fn curve_row<const C: usize>(
-    modes: impl Fn(usize) -> f64,
-    h_iota_t: &[[f64; LANES]],
+/// What one coordinate's row of the curve at the nodes is made of: the small parts
+/// δq_k + h ι_j0 c_0,lo (`small`, from a vector of ι_·0), the modes c_a,r (`modes`), the rows
+/// of h ιᵀ and ιᵀ (k rows of vectors each) and q_k,r (`o`).
+struct CurveRow<'a, S, M> {
+    small: S,
+    modes: M,
+    h_iota_t: &'a [[f64; LANES]],
+    iota_t: &'a [[f64; LANES]],
     k: usize,
-    row: &mut [[f64; LANES]],
-) {
-    let mut acc: [[f64; LANES]; C] = std::array::from_fn(|c| row[c]);
-    for (a, it) in h_iota_t.chunks_exact(C).take(k).enumerate() {
-        let x = modes(a);
-        for (acc, it) in acc.iter_mut().zip(it) {
-            *acc = std::array::from_fn(|l| acc[l] + it[l] * x);
-        }
-    }
-    row[..C].copy_from_slice(&acc);
+    o: f64,
 }
 
-/// [`curve_row`] for rows of any length (the sums in memory).
-fn curve_row_any(
-    modes: impl Fn(usize) -> f64,
-    h_iota_t: &[[f64; LANES]],
-    k: usize,
-    row: &mut [[f64; LANES]],
-) {
-    let c = row.len();
-    for (a, it) in h_iota_t.chunks_exact(c).take(k).enumerate() {
-        let x = modes(a);
-        for (q, it) in row.iter_mut().zip(it) {
-            *q = std::array::from_fn(|l| q[l] + it[l] * x);
+impl<S: Fn(&[f64; LANES]) -> [f64; LANES], M: Fn(usize) -> f64> CurveRow<'_, S, M> {
+    /// The row (`C` vectors): the small parts, then Σ_a (h ι_ja) c_a,r added for a ascending,
+    /// as the unmasked residual's product (`gemm`) adds them, then q_k — in registers, one
+    /// store.
+    #[inline(always)]
+    fn fill<const C: usize>(&self, row: &mut [[f64; LANES]]) {
+        let mut acc: [[f64; LANES]; C] = std::array::from_fn(|c| (self.small)(&self.iota_t[c]));
+        for (a, it) in self.h_iota_t.chunks_exact(C).take(self.k).enumerate() {
+            let x = (self.modes)(a);
+            for (acc, it) in acc.iter_mut().zip(it) {
+                *acc = std::array::from_fn(|l| acc[l] + it[l] * x);
+            }
+        }
+        for (q, acc) in row.iter_mut().zip(&acc) {
+            *q = std::array::from_fn(|l| acc[l] + self.o);
+        }
+    }
+
+    /// [`Self::fill`] for rows of any length (the sums in memory).
+    fn fill_any(&self, row: &mut [[f64; LANES]]) {
+        let c = row.len();
+        for (q, i0) in row.iter_mut().zip(self.iota_t) {
+            *q = (self.small)(i0);
+        }
+        for (a, it) in self.h_iota_t.chunks_exact(c).take(self.k).enumerate() {
+            let x = (self.modes)(a);
+            for (q, it) in row.iter_mut().zip(it) {
+                *q = std::array::from_fn(|l| q[l] + it[l] * x);
+            }
+        }
+        for q in row.iter_mut() {
+            *q = std::array::from_fn(|l| q[l] + self.o);
         }
     }
 }
