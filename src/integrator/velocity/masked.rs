@@ -10,9 +10,12 @@
 //! for a masked residual on 6 of 30 columns against 2.47 µs for all of them). Here the
 //! converged blocks' rows stay in place between iterations — filled once from the last
 //! unmasked residual's curve — and only the active rows are recomputed: each a contiguous row
-//! of the curve at the nodes (Σ_a c_a,r ι_·a over the rows of ιᵀ), of the forces, and of the
-//! residual (its k modes). Every entry sees the operations of the unmasked residual in the
-//! same order, so the iteration is the same.
+//! of the curve at the nodes (the small parts, then Σ_a (h ι_ja) c_a,r over the rows of h ιᵀ),
+//! of the forces, and of the residual (its k modes). Every entry sees the operations of the
+//! unmasked residual in the same order, so the iteration is the same. (The masked products
+//! before summed runs of fewer than eight columns from zero instead; against them the maps
+//! are the same bits in 332 of the 344 same-maps cases and within 2.5e-14 in the others:
+//! docs/solvers.md.)
 
 use super::VelocityTables;
 use super::momentum::{MomentumRow, momentum_row, rounded_momentum_row};

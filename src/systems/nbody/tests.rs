@@ -200,6 +200,19 @@ fn hessian_blocks_in_lanes_are_the_pointwise_blocks_bit_for_bit() {
     );
 }
 
+/// Six bodies in `dim` dimensions at nine scattered points, and their full gradients there:
+/// (system, D, points, positions point by point, gradients point by point).
+fn six_bodies_at_nine_points(dim: usize) -> (NBody, usize, usize, Vec<f64>, Vec<f64>) {
+    let nb = NBody::new(vec![1.0, 1e-3, 3e-4, 5e-5, 4e-5, 7e-9], 2.9591e-4, dim).unwrap();
+    let (d, points) = (6 * dim, 9);
+    let q: Vec<f64> = (0..points * d)
+        .map(|i| ((i * 37 % 23) as f64 - 11.0) * 0.7 + (i as f64 * 0.37).sin())
+        .collect();
+    let mut full = vec![0.0; points * d];
+    nb.potential_gradient_at_points(&q, &mut full);
+    (nb, d, points, q, full)
+}
+
 /// The gradient on some bodies only (`potential_gradient_at_points_on_blocks`): the active
 /// bodies' rows are the full gradient's bit for bit, whichever bodies are active (the Sun
 /// alone, the innermost pair, a scattered set). Negative control: an inactive body's row,
@@ -207,14 +220,7 @@ fn hessian_blocks_in_lanes_are_the_pointwise_blocks_bit_for_bit() {
 #[test]
 fn gradient_on_active_bodies_is_the_full_gradient_there() {
     for dim in [2usize, 3] {
-        let nb = NBody::new(vec![1.0, 1e-3, 3e-4, 5e-5, 4e-5, 7e-9], 2.9591e-4, dim).unwrap();
-        let d = 6 * dim;
-        let points = 9;
-        let q: Vec<f64> = (0..points * d)
-            .map(|i| ((i * 37 % 23) as f64 - 11.0) * 0.7 + (i as f64 * 0.37).sin())
-            .collect();
-        let mut full = vec![0.0; points * d];
-        nb.potential_gradient_at_points(&q, &mut full);
+        let (nb, d, points, q, full) = six_bodies_at_nine_points(dim);
         for active in [
             [true, false, false, false, false, false],
             [true, true, false, false, false, false],
@@ -250,14 +256,7 @@ fn gradient_on_active_bodies_is_the_full_gradient_there() {
 fn gradient_by_coordinate_on_active_bodies_is_the_full_gradient_there() {
     use crate::lagrangian::ByCoordinate;
     for dim in [2usize, 3] {
-        let nb = NBody::new(vec![1.0, 1e-3, 3e-4, 5e-5, 4e-5, 7e-9], 2.9591e-4, dim).unwrap();
-        let d = 6 * dim;
-        let points = 9;
-        let q: Vec<f64> = (0..points * d)
-            .map(|i| ((i * 37 % 23) as f64 - 11.0) * 0.7 + (i as f64 * 0.37).sin())
-            .collect();
-        let mut full = vec![0.0; points * d];
-        nb.potential_gradient_at_points(&q, &mut full);
+        let (nb, d, points, q, full) = six_bodies_at_nine_points(dim);
         for stride in [points, 16] {
             let layout = ByCoordinate::new(points, stride);
             let mut qt = vec![0.0; d * stride];
