@@ -161,10 +161,9 @@ pub(super) fn gradient_by_coordinate_on<const K: usize>(
 
 /// The kernel of [`gradient_at_points`] and its variants on its scratch (2·D rows): for each
 /// group of [`LANES`] nodes from `first` (`valid` of them), `load` fills the positions' rows,
-/// the pairs run in lanes, and `store` takes the gradient's rows (of the active bodies, when
-/// masked: the others hold anything). `MASKED`: only
-/// the pairs with a body marked in `active`, and only the active bodies' rows zeroed, summed
-/// and stored.
+/// the pairs run in lanes, and `store` takes the gradient's rows. `MASKED`: only the pairs
+/// with a body marked in `active`, and only the active bodies' rows zeroed and summed (the
+/// others' rows hold anything, and `store` writes the active ones only).
 #[allow(clippy::too_many_arguments)]
 fn gradient_in_lanes<const K: usize, const MASKED: bool>(
     g: f64,
