@@ -215,6 +215,25 @@ pub(crate) struct BlockMaxima<'a> {
     column_scale: &'a mut [f64],
 }
 
+impl BlockMaxima<'_> {
+    /// Each active block's largest |δ| and |c| from its columns' maxima; returns the largest
+    /// over the active blocks.
+    fn fold(self) -> (f64, f64) {
+        let (mut size, mut scale) = (0.0f64, 0.0f64);
+        let fold = |v: &[f64]| v.iter().fold(0.0f64, |acc, &x| acc.max(x));
+        for &(a, b) in self.runs {
+            for i in a / self.block..b / self.block {
+                let cols = i * self.block..(i + 1) * self.block;
+                self.block_delta[i] = fold(&self.column_delta[cols.clone()]);
+                self.block_scale[i] = fold(&self.column_scale[cols]);
+                size = size.max(self.block_delta[i]);
+                scale = scale.max(self.block_scale[i]);
+            }
+        }
+        (size, scale)
+    }
+}
+
 /// The fixed-point correction on the active columns of the k×D iterate: δ = −F/m (`divide`;
 /// M = I leaves δ = −F, `tiled` the diagonal of M repeated for every mode), c ← c + δ with
 /// row 0 compensated (TwoSum into `c0_lo`, as the unmasked correction), and each active
@@ -234,14 +253,8 @@ pub(crate) fn correct_on_blocks(
     maxima: BlockMaxima<'_>,
 ) -> (f64, f64) {
     use crate::integrator::dd::two_sum;
-    let BlockMaxima {
-        runs,
-        block,
-        block_delta,
-        block_scale,
-        column_delta,
-        column_scale,
-    } = maxima;
+    let runs = maxima.runs;
+    let (column_delta, column_scale) = (&mut *maxima.column_delta, &mut *maxima.column_scale);
     let step = |x: f64, m: f64| if divide { x / m } else { x };
     // Row 0, compensated: the columns' maxima start here.
     for &(a, b) in runs {
@@ -279,14 +292,7 @@ pub(crate) fn correct_on_blocks(
             }
         }
     }
-    fold_blocks(
-        runs,
-        block,
-        column_delta,
-        column_scale,
-        block_delta,
-        block_scale,
-    )
+    maxima.fold()
 }
 
 /// [`correct_on_blocks`] from −F laid out by coordinate, as the masked residual leaves it
@@ -305,14 +311,8 @@ pub(crate) fn correct_on_rows(
     maxima: BlockMaxima<'_>,
 ) -> (f64, f64) {
     use crate::integrator::dd::two_sum;
-    let BlockMaxima {
-        runs,
-        block,
-        block_delta,
-        block_scale,
-        column_delta,
-        column_scale,
-    } = maxima;
+    let runs = maxima.runs;
+    let (column_delta, column_scale) = (&mut *maxima.column_delta, &mut *maxima.column_scale);
     const LANES: usize = 8;
     for r in runs.iter().flat_map(|&(a, b)| a..b) {
         // The row's modes divided by m_r in vector lanes (its padding too), then applied
@@ -345,38 +345,7 @@ pub(crate) fn correct_on_rows(
         column_delta[r] = cd;
         column_scale[r] = cs;
     }
-    fold_blocks(
-        runs,
-        block,
-        column_delta,
-        column_scale,
-        block_delta,
-        block_scale,
-    )
-}
-
-/// Each active block's largest |δ| and |c| from its columns' maxima; returns the largest over
-/// the active blocks.
-fn fold_blocks(
-    runs: &[(usize, usize)],
-    block: usize,
-    column_delta: &[f64],
-    column_scale: &[f64],
-    block_delta: &mut [f64],
-    block_scale: &mut [f64],
-) -> (f64, f64) {
-    let (mut size, mut scale) = (0.0f64, 0.0f64);
-    for &(a, b) in runs {
-        for i in a / block..b / block {
-            let cols = i * block..(i + 1) * block;
-            let fold = |v: &[f64]| v.iter().fold(0.0f64, |acc, &x| acc.max(x));
-            block_delta[i] = fold(&column_delta[cols.clone()]);
-            block_scale[i] = fold(&column_scale[cols]);
-            size = size.max(block_delta[i]);
-            scale = scale.max(block_scale[i]);
-        }
-    }
-    (size, scale)
+    maxima.fold()
 }
 
 #[cfg(test)]
