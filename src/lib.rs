@@ -45,6 +45,7 @@ pub mod lagrangian;
 pub mod lie;
 pub mod linalg;
 pub mod method;
+pub mod multirate;
 pub mod newton;
 pub mod periodic;
 pub mod quadrature;

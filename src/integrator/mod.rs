@@ -50,6 +50,7 @@ mod stage_scratch;
 mod stepper;
 mod tangent;
 mod velocity;
+pub(crate) use velocity::legendre_modes;
 mod workspace;
 
 pub use discrete_action::DiscreteLagrangian;

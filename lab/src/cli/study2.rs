@@ -75,6 +75,17 @@ pub struct WorkPrecisionArgs {
     /// preset's).
     #[arg(long, value_delimiter = ',', value_parser = super::values::count)]
     pub kepler_divisors: Option<Vec<usize>>,
+    /// Numbers of basis functions of the multirate Galerkin integrator, comma-separated
+    /// (N-body scenes with a dominant mass: the shortest orbit on micro steps; families
+    /// galerkin-multirate-R; default: the preset's).
+    #[arg(long, value_delimiter = ',', value_parser = super::values::count)]
+    pub multirate_ns: Option<Vec<usize>>,
+    /// Multirate micro steps per step, comma-separated (default: the preset's).
+    #[arg(long, value_delimiter = ',', value_parser = super::values::count)]
+    pub multirate_micro_steps: Option<Vec<usize>>,
+    /// Multirate steps per sample interval, comma-separated (H = Δ/m; default: the preset's).
+    #[arg(long, value_delimiter = ',', value_parser = super::values::count)]
+    pub multirate_divisors: Option<Vec<usize>>,
     #[command(flatten)]
     pub run: SceneArgs,
 }
@@ -89,6 +100,12 @@ fn refuse_study_flags_with_write_reference(args: &WorkPrecisionArgs) -> Result<(
         ("--quadratures", args.quadratures.is_some()),
         ("--kepler-stages", args.kepler_stages.is_some()),
         ("--kepler-divisors", args.kepler_divisors.is_some()),
+        ("--multirate-ns", args.multirate_ns.is_some()),
+        (
+            "--multirate-micro-steps",
+            args.multirate_micro_steps.is_some(),
+        ),
+        ("--multirate-divisors", args.multirate_divisors.is_some()),
         ("--repeats", args.repeats.is_some()),
         ("--external", !args.external.is_empty()),
         ("--out", args.out.is_some()),
@@ -163,6 +180,15 @@ pub fn run_work_precision(args: WorkPrecisionArgs) -> Result<(), LabError> {
     }
     if let Some(m) = &args.kepler_divisors {
         config.kepler_divisors = m.clone();
+    }
+    if let Some(n) = &args.multirate_ns {
+        config.multirate_ns = n.clone();
+    }
+    if let Some(r) = &args.multirate_micro_steps {
+        config.multirate_micro_steps = r.clone();
+    }
+    if let Some(m) = &args.multirate_divisors {
+        config.multirate_divisors = m.clone();
     }
     if let Some(q) = &args.quadratures {
         config.quad_points = QuadPoints::ALL

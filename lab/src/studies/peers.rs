@@ -11,6 +11,7 @@ use galerkin_vi::baselines::{
 use galerkin_vi::basis::BasisKind;
 use galerkin_vi::integrator::GalerkinIntegrator;
 use galerkin_vi::kepler_adapted::KeplerAdaptedGalerkin;
+use galerkin_vi::multirate::{MultirateGalerkin, MultirateShape};
 use galerkin_vi::quadrature::QuadratureKind;
 use galerkin_vi::systems::{AnySystem, NBody, System};
 use serde::Serialize;
@@ -126,6 +127,15 @@ pub enum Peer {
         /// Stages (order 2s).
         s: usize,
     },
+    /// The multirate Galerkin integrator: the body with the shortest orbit on `micro_steps`
+    /// micro steps per step, every body with n basis functions and n − 1 Gauss points (Gauss
+    /// collocation): N-body scenes with a dominant mass only.
+    Multirate {
+        /// Number of basis functions.
+        n: usize,
+        /// Micro steps R per step.
+        micro_steps: usize,
+    },
     /// DOP853 (adaptive) with rtol = atol = tolerance, stopped at every sample time.
     Dop853 {
         /// Tolerance.
@@ -145,6 +155,7 @@ impl Peer {
             Peer::Rk4 => "rk4".into(),
             Peer::Gauss { s } => format!("gauss-{s}"),
             Peer::KeplerAdapted { s } => format!("galerkin-kepler-{s}"),
+            Peer::Multirate { micro_steps, .. } => format!("galerkin-multirate-{micro_steps}"),
             Peer::Composition { scheme } => scheme.as_str().into(),
             Peer::Dop853 { .. } => "dop853".into(),
         }
@@ -226,6 +237,26 @@ pub fn run_peer<S: System + 'static>(
             })?;
             sampled(
                 &mut KeplerAdaptedGalerkin::new(nbody, s, h)?,
+                initial,
+                divisor,
+                samples,
+            )
+        }
+        Peer::Multirate { n, micro_steps } => {
+            let nbody = nbody_of(system).ok_or_else(|| LabError::InvalidArgument {
+                name: "peer".into(),
+                reason: "the multirate integrator needs an N-body scene".into(),
+            })?;
+            let fast = MultirateGalerkin::shortest_period_body(nbody, &initial.q, &initial.p)
+                .ok_or_else(|| LabError::InvalidArgument {
+                    name: "peer".into(),
+                    reason: "the multirate integrator needs a bound orbit about the heaviest \
+                             body"
+                        .into(),
+                })?;
+            let shape = MultirateShape::collocation(n, micro_steps);
+            sampled(
+                &mut MultirateGalerkin::new(nbody, &[fast], shape, h)?,
                 initial,
                 divisor,
                 samples,

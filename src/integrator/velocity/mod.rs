@@ -102,7 +102,7 @@ pub(crate) struct VelocityTables {
 
 /// P̃_a(τ) for a < len and I_a(τ) for a < len − 1 (with I_0 = τ), from the Legendre
 /// recurrence at x = 2τ − 1.
-fn legendre_modes(tau: f64, values: &mut [f64], integrals: &mut [f64]) {
+pub(crate) fn legendre_modes(tau: f64, values: &mut [f64], integrals: &mut [f64]) {
     let len = values.len();
     let x = 2.0 * tau - 1.0;
     // P_0 … P_{len−1}

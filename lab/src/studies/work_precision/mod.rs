@@ -75,6 +75,13 @@ pub struct WorkPrecisionConfig {
     pub kepler_stages: Vec<usize>,
     /// Kepler-adapted steps per sample interval (h = Δ/m).
     pub kepler_divisors: Vec<usize>,
+    /// Numbers of basis functions of the multirate integrator (N-body scenes with a dominant
+    /// mass; families `galerkin-multirate-R`).
+    pub multirate_ns: Vec<usize>,
+    /// Its micro steps per step (R).
+    pub multirate_micro_steps: Vec<usize>,
+    /// Its steps per sample interval (H = Δ/m).
+    pub multirate_divisors: Vec<usize>,
     /// DOP853 tolerances (rtol = atol).
     pub tolerances: Vec<f64>,
     /// Skip fixed-step runs with more steps than this.
@@ -96,6 +103,9 @@ impl WorkPrecisionConfig {
             gauss_stages: vec![2, 4],
             kepler_stages: vec![4, 6, 8],
             kepler_divisors: vec![1, 2, 3, 4, 6, 8],
+            multirate_ns: vec![8, 9, 10, 11, 12],
+            multirate_micro_steps: vec![2, 3, 4],
+            multirate_divisors: vec![1, 2, 3, 4, 5],
             tolerances: half_decades(4, 15),
             max_steps: 2_000_000,
         }
@@ -114,6 +124,9 @@ impl WorkPrecisionConfig {
             gauss_stages: vec![2],
             kepler_stages: vec![4],
             kepler_divisors: vec![1, 2],
+            multirate_ns: vec![8],
+            multirate_micro_steps: vec![3],
+            multirate_divisors: vec![2],
             tolerances: vec![1e-4, 1e-8, 1e-12],
             max_steps: 20_000,
         }
@@ -135,6 +148,9 @@ impl WorkPrecisionConfig {
             gauss_stages: vec![4],
             kepler_stages: vec![6, 8],
             kepler_divisors: vec![2, 4],
+            multirate_ns: vec![12, 16],
+            multirate_micro_steps: vec![3],
+            multirate_divisors: vec![2, 4],
             tolerances: half_decades(10, 15),
             max_steps: 2_000_000,
         }
@@ -419,11 +435,18 @@ fn time_point<S: System + 'static>(
             Some(n),
             None,
         ),
+        Peer::Multirate { n, micro_steps } => (
+            format!("n = {n}, h = {h}, m = {}, R = {micro_steps}", n - 1),
+            Some(h),
+            Some(n),
+            None,
+        ),
         Peer::Dop853 { tolerance } => (format!("tol = {tolerance:e}"), None, None, Some(tolerance)),
         _ => (format!("h = {h}"), Some(h), None, None),
     };
     let quad_points = match peer {
         Peer::Galerkin { n, points, .. } => Some(points.points(n)),
+        Peer::Multirate { n, .. } => Some(n - 1),
         _ => None,
     };
     let mut point = WorkPoint {

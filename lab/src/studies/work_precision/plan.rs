@@ -42,6 +42,26 @@ pub(super) fn sweep_plan<S: System + 'static>(
             );
         }
     }
+    // The multirate integrator on N-body scenes with a dominant mass (a star and planets):
+    // one family per number of micro steps and step, over n.
+    if let Some(nb) = nbody_of(system) {
+        let masses = nb.masses();
+        let heaviest = masses.iter().copied().fold(0.0, f64::max);
+        let rest: f64 = masses.iter().sum::<f64>() - heaviest;
+        if masses.len() > 2 && heaviest >= 10.0 * rest {
+            for &r in &config.multirate_micro_steps {
+                for &m in &config.multirate_divisors {
+                    plan.push(
+                        config
+                            .multirate_ns
+                            .iter()
+                            .map(|&n| (Peer::Multirate { n, micro_steps: r }, m))
+                            .collect(),
+                    );
+                }
+            }
+        }
+    }
     let mut fixed = vec![Peer::StormerVerlet, Peer::Rk4];
     fixed.extend(config.gauss_stages.iter().map(|&s| Peer::Gauss { s }));
     fixed.extend(CompositionScheme::ALL.map(|scheme| Peer::Composition { scheme }));
