@@ -21,8 +21,8 @@
 //! the knots x_{r+1} = x_r + h c^r_0. The discrete Lagrangian is the extremum over the
 //! internal unknowns (the slow modes, the fast modes and knots) of
 //!
-//! S = H Σ_j b_j [½ q̇_Sᵀ M_S q̇_S − V_SS(q_S)](c_j)
-//!   + Σ_r h Σ_i β_i [½ q̇_Fᵀ M_F q̇_F − V_F(q_S, q_F)](t_r + γ_i h),
+//! S = H Σ_j b_j \[½ q̇_Sᵀ M_S q̇_S − V_SS(q_S)\](c_j)
+//!   + Σ_r h Σ_i β_i \[½ q̇_Fᵀ M_F q̇_F − V_F(q_S, q_F)\](t_r + γ_i h),
 //!
 //! (c_j, b_j) the m-point Gauss rule of the macro step and (γ_i, β_i) the m_F-point rule of a
 //! micro step. Stationarity gives, for every slow mode b (with ψ_0 = I_0 − 1, ψ_b = I_b),

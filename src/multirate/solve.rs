@@ -327,11 +327,15 @@ impl NewtonIteration for StageIteration<'_> {
                 reason: "non-finite stage value (a collision?)".into(),
             });
         }
+        // The contraction estimate and the floor from the third sweep on: the first sweep's
+        // size is the fast body's guess error (its micro steps converge inside that sweep),
+        // not a correction the next one can be compared with.
+        let trusted = iteration >= 2;
         let termination = Termination::new(
             MAX_ITERATIONS,
             TOLERANCE,
-            Some(ESTIMATE_BELOW),
-            FLOOR,
+            trusted.then_some(ESTIMATE_BELOW),
+            if trusted { FLOOR } else { 0.0 },
             ESTIMATE_BELOW,
         );
         Ok((
