@@ -237,6 +237,27 @@ pub fn ensure_finite(what: &str, values: &[f64]) -> Result<()> {
     }
 }
 
+/// Check the state a one-step method is handed: q, p and the outputs q_next, p_next of length
+/// `dim` each, q and p finite.
+pub fn ensure_step_state(
+    dim: usize,
+    q: &[f64],
+    p: &[f64],
+    q_next: &[f64],
+    p_next: &[f64],
+) -> Result<()> {
+    for (name, len) in [
+        ("q", q.len()),
+        ("p", p.len()),
+        ("q_next", q_next.len()),
+        ("p_next", p_next.len()),
+    ] {
+        ensure_len(name, dim, len)?;
+    }
+    ensure_finite("q", q)?;
+    ensure_finite("p", p)
+}
+
 /// Check that a slice has the expected length.
 pub fn ensure_len(what: &str, expected: usize, got: usize) -> Result<()> {
     if expected == got {

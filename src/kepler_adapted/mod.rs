@@ -458,16 +458,7 @@ impl OneStepMethod for KeplerAdaptedGalerkin {
         p_next: &mut [f64],
     ) -> Result<()> {
         let (k, nb) = (self.dim, self.jacobi.bodies());
-        for (name, len) in [
-            ("q", q.len()),
-            ("p", p.len()),
-            ("q_next", q_next.len()),
-            ("p_next", p_next.len()),
-        ] {
-            crate::error::ensure_len(name, nb * k, len)?;
-        }
-        crate::error::ensure_finite("q", q)?;
-        crate::error::ensure_finite("p", p)?;
+        crate::error::ensure_step_state(nb * k, q, p, q_next, p_next)?;
         let st = &mut self.stages;
         for b in 0..nb {
             st.r[b] = [0.0; 3];

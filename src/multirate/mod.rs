@@ -480,16 +480,7 @@ impl OneStepMethod for MultirateGalerkin {
         p_next: &mut [f64],
     ) -> Result<()> {
         let (dim, nb) = (self.dim, self.masses.len());
-        for (name, len) in [
-            ("q", q.len()),
-            ("p", p.len()),
-            ("q_next", q_next.len()),
-            ("p_next", p_next.len()),
-        ] {
-            crate::error::ensure_len(name, nb * dim, len)?;
-        }
-        crate::error::ensure_finite("q", q)?;
-        crate::error::ensure_finite("p", p)?;
+        crate::error::ensure_step_state(nb * dim, q, p, q_next, p_next)?;
         let st = &mut self.state;
         gather(q, &self.slow, dim, &mut st.qs);
         gather(p, &self.slow, dim, &mut st.ps);
