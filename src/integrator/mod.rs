@@ -49,8 +49,7 @@ mod stage;
 mod stage_scratch;
 mod stepper;
 mod tangent;
-mod velocity;
-pub(crate) use velocity::legendre_modes;
+pub(crate) mod velocity;
 mod workspace;
 
 pub use discrete_action::DiscreteLagrangian;

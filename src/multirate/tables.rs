@@ -3,7 +3,7 @@
 //! here for two rules and for the slow modes at the micro nodes).
 
 use crate::error::Result;
-use crate::integrator::legendre_modes;
+use crate::integrator::velocity::legendre_modes;
 use crate::quadrature::QuadratureKind;
 
 /// The tables of one rule for k = n − 1 velocity modes (row-major, m nodes).
