@@ -38,6 +38,14 @@
 //! momentum; the Jacobi transform conserves the total. The total linear momentum is the
 //! centre of mass's, which drifts freely and exactly.
 //!
+//! # Some bodies only
+//!
+//! [`KeplerAdaptedGalerkin::with_kepler_bodies`] puts only the listed planets on their
+//! exact Kepler flows: H = Σ_{i∈K} H_K,i + H_R, and (1) becomes the interaction picture of
+//! that partial flow, the unlisted planets' Kepler terms part of H_R and their curves
+//! polynomials in the physical variables. The statement above holds with K in place of every
+//! planet; no planet listed is s-stage Gauss collocation of H.
+//!
 //! # Cost
 //!
 //! Each evaluation of (1) at the s stages makes one Kepler drift per planet and stage (warm
@@ -57,7 +65,7 @@ use crate::baselines::{OneStepMethod, gauss_tableau};
 use crate::error::{GviError, Result};
 use crate::newton::{Correction, Divergence, NewtonFailure, NewtonIteration, Termination, drive};
 use crate::systems::NBody;
-use jacobi::{Jacobi, add, scale};
+use jacobi::{Jacobi, add, dot, scale};
 
 /// The largest number of stages accepted.
 pub const MAX_KEPLER_ADAPTED_STAGES: usize = 16;
@@ -117,6 +125,9 @@ pub struct KeplerAdaptedGalerkin {
     /// Continue from the last step's Jacobi state when a step starts where it ended (always,
     /// except in the tests' negative control).
     continue_jacobi: bool,
+    /// Which Jacobi bodies move on their exact Kepler flow (entry 0, the centre of mass,
+    /// unused); the others' curves are polynomials ([`KeplerAdaptedGalerkin::with_kepler_bodies`]).
+    kepler: Vec<bool>,
 }
 
 /// The stage equations' unknowns and work buffers: planet i of stage j at index j·n + i
@@ -164,13 +175,60 @@ impl KeplerAdaptedGalerkin {
             });
         }
         let (c, b, a) = gauss_tableau(stages)?;
-        Self::from_tableau(system, c, b, a, h)
+        let all: Vec<usize> = (1..system.bodies()).collect();
+        Self::from_tableau(system, c, b, a, h, &all)
+    }
+
+    /// The integrator adapted to the Kepler motion of the listed bodies only (indices
+    /// 1 … N − 1 of `system`'s bodies, in any order): each listed body's Jacobi Kepler problem
+    /// is solved exactly, as in [`new`](Self::new), and every other body's curve is a
+    /// polynomial, as in plain Gauss collocation. `bodies` = 1 … N − 1 is [`new`](Self::new);
+    /// an empty list is s-stage Gauss collocation of the whole system (in Jacobi coordinates,
+    /// which a Runge–Kutta method does not notice: it commutes with linear changes of
+    /// variables).
+    ///
+    /// The splitting is H = Σ_{i∈K} H_K,i + H_R with H_R the rest (the unlisted bodies'
+    /// Kepler terms included), and the step is Gauss collocation of H_R in the interaction
+    /// picture of the listed bodies' Kepler flows: the same variational statement as the
+    /// [module](self)'s over the space of curves whose listed bodies follow Kepler orbits with
+    /// polynomially varying elements, so the map is symplectic and conserves the angular
+    /// momentum. Its use: a fast planet on its exact orbit (Mercury in the J2000 scene, where
+    /// a polynomial curve needs steps a third of the slow planets' and Picard iterations that
+    /// contract by (hω)² per step; docs/solvers.md, issue 35), the others on the polynomial
+    /// step.
+    pub fn with_kepler_bodies(
+        system: &NBody,
+        stages: usize,
+        h: f64,
+        bodies: &[usize],
+    ) -> Result<Self> {
+        let mut m = Self::new(system, stages, h)?;
+        let nb = system.bodies();
+        if let Some(&bad) = bodies.iter().find(|&&b| b == 0 || b >= nb) {
+            return Err(GviError::InvalidInput {
+                name: "Kepler bodies".into(),
+                reason: format!(
+                    "body {bad}: the Kepler-adapted bodies are 1 … {} (body 0 is the central \
+                     mass)",
+                    nb - 1
+                ),
+            });
+        }
+        m.kepler = (0..nb).map(|b| bodies.contains(&b)).collect();
+        Ok(m)
     }
 
     /// The interaction-picture step with the Runge–Kutta tableau (c, b, A) (A row-major):
     /// Gauss for [`new`](Self::new); other tableaux serve as the property tests' negative
     /// controls.
-    fn from_tableau(system: &NBody, c: Vec<f64>, b: Vec<f64>, a: Vec<f64>, h: f64) -> Result<Self> {
+    fn from_tableau(
+        system: &NBody,
+        c: Vec<f64>,
+        b: Vec<f64>,
+        a: Vec<f64>,
+        h: f64,
+        kepler_bodies: &[usize],
+    ) -> Result<Self> {
         let stages = c.len();
         if !(h.is_finite() && h > 0.0) {
             return Err(GviError::InvalidStepSize { h });
@@ -219,6 +277,7 @@ impl KeplerAdaptedGalerkin {
             evaluations: 0,
             iterations: 0,
             continue_jacobi: true,
+            kepler: (0..nb).map(|b| kepler_bodies.contains(&b)).collect(),
         })
     }
 
@@ -244,6 +303,11 @@ impl KeplerAdaptedGalerkin {
             st.drifts.clear();
             for i in 0..n {
                 let (body, k) = (i + 1, j * n + i);
+                if !self.kepler[body] {
+                    // A polynomial body is where its stage value is.
+                    st.positions[body] = st.zq[k];
+                    continue;
+                }
                 let m = self.jacobi.jacobi_mass(body);
                 let guess = st.anomaly[k];
                 let drift = KeplerDrift::new(
@@ -265,13 +329,33 @@ impl KeplerAdaptedGalerkin {
                 &mut st.cartesian_gradient,
                 &mut st.gradient,
             );
+            let mut drifts = st.drifts.iter();
             for i in 0..n {
                 let (body, k) = (i + 1, j * n + i);
                 let m = self.jacobi.jacobi_mass(body);
-                let kick = scale(-1.0 / m, st.gradient[body]);
-                let (dr, dv) = st.drifts[i].pull_back([0.0; 3], kick);
-                st.fq[k] = dr;
-                st.fp[k] = scale(m, dv);
+                let drift = if self.kepler[body] {
+                    drifts.next()
+                } else {
+                    None
+                };
+                match drift {
+                    // The pulled-back kick (0, −∂H_I/∂r′).
+                    Some(drift) => {
+                        let kick = scale(-1.0 / m, st.gradient[body]);
+                        let (dr, dv) = drift.pull_back([0.0; 3], kick);
+                        st.fq[k] = dr;
+                        st.fp[k] = scale(m, dv);
+                    }
+                    // Hamilton's equations of H_R for a polynomial body: its Kepler term
+                    // p²/2m′ − m′μ/|r′| is in H_R, so its force is −∂H_I/∂r′ − m′μ r′/|r′|³.
+                    None => {
+                        let r = st.zq[k];
+                        let r2 = dot(r, r);
+                        let kepler = m * self.jacobi.mu(body) / (r2 * r2.sqrt());
+                        st.fq[k] = scale(1.0 / m, st.zp[k]);
+                        st.fp[k] = scale(-1.0, add(st.gradient[body], scale(kepler, r)));
+                    }
+                }
             }
         }
         self.evaluations += s;
@@ -342,6 +426,11 @@ impl KeplerAdaptedGalerkin {
             }
             let m = self.jacobi.jacobi_mass(body);
             let (q1, p1) = (add(st.rj[body], dq), add(st.pj[body], dp));
+            if !self.kepler[body] {
+                st.rj[body] = q1;
+                st.pj[body] = p1;
+                continue;
+            }
             let guess = st.full_anomaly[i];
             let drift = KeplerDrift::new(
                 self.jacobi.mu(body),

@@ -308,8 +308,10 @@ fn dop853<S: System>(
     )
 }
 
-/// The generic loop (monomorphised per method, so timings compare like with like).
-fn sampled<M: OneStepMethod>(
+/// The generic loop (monomorphised per method, so timings compare like with like): `samples`
+/// sample intervals of `divisor` steps of `m` from `initial`, the state at every sample
+/// (for methods built outside [`Peer`], e.g. by the lab's examples).
+pub fn sampled<M: OneStepMethod>(
     m: &mut M,
     initial: &InitialState,
     divisor: usize,
