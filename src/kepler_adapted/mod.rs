@@ -55,6 +55,7 @@
 
 pub mod drift;
 mod jacobi;
+mod stages;
 mod stumpff;
 #[cfg(test)]
 mod tests;
@@ -63,9 +64,10 @@ pub use drift::{DriftError, KeplerDrift};
 
 use crate::baselines::{OneStepMethod, gauss_tableau};
 use crate::error::{GviError, Result};
-use crate::newton::{Correction, Divergence, NewtonFailure, NewtonIteration, Termination, drive};
+use crate::newton::drive;
 use crate::systems::NBody;
-use jacobi::{Jacobi, add, dot, scale};
+use jacobi::{Jacobi, add, scale};
+use stages::{StageIteration, termination};
 
 /// The largest number of stages accepted.
 pub const MAX_KEPLER_ADAPTED_STAGES: usize = 16;
@@ -119,6 +121,9 @@ pub struct KeplerAdaptedGalerkin {
     b: Vec<f64>,
     /// a_ij, row-major s×s.
     a: Vec<f64>,
+    /// The stage guesses of the polynomial bodies: row j holds the Lagrange basis over the
+    /// nodes 0, c_1, …, c_s of the last step evaluated at 1 + c_j (s × (s + 1)).
+    extrapolate: Vec<f64>,
     stages: StageState,
     evaluations: usize,
     iterations: usize,
@@ -148,6 +153,11 @@ struct StageState {
     anomaly: Vec<f64>,
     /// Universal anomalies of the last full-step drifts.
     full_anomaly: Vec<f64>,
+    /// The last step's z_k and stage values (entries l·n + i, l = 0 … s), for the polynomial
+    /// bodies' next stage guesses; valid when `has_previous`.
+    previous_q: Vec<[f64; 3]>,
+    previous_p: Vec<[f64; 3]>,
+    has_previous: bool,
     /// One stage's drifts, its Jacobi positions, Cartesian scratch and gradients.
     drifts: Vec<KeplerDrift>,
     positions: Vec<[f64; 3]>,
@@ -245,6 +255,20 @@ impl KeplerAdaptedGalerkin {
         let n = nb - 1;
         let three = vec![[0.0; 3]; nb];
         let stage_values = vec![[0.0; 3]; stages * n];
+        let nodes: Vec<f64> = std::iter::once(0.0).chain(c.iter().copied()).collect();
+        let extrapolate = c
+            .iter()
+            .flat_map(|&cj| {
+                let x = 1.0 + cj;
+                let nodes = &nodes;
+                (0..nodes.len()).map(move |l| {
+                    (0..nodes.len())
+                        .filter(|&m| m != l)
+                        .map(|m| (x - nodes[m]) / (nodes[l] - nodes[m]))
+                        .product::<f64>()
+                })
+            })
+            .collect();
         Ok(KeplerAdaptedGalerkin {
             jacobi: Jacobi::new(system.masses(), system.g()),
             dim: system.body_dim(),
@@ -253,6 +277,7 @@ impl KeplerAdaptedGalerkin {
             c,
             b,
             a,
+            extrapolate,
             stages: StageState {
                 n,
                 rj: three.clone(),
@@ -263,6 +288,9 @@ impl KeplerAdaptedGalerkin {
                 fp: stage_values,
                 anomaly: vec![f64::NAN; stages * n],
                 full_anomaly: vec![f64::NAN; n],
+                previous_q: vec![[0.0; 3]; (stages + 1) * n],
+                previous_p: vec![[0.0; 3]; (stages + 1) * n],
+                has_previous: false,
                 drifts: Vec::with_capacity(n),
                 positions: three.clone(),
                 cartesian: three.clone(),
@@ -292,115 +320,32 @@ impl KeplerAdaptedGalerkin {
         self.iterations
     }
 
-    /// The right-hand side of (1) at every stage value into `fq`, `fp`: per stage, the Kepler
-    /// drifts of the planets over c_j h, the interaction gradient at the drifted positions,
-    /// and the pulled-back kick (0, −∂H_I/∂r′).
-    fn evaluate(&mut self) -> std::result::Result<(), (usize, DriftError)> {
-        let (s, h) = (self.s, self.h);
-        let st = &mut self.stages;
-        let n = st.n;
-        for j in 0..s {
-            st.drifts.clear();
-            for i in 0..n {
-                let (body, k) = (i + 1, j * n + i);
-                if !self.kepler[body] {
-                    // A polynomial body is where its stage value is.
-                    st.positions[body] = st.zq[k];
-                    continue;
-                }
-                let m = self.jacobi.jacobi_mass(body);
-                let guess = st.anomaly[k];
-                let drift = KeplerDrift::new(
-                    self.jacobi.mu(body),
-                    st.zq[k],
-                    scale(1.0 / m, st.zp[k]),
-                    self.c[j] * h,
-                    guess.is_finite().then_some(guess),
-                )
-                .map_err(|e| (body, e))?;
-                st.anomaly[k] = drift.anomaly();
-                st.positions[body] = drift.position();
-                st.drifts.push(drift);
-            }
-            st.positions[0] = [0.0; 3];
-            self.jacobi.interaction_gradient(
-                &st.positions,
-                &mut st.cartesian,
-                &mut st.cartesian_gradient,
-                &mut st.gradient,
-            );
-            let mut drifts = st.drifts.iter();
-            for i in 0..n {
-                let (body, k) = (i + 1, j * n + i);
-                let m = self.jacobi.jacobi_mass(body);
-                let drift = if self.kepler[body] {
-                    drifts.next()
-                } else {
-                    None
-                };
-                match drift {
-                    // The pulled-back kick (0, −∂H_I/∂r′).
-                    Some(drift) => {
-                        let kick = scale(-1.0 / m, st.gradient[body]);
-                        let (dr, dv) = drift.pull_back([0.0; 3], kick);
-                        st.fq[k] = dr;
-                        st.fp[k] = scale(m, dv);
-                    }
-                    // Hamilton's equations of H_R for a polynomial body: its Kepler term
-                    // p²/2m′ − m′μ/|r′| is in H_R, so its force is −∂H_I/∂r′ − m′μ r′/|r′|³.
-                    None => {
-                        let r = st.zq[k];
-                        let r2 = dot(r, r);
-                        let kepler = m * self.jacobi.mu(body) / (r2 * r2.sqrt());
-                        st.fq[k] = scale(1.0 / m, st.zp[k]);
-                        st.fp[k] = scale(-1.0, add(st.gradient[body], scale(kepler, r)));
-                    }
-                }
-            }
-        }
-        self.evaluations += s;
-        Ok(())
-    }
-
-    /// One fixed-point update Z_j ← z_k + h Σ_l a_jl F_l; returns the largest change relative
-    /// to each planet's Jacobi position and momentum.
-    fn update(&mut self) -> f64 {
-        let (s, h) = (self.s, self.h);
-        let st = &mut self.stages;
-        let n = st.n;
-        let mut change = 0.0f64;
-        for j in 0..s {
-            for i in 0..n {
-                let (body, k) = (i + 1, j * n + i);
-                let (mut dq, mut dp) = ([0.0; 3], [0.0; 3]);
-                for l in 0..s {
-                    let w = h * self.a[j * s + l];
-                    dq = add(dq, scale(w, st.fq[l * n + i]));
-                    dp = add(dp, scale(w, st.fp[l * n + i]));
-                }
-                let (q0, p0) = (st.rj[body], st.pj[body]);
-                let (qn, pn) = (add(q0, dq), add(p0, dp));
-                let (sq, sp) = (norm_max(q0), norm_max(p0));
-                for c in 0..3 {
-                    change = change.max((qn[c] - st.zq[k][c]).abs() / sq);
-                    change = change.max((pn[c] - st.zp[k][c]).abs() / sp);
-                }
-                st.zq[k] = qn;
-                st.zp[k] = pn;
-            }
-        }
-        change
-    }
-
     /// The step in Jacobi coordinates: `stages.rj`, `stages.pj` hold z_k on entry and
     /// y_{k+1} on return.
     fn advance_jacobi(&mut self, t: f64) -> Result<()> {
         let (s, h) = (self.s, self.h);
         let n = self.stages.n;
+        let st = &mut self.stages;
         for j in 0..s {
             for i in 0..n {
-                self.stages.zq[j * n + i] = self.stages.rj[i + 1];
-                self.stages.zp[j * n + i] = self.stages.pj[i + 1];
+                let (body, k) = (i + 1, j * n + i);
+                if self.kepler[body] || !st.has_previous {
+                    // In the interaction picture a Kepler body's state changes by O(ε) over
+                    // the step: its start is the guess.
+                    st.zq[k] = st.rj[body];
+                    st.zp[k] = st.pj[body];
+                    continue;
+                }
+                // A polynomial body: the last step's collocation polynomial (through its
+                // z_k and stage values) continued to this step's stage times.
+                let row = &self.extrapolate[j * (s + 1)..(j + 1) * (s + 1)];
+                let (mut q, mut p) = ([0.0; 3], [0.0; 3]);
+                for (l, &e) in row.iter().enumerate() {
+                    q = add(q, scale(e, st.previous_q[l * n + i]));
+                    p = add(p, scale(e, st.previous_p[l * n + i]));
+                }
+                st.zq[k] = q;
+                st.zp[k] = p;
             }
         }
         let step = (t / h).round().max(0.0) as usize;
@@ -414,8 +359,16 @@ impl KeplerAdaptedGalerkin {
         let mut solve = StageIteration { m: self, last: 0.0 };
         let first = termination(0);
         drive(&mut solve, &first).map_err(|f| fail(f.residual, f.iterations, f.reason))?;
-        // z_{k+1} = z_k + h Σ b_j F_j, then the Kepler flow over the whole step.
         let st = &mut self.stages;
+        // The polynomial bodies' next guesses start from this step's z_k and stage values.
+        for i in 0..n {
+            st.previous_q[i] = st.rj[i + 1];
+            st.previous_p[i] = st.pj[i + 1];
+        }
+        st.previous_q[n..].copy_from_slice(&st.zq);
+        st.previous_p[n..].copy_from_slice(&st.zp);
+        st.has_previous = true;
+        // z_{k+1} = z_k + h Σ b_j F_j, then the Kepler flow over the whole step.
         for i in 0..n {
             let body = i + 1;
             let (mut dq, mut dp) = ([0.0; 3], [0.0; 3]);
@@ -448,80 +401,6 @@ impl KeplerAdaptedGalerkin {
         let total = self.jacobi.jacobi_mass(0);
         st.rj[0] = add(st.rj[0], scale(h / total, st.pj[0]));
         Ok(())
-    }
-}
-
-/// The termination of the stage iteration after `corrections` corrections: converged when an
-/// update is at most one ulp of the stage values (relative, per planet), or — from the third
-/// correction on — when the contraction estimate bounds the remaining error by that,
-/// θ/(1 − θ)·|δ| ≤ ε with θ < 0.05, or when the updates stopped shrinking at the round-off
-/// floor; failed when, after 6 corrections, one is more than twice the last. The iteration
-/// contracts by O(ε h²ω²) per step, so it ends after about three corrections (measured: 3.0 per
-/// step on J2000 at h = 12.5–25 d, s = 8, against 4.7–4.8 when iterating to an exactly zero
-/// update; the end states differ by less than the run's own round-off scatter, see
-/// docs/guide/kepler-adapted.md).
-fn termination(corrections: usize) -> Termination {
-    // The first update is the stage increment itself, not a correction of it, so the first
-    // ratio θ compares unlike quantities: θ is trusted from the third correction on.
-    let trusted = corrections > 2;
-    let floor = if trusted { FLOOR } else { 0.0 };
-    Termination {
-        divergence: Some(Divergence {
-            after: 6,
-            growth: 2.0,
-        }),
-        ..Termination::new(
-            MAX_ITERATIONS,
-            f64::EPSILON,
-            trusted.then_some(ESTIMATE_BELOW),
-            floor,
-            f64::from_bits(1f64.to_bits() - 1),
-        )
-    }
-}
-
-/// max |xᵢ| (at least the smallest positive normal).
-fn norm_max(x: [f64; 3]) -> f64 {
-    x.iter().fold(f64::MIN_POSITIVE, |m, v| m.max(v.abs()))
-}
-
-/// The fixed-point iteration of the stage equations as a [`NewtonIteration`] (the identity for
-/// its linear solve) run by the crate's one driver.
-struct StageIteration<'m> {
-    m: &'m mut KeplerAdaptedGalerkin,
-    /// The last update's relative size (0 before the first).
-    last: f64,
-}
-
-impl NewtonIteration for StageIteration<'_> {
-    /// The update is the residual of the iterate before it; this reports the last one.
-    fn residual(&mut self, _: usize) -> f64 {
-        self.last
-    }
-
-    fn correct(
-        &mut self,
-        iteration: usize,
-    ) -> std::result::Result<(Correction, Termination), NewtonFailure> {
-        self.m.evaluate().map_err(|(body, e)| NewtonFailure {
-            residual: self.last,
-            iterations: iteration + 1,
-            reason: format!("Kepler drift of body {body}: {e}"),
-        })?;
-        self.m.iterations += 1;
-        self.last = self.m.update();
-        if !self.last.is_finite() {
-            return Err(NewtonFailure {
-                residual: self.last,
-                iterations: iteration + 1,
-                reason: "non-finite stage value".into(),
-            });
-        }
-        let correction = Correction {
-            size: self.last,
-            scale: 1.0,
-        };
-        Ok((correction, termination(iteration + 1)))
     }
 }
 
@@ -565,6 +444,8 @@ impl OneStepMethod for KeplerAdaptedGalerkin {
         let continues =
             self.continue_jacobi && st.has_last && same(&st.last_q, q) && same(&st.last_p, p);
         if !continues {
+            // A new start: no last step to continue the polynomial bodies' curves from.
+            st.has_previous = false;
             self.jacobi.positions_to_jacobi(&st.r, &mut st.rj);
             self.jacobi.covector_to_jacobi(&st.p, &mut st.pj);
         }
