@@ -21,7 +21,7 @@
 //! ```
 use galerkin_vi::kepler_adapted::KeplerAdaptedGalerkin;
 use galerkin_vi_lab::scene::Scene;
-use galerkin_vi_lab::studies::peers::{Peer, nbody_of, run_peer, sampled};
+use galerkin_vi_lab::studies::peers::{KeplerBodies, Peer, nbody_of, run_peer, sampled};
 use galerkin_vi_lab::studies::work_precision::{WorkPrecisionConfig, reference_csv};
 use std::time::Instant;
 
@@ -77,7 +77,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                             KeplerAdaptedGalerkin::with_kepler_bodies(nbody, s, h, bodies)?;
                         sampled(&mut method, &initial, m, samples)
                     }
-                    None => run_peer(system, &initial, Peer::KeplerAdapted { s }, dt, m, samples)?,
+                    None => run_peer(
+                        system,
+                        &initial,
+                        Peer::KeplerAdapted {
+                            s,
+                            bodies: KeplerBodies::All,
+                        },
+                        dt,
+                        m,
+                        samples,
+                    )?,
                 };
                 times.push(start.elapsed().as_secs_f64());
                 last = Some(run);

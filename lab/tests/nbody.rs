@@ -268,14 +268,17 @@ fn cli_orbit_plots_and_report() {
 /// over 10 sample intervals, and a scene that is not an N-body system gets a typed error, not a panic.
 #[test]
 fn kepler_adapted_peer_agrees_with_the_galerkin_integrator_and_refuses_other_scenes() {
-    use galerkin_vi_lab::studies::peers::{Peer, QuadPoints, run_peer};
+    use galerkin_vi_lab::studies::peers::{KeplerBodies, Peer, QuadPoints, run_peer};
     let scene = Scene::load("outer-solar-system").unwrap().build().unwrap();
     let system = scene.euclidean().unwrap();
     let dt = scene.method.h;
     let kepler = run_peer(
         system,
         &scene.initial,
-        Peer::KeplerAdapted { s: 8 },
+        Peer::KeplerAdapted {
+            s: 8,
+            bodies: KeplerBodies::All,
+        },
         dt,
         3,
         10,
@@ -305,11 +308,34 @@ fn kepler_adapted_peer_agrees_with_the_galerkin_integrator_and_refuses_other_sce
     // Measured 7.0e-12 AU over these 10 samples (the study: s = 8 at h = Δ/3 within 1.1e-10
     // of the reference over 100); a wrong kick or drift is off by far more.
     assert!(worst < 1e-10, "Kepler-adapted vs Galerkin: {worst:e} AU");
+    // Only the fastest body (Jupiter) on its Kepler orbit, the others polynomial: the family
+    // `galerkin-kepler-8-fast`, as close (measured: 7.0e-12 AU).
+    let fast_peer = Peer::KeplerAdapted {
+        s: 8,
+        bodies: KeplerBodies::Fastest,
+    };
+    assert_eq!(fast_peer.family(), "galerkin-kepler-8-fast");
+    let fast = run_peer(system, &scene.initial, fast_peer, dt, 3, 10).unwrap();
+    assert!(fast.failure.is_none());
+    let mut worst_fast = 0.0f64;
+    for (a, b) in fast.q.iter().zip(&galerkin.q) {
+        for (x, y) in a.iter().zip(b) {
+            worst_fast = worst_fast.max((x - y).abs());
+        }
+    }
+    eprintln!("fastest only against Galerkin: {worst_fast:e} AU");
+    assert!(
+        worst_fast < 1e-10,
+        "Kepler-adapted (fastest) vs Galerkin: {worst_fast:e} AU"
+    );
     let kepler_scene = Scene::load("kepler").unwrap().build().unwrap();
     let err = run_peer(
         kepler_scene.euclidean().unwrap(),
         &kepler_scene.initial,
-        Peer::KeplerAdapted { s: 4 },
+        Peer::KeplerAdapted {
+            s: 4,
+            bodies: KeplerBodies::All,
+        },
         kepler_scene.method.h,
         1,
         2,

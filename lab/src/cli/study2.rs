@@ -4,7 +4,7 @@ use super::run::{SceneArgs, load_scene};
 use crate::error::LabError;
 use crate::output::Plan;
 use crate::studies::compare_refinement::{CompareConfig, compare_refinement};
-use crate::studies::peers::QuadPoints;
+use crate::studies::peers::{KeplerBodies, QuadPoints};
 use crate::studies::stability::{Class, StabilityConfig, stability};
 use crate::studies::work_precision::{
     WorkPrecisionConfig, read_external, reference_csv, work_precision,
@@ -75,6 +75,12 @@ pub struct WorkPrecisionArgs {
     /// preset's).
     #[arg(long, value_delimiter = ',', value_parser = super::values::count)]
     pub kepler_divisors: Option<Vec<usize>>,
+    /// Which bodies the Kepler-adapted integrator puts on their exact Kepler orbits,
+    /// comma-separated: `all` (every planet, families galerkin-kepler-S) and `fastest` (only
+    /// the body with the shortest orbit, the others polynomial: galerkin-kepler-S-fast).
+    /// Default: the preset's.
+    #[arg(long, value_delimiter = ',', value_parser = super::values::parsed::<KeplerBodies>)]
+    pub kepler_bodies: Option<Vec<KeplerBodies>>,
     /// Numbers of basis functions of the multirate Galerkin integrator, comma-separated
     /// (N-body scenes with a dominant mass: the shortest orbit on micro steps; families
     /// galerkin-multirate-R; default: the preset's).
@@ -100,6 +106,7 @@ fn refuse_study_flags_with_write_reference(args: &WorkPrecisionArgs) -> Result<(
         ("--quadratures", args.quadratures.is_some()),
         ("--kepler-stages", args.kepler_stages.is_some()),
         ("--kepler-divisors", args.kepler_divisors.is_some()),
+        ("--kepler-bodies", args.kepler_bodies.is_some()),
         ("--multirate-ns", args.multirate_ns.is_some()),
         (
             "--multirate-micro-steps",
@@ -180,6 +187,9 @@ pub fn run_work_precision(args: WorkPrecisionArgs) -> Result<(), LabError> {
     }
     if let Some(m) = &args.kepler_divisors {
         config.kepler_divisors = m.clone();
+    }
+    if let Some(k) = &args.kepler_bodies {
+        config.kepler_bodies = k.clone();
     }
     if let Some(n) = &args.multirate_ns {
         config.multirate_ns = n.clone();

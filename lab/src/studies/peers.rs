@@ -79,6 +79,38 @@ impl std::fmt::Display for QuadPoints {
     }
 }
 
+/// Which bodies the Kepler-adapted integrator puts on their exact Kepler orbits.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum KeplerBodies {
+    /// Every planet (`KeplerAdaptedGalerkin::new`; families `galerkin-kepler-S`).
+    All,
+    /// Only the body with the shortest orbit about the heaviest one, the others' curves
+    /// polynomial (`KeplerAdaptedGalerkin::with_kepler_bodies`; families
+    /// `galerkin-kepler-S-fast`).
+    Fastest,
+}
+
+impl KeplerBodies {
+    /// Its name on the command line.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            KeplerBodies::All => "all",
+            KeplerBodies::Fastest => "fastest",
+        }
+    }
+}
+
+impl std::str::FromStr for KeplerBodies {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        [KeplerBodies::All, KeplerBodies::Fastest]
+            .into_iter()
+            .find(|k| k.as_str() == s.trim())
+            .ok_or_else(|| format!("unknown Kepler bodies '{s}' (expected all or fastest)"))
+    }
+}
+
 impl std::str::FromStr for QuadPoints {
     type Err = String;
     fn from_str(s: &str) -> std::result::Result<Self, String> {
@@ -126,6 +158,8 @@ pub enum Peer {
     KeplerAdapted {
         /// Stages (order 2s).
         s: usize,
+        /// Which bodies move on their exact Kepler orbits.
+        bodies: KeplerBodies,
     },
     /// The multirate Galerkin integrator: the body with the shortest orbit on `micro_steps`
     /// micro steps per step, every body with n basis functions and n − 1 Gauss points (Gauss
@@ -154,7 +188,14 @@ impl Peer {
             Peer::StormerVerlet => "stormer-verlet".into(),
             Peer::Rk4 => "rk4".into(),
             Peer::Gauss { s } => format!("gauss-{s}"),
-            Peer::KeplerAdapted { s } => format!("galerkin-kepler-{s}"),
+            Peer::KeplerAdapted {
+                s,
+                bodies: KeplerBodies::All,
+            } => format!("galerkin-kepler-{s}"),
+            Peer::KeplerAdapted {
+                s,
+                bodies: KeplerBodies::Fastest,
+            } => format!("galerkin-kepler-{s}-fast"),
             Peer::Multirate { micro_steps, .. } => format!("galerkin-multirate-{micro_steps}"),
             Peer::Composition { scheme } => scheme.as_str().into(),
             Peer::Dop853 { .. } => "dop853".into(),
@@ -230,30 +271,26 @@ pub fn run_peer<S: System + 'static>(
             divisor,
             samples,
         ),
-        Peer::KeplerAdapted { s } => {
+        Peer::KeplerAdapted { s, bodies } => {
             let nbody = nbody_of(system).ok_or_else(|| LabError::InvalidArgument {
                 name: "peer".into(),
                 reason: "the Kepler-adapted integrator needs an N-body scene".into(),
             })?;
-            sampled(
-                &mut KeplerAdaptedGalerkin::new(nbody, s, h)?,
-                initial,
-                divisor,
-                samples,
-            )
+            let mut method = match bodies {
+                KeplerBodies::All => KeplerAdaptedGalerkin::new(nbody, s, h)?,
+                KeplerBodies::Fastest => {
+                    let fast = shortest_period_body(nbody, initial)?;
+                    KeplerAdaptedGalerkin::with_kepler_bodies(nbody, s, h, &[fast])?
+                }
+            };
+            sampled(&mut method, initial, divisor, samples)
         }
         Peer::Multirate { n, micro_steps } => {
             let nbody = nbody_of(system).ok_or_else(|| LabError::InvalidArgument {
                 name: "peer".into(),
                 reason: "the multirate integrator needs an N-body scene".into(),
             })?;
-            let fast = MultirateGalerkin::shortest_period_body(nbody, &initial.q, &initial.p)
-                .ok_or_else(|| LabError::InvalidArgument {
-                    name: "peer".into(),
-                    reason: "the multirate integrator needs a bound orbit about the heaviest \
-                             body"
-                        .into(),
-                })?;
+            let fast = shortest_period_body(nbody, initial)?;
             let shape = MultirateShape::collocation(n, micro_steps);
             sampled(
                 &mut MultirateGalerkin::new(nbody, &[fast], shape, h)?,
@@ -306,6 +343,17 @@ fn dop853<S: System>(
         crate::error::GviError::Unsupported("DOP853 needs the cargo feature `dop853`".into())
             .into(),
     )
+}
+
+/// The body with the shortest orbit about the heaviest one (the multirate integrator's fast
+/// body, the Kepler-adapted integrator's `fastest`).
+fn shortest_period_body(nbody: &NBody, initial: &InitialState) -> Result<usize> {
+    MultirateGalerkin::shortest_period_body(nbody, &initial.q, &initial.p).ok_or_else(|| {
+        LabError::InvalidArgument {
+            name: "peer".into(),
+            reason: "no bound orbit about the heaviest body".into(),
+        }
+    })
 }
 
 /// The generic loop (monomorphised per method, so timings compare like with like): `samples`

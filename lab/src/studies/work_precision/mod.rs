@@ -31,7 +31,7 @@
 //! assert!(!study.pareto_front().is_empty());
 //! ```
 
-use super::peers::{Peer, QuadPoints, run_peer};
+use super::peers::{KeplerBodies, Peer, QuadPoints, run_peer};
 use super::{Reference, max_norm_diff, write_file};
 use crate::error::LabError;
 use crate::error::Result;
@@ -75,6 +75,9 @@ pub struct WorkPrecisionConfig {
     pub kepler_stages: Vec<usize>,
     /// Kepler-adapted steps per sample interval (h = Δ/m).
     pub kepler_divisors: Vec<usize>,
+    /// Which bodies the Kepler-adapted integrator puts on their Kepler orbits: every planet
+    /// (`galerkin-kepler-S`) and/or only the fastest (`galerkin-kepler-S-fast`).
+    pub kepler_bodies: Vec<KeplerBodies>,
     /// Numbers of basis functions of the multirate integrator (N-body scenes with a dominant
     /// mass; families `galerkin-multirate-R`).
     pub multirate_ns: Vec<usize>,
@@ -103,6 +106,7 @@ impl WorkPrecisionConfig {
             gauss_stages: vec![2, 4],
             kepler_stages: vec![4, 6, 8],
             kepler_divisors: vec![1, 2, 3, 4, 6, 8],
+            kepler_bodies: vec![KeplerBodies::All, KeplerBodies::Fastest],
             multirate_ns: vec![8, 9, 10, 11, 12],
             multirate_micro_steps: vec![2, 3, 4],
             multirate_divisors: vec![1, 2, 3, 4, 5],
@@ -124,6 +128,7 @@ impl WorkPrecisionConfig {
             gauss_stages: vec![2],
             kepler_stages: vec![4],
             kepler_divisors: vec![1, 2],
+            kepler_bodies: vec![KeplerBodies::All],
             multirate_ns: vec![8],
             multirate_micro_steps: vec![3],
             multirate_divisors: vec![2],
@@ -148,6 +153,7 @@ impl WorkPrecisionConfig {
             gauss_stages: vec![4],
             kepler_stages: vec![6, 8],
             kepler_divisors: vec![2, 4],
+            kepler_bodies: vec![KeplerBodies::All],
             multirate_ns: vec![12, 16],
             multirate_micro_steps: vec![3],
             multirate_divisors: vec![2, 4],

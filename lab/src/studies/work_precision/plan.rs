@@ -33,13 +33,15 @@ pub(super) fn sweep_plan<S: System + 'static>(
     // own step grid (its steps are longer than the polynomial bases').
     if nbody_of(system).is_some() {
         for &s in &config.kepler_stages {
-            plan.push(
-                config
-                    .kepler_divisors
-                    .iter()
-                    .map(|&m| (Peer::KeplerAdapted { s }, m))
-                    .collect(),
-            );
+            for &bodies in &config.kepler_bodies {
+                plan.push(
+                    config
+                        .kepler_divisors
+                        .iter()
+                        .map(|&m| (Peer::KeplerAdapted { s, bodies }, m))
+                        .collect(),
+                );
+            }
         }
     }
     // The multirate integrator on N-body scenes with a dominant mass (a star and planets):
