@@ -54,6 +54,7 @@
 //! fixed-point iteration: its contraction is O(ε h²ω²), so it converges in a few iterations.
 
 pub mod drift;
+mod inner;
 mod jacobi;
 mod stages;
 mod stumpff;
@@ -61,6 +62,7 @@ mod stumpff;
 mod tests;
 
 pub use drift::{DriftError, KeplerDrift};
+pub use inner::InnerKeplerGalerkin;
 
 use crate::baselines::{OneStepMethod, gauss_tableau};
 use crate::error::{GviError, Result};

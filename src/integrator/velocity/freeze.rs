@@ -191,6 +191,14 @@ impl BlockFreeze {
         true
     }
 
+    /// Block `block`'s largest |δ| and |c| in the last correction, for an iteration that
+    /// corrects its blocks itself rather than through [`correct_on_blocks`] (the inner
+    /// Kepler-adapted step's bodies, `crate::kepler_adapted::InnerKeplerGalerkin`).
+    pub(crate) fn record(&mut self, block: usize, delta: f64, scale: f64) {
+        self.block_delta[block] = delta;
+        self.block_scale[block] = scale;
+    }
+
     /// The active columns and the maxima's buffers, for [`correct_on_blocks`].
     pub(crate) fn maxima_mut(&mut self) -> BlockMaxima<'_> {
         BlockMaxima {

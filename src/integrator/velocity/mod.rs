@@ -42,6 +42,7 @@ mod momentum;
 mod solve;
 mod state;
 
+pub(crate) use freeze::BlockFreeze;
 pub(crate) use solve::FIXED_POINT_HANDOVER;
 pub(crate) use state::VelocityState;
 
