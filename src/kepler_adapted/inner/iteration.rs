@@ -4,7 +4,9 @@
 
 use super::super::jacobi::{add, dot, scale, sub};
 use super::super::stages::termination;
-use super::super::{DriftError, ESTIMATE_BELOW, KeplerDrift, MAX_ITERATIONS};
+use super::super::{
+    DriftError, ESTIMATE_BELOW, KeplerDrift, MAX_ITERATIONS, MAX_KEPLER_ADAPTED_STAGES,
+};
 use super::InnerKeplerGalerkin;
 use crate::lagrangian::{ByCoordinate, Mechanical};
 use crate::newton::{Adapt, Correction, NewtonFailure, NewtonIteration, Progress, Termination};
@@ -60,28 +62,19 @@ impl InnerKeplerGalerkin {
                 st.drifts[idx] = Some(drift);
             }
         }
-        // The positions of the bodies whose slots moved (the others' rows hold their frozen
-        // stage positions), by coordinate.
+        // The chain's Cartesian positions, if it moved (the bodies after it have their stage
+        // positions in `x` already).
         let st = &mut self.slots;
-        for j in 0..s {
-            if chain_active {
-                st.chain[0] = st.q[j * n];
-                for b in 1..=k {
-                    st.chain[b] = st.drifts[j * n + b].map_or(st.q[j * n + b], |d| d.position());
-                }
-                self.prefix
-                    .positions_from_jacobi(&st.chain, &mut st.chain_out);
-                for (b, x) in st.chain_out.iter().enumerate() {
-                    for (c, &v) in x.iter().enumerate().take(dim) {
-                        st.x[(b * dim + c) * s + j] = v;
-                    }
-                }
+        for j in (0..s).filter(|_| chain_active) {
+            st.chain[0] = st.q[j * n];
+            for b in 1..=k {
+                st.chain[b] = st.drifts[j * n + b].map_or(st.q[j * n + b], |d| d.position());
             }
-            for b in k + 1..n {
-                if st.need[b] {
-                    for c in 0..dim {
-                        st.x[(b * dim + c) * s + j] = st.q[j * n + b][c];
-                    }
+            self.prefix
+                .positions_from_jacobi(&st.chain, &mut st.chain_out);
+            for (b, x) in st.chain_out.iter().enumerate() {
+                for (c, &v) in x.iter().enumerate().take(dim) {
+                    st.x[(b * dim + c) * s + j] = v;
                 }
             }
         }
@@ -128,11 +121,6 @@ impl InnerKeplerGalerkin {
                     st.f[idx] = scale(m, dv);
                 }
             }
-            for b in k + 1..n {
-                if st.need[b] {
-                    st.f[j * n + b] = scale(-1.0, g(st, b, j));
-                }
-            }
         }
         Ok(())
     }
@@ -175,20 +163,45 @@ impl InnerKeplerGalerkin {
                     st.q[idx] = qn;
                     st.zp[idx] = pn;
                 }
-            } else {
-                let v = scale(h / m, st.p0[b]);
+            } else if b == 0 {
+                let v = scale(h / m, st.p0[0]);
                 let h2m = h * h / m;
                 for j in 0..s {
                     let mut dq = [0.0; 3];
                     for l in 0..s {
-                        dq = add(dq, scale(self.a2[j * s + l], st.f[l * n + b]));
+                        dq = add(dq, scale(self.a2t[l * s + j], st.f[l * n]));
                     }
-                    let idx = j * n + b;
-                    let qn = add(st.q0[b], add(scale(self.c[j], v), scale(h2m, dq)));
+                    let qn = add(st.q0[0], add(scale(self.c[j], v), scale(h2m, dq)));
                     for c in 0..3 {
-                        change = change.max((qn[c] - st.q[idx][c]).abs());
+                        change = change.max((qn[c] - st.q[j * n][c]).abs());
                     }
-                    st.q[idx] = qn;
+                    st.q[j * n] = qn;
+                }
+                change /= st.scale[0];
+            } else {
+                // A body after the chain, a coordinate (a row over the stages) at a time:
+                // Q_j = q + c_j h v − (h²/m) Σ_l (A²)_jl ∇V_l.
+                let h2m = h * h / m;
+                let mut acc = [0.0; MAX_KEPLER_ADAPTED_STAGES];
+                let acc = &mut acc[..s];
+                for c in 0..self.dim {
+                    let r = b * self.dim + c;
+                    let g = &st.gradient[r * s..(r + 1) * s];
+                    acc.iter_mut().for_each(|x| *x = 0.0);
+                    for (l, &gl) in g.iter().enumerate() {
+                        let column = &self.a2t[l * s..(l + 1) * s];
+                        for (x, &a) in acc.iter_mut().zip(column) {
+                            *x += a * gl;
+                        }
+                    }
+                    let (q0, v) = (st.q0[b][c], h / m * st.p0[b][c]);
+                    let row = &mut st.x[r * s..(r + 1) * s];
+                    for ((x, &acc), &cj) in row.iter_mut().zip(acc.iter()).zip(&self.c) {
+                        let qn = q0 + (cj * v - h2m * acc);
+                        let d = (qn - *x).abs();
+                        change = if d > change { d } else { change };
+                        *x = qn;
+                    }
                 }
                 change /= st.scale[b];
             }

@@ -94,8 +94,10 @@ pub struct InnerKeplerGalerkin {
     b: Vec<f64>,
     /// a_jl, row-major s×s.
     a: Vec<f64>,
-    /// (A²)_jl, row-major s×s: the positions' stage matrix of the second-order form.
-    a2: Vec<f64>,
+    /// (A²)_lj, the transpose of the positions' stage matrix of the second-order form
+    /// (row-major s×s: row l holds column l of A², so that a slot's stage positions are
+    /// updated a row at a time over the stages).
+    a2t: Vec<f64>,
     /// (bᵀA)_l: the end position's weights.
     ba: Vec<f64>,
     /// The polynomial slots' stage guesses: row j holds the Lagrange basis over the nodes 0,
@@ -118,26 +120,30 @@ struct Slots {
     /// The slots' positions and momenta at the step's start.
     q0: Vec<[f64; 3]>,
     p0: Vec<[f64; 3]>,
-    /// Stage positions: Q_j of a polynomial slot, the interaction-picture position of a
-    /// Kepler slot.
+    /// The chain's stage positions: Q_j of slot 0, the interaction-picture position of a
+    /// Kepler slot (the slots after the chain have theirs in `x`).
     q: Vec<[f64; 3]>,
     /// A Kepler slot's interaction-picture stage momenta (unused for the others).
     zp: Vec<[f64; 3]>,
     /// A Kepler slot's right-hand side for its positions (unused for the others).
     fq: Vec<[f64; 3]>,
-    /// The force on a polynomial slot; a Kepler slot's right-hand side for its momenta.
+    /// The force on slot 0; a Kepler slot's right-hand side for its momenta (the slots after
+    /// the chain have theirs, negated, in `gradient`).
     f: Vec<[f64; 3]>,
     /// A Kepler slot's drift at each stage (its position and the pull-back of its kicks).
     drifts: Vec<Option<KeplerDrift>>,
     /// Universal anomalies of the last stage and full-step drifts (warm starts; NaN before).
     anomaly: Vec<f64>,
     full_anomaly: Vec<f64>,
-    /// The last step's start and stage positions (entries l·N + b, l = 0 … s), for the
-    /// polynomial slots' guesses; valid when `has_previous`.
+    /// The last step's start and stage positions, for the polynomial slots' guesses (valid
+    /// when `has_previous`): slot 0's at entries l = 0 … s, the others' by coordinate (row
+    /// r = b·K + c holds s + 1 values, the start first).
     previous: Vec<[f64; 3]>,
+    previous_rows: Vec<f64>,
     has_previous: bool,
     /// Cartesian positions and the potential's gradient at the stages by coordinate: row
-    /// b·K + c holds coordinate c of body b at the s stages.
+    /// b·K + c holds coordinate c of body b at the s stages. For a body after the chain these
+    /// are its slot's stage positions Q_j, the unknowns themselves.
     x: Vec<f64>,
     gradient: Vec<f64>,
     /// The Cartesian bodies whose gradient an iteration needs.
@@ -184,9 +190,9 @@ impl InnerKeplerGalerkin {
         }
         let (c, b, a) = gauss_tableau(stages)?;
         let s = stages;
-        let a2 = (0..s * s)
-            .map(|jl| {
-                let (j, l) = (jl / s, jl % s);
+        let a2t = (0..s * s)
+            .map(|lj| {
+                let (l, j) = (lj / s, lj % s);
                 (0..s).map(|m| a[j * s + m] * a[m * s + l]).sum()
             })
             .collect();
@@ -235,7 +241,7 @@ impl InnerKeplerGalerkin {
             c,
             b,
             a,
-            a2,
+            a2t,
             ba,
             extrapolate,
             mass,
@@ -250,7 +256,8 @@ impl InnerKeplerGalerkin {
                 drifts: vec![None; s * nb],
                 anomaly: vec![f64::NAN; s * nb],
                 full_anomaly: vec![f64::NAN; nb],
-                previous: vec![[0.0; 3]; (s + 1) * nb],
+                previous: vec![[0.0; 3]; s + 1],
+                previous_rows: vec![0.0; nb * dim * (s + 1)],
                 has_previous: false,
                 x: vec![0.0; nb * dim * s],
                 gradient: vec![0.0; nb * dim * s],
@@ -337,27 +344,40 @@ impl InnerKeplerGalerkin {
         for b in 0..n {
             self.slots.scale[b] = norm_max(self.slots.q0[b]).max(inner);
         }
+        let (k, dim) = (self.kepler, self.dim);
+        let st = &mut self.slots;
         for j in 0..s {
-            for b in 0..n {
-                let kidx = j * n + b;
-                let kepler = self.is_kepler(b);
-                let st = &mut self.slots;
-                if kepler {
-                    st.q[kidx] = st.q0[b];
-                    st.zp[kidx] = st.p0[b];
-                    continue;
-                }
-                if !st.has_previous {
-                    let v = scale(1.0 / self.mass[b], st.p0[b]);
-                    st.q[kidx] = add(st.q0[b], scale(self.c[j] * h, v));
-                    continue;
-                }
-                let row = &self.extrapolate[j * (s + 1)..(j + 1) * (s + 1)];
+            for b in 1..=k {
+                st.q[j * n + b] = st.q0[b];
+                st.zp[j * n + b] = st.p0[b];
+            }
+            let e = &self.extrapolate[j * (s + 1)..(j + 1) * (s + 1)];
+            st.q[j * n] = if st.has_previous {
                 let mut q = [0.0; 3];
-                for (l, &e) in row.iter().enumerate() {
-                    q = add(q, scale(e, st.previous[l * n + b]));
+                for (l, &e) in e.iter().enumerate() {
+                    q = add(q, scale(e, st.previous[l]));
                 }
-                st.q[kidx] = q;
+                q
+            } else {
+                add(st.q0[0], scale(self.c[j] * h / self.mass[0], st.p0[0]))
+            };
+        }
+        for b in k + 1..n {
+            for c in 0..dim {
+                let r = b * dim + c;
+                let row = &mut st.x[r * s..(r + 1) * s];
+                if st.has_previous {
+                    let previous = &st.previous_rows[r * (s + 1)..(r + 1) * (s + 1)];
+                    for (j, x) in row.iter_mut().enumerate() {
+                        let e = &self.extrapolate[j * (s + 1)..(j + 1) * (s + 1)];
+                        *x = e.iter().zip(previous).map(|(e, q)| e * q).sum();
+                    }
+                } else {
+                    let (q0, v) = (st.q0[b][c], st.p0[b][c] / self.mass[b]);
+                    for (x, &cj) in row.iter_mut().zip(&self.c) {
+                        *x = q0 + cj * h * v;
+                    }
+                }
             }
         }
     }
@@ -381,28 +401,44 @@ impl InnerKeplerGalerkin {
             confirmation: false,
         };
         drive(&mut solve, &termination(0)).map_err(|f| fail(f.residual, f.iterations, f.reason))?;
+        let (k, dim) = (self.kepler, self.dim);
         let st = &mut self.slots;
-        for b in 0..n {
-            st.previous[b] = st.q0[b];
+        st.previous[0] = st.q0[0];
+        for j in 0..s {
+            st.previous[j + 1] = st.q[j * n];
         }
-        st.previous[n..].copy_from_slice(&st.q);
         st.has_previous = true;
-        for b in 0..n {
-            let (m, kepler) = (self.mass[b], self.is_kepler(b));
-            let st = &mut self.slots;
-            if !kepler {
-                // p_{k+1} = p_k + h Σ b_l f_l, q_{k+1} = q_k + h v_k + h² Σ (bᵀA)_l f_l/m.
-                let (mut dp, mut dq) = ([0.0; 3], [0.0; 3]);
+        // The polynomial slots: p_{k+1} = p_k + h Σ b_l f_l and
+        // q_{k+1} = q_k + h v_k + h² Σ (bᵀA)_l f_l/m, with f = −∇V after the chain.
+        let (mut dp, mut dq) = ([0.0; 3], [0.0; 3]);
+        for l in 0..s {
+            let f = st.f[l * n];
+            dp = add(dp, scale(h * self.b[l], f));
+            dq = add(dq, scale(h * h * self.ba[l] / self.mass[0], f));
+        }
+        let v = scale(h / self.mass[0], st.p0[0]);
+        st.q0[0] = add(st.q0[0], add(v, dq));
+        st.p0[0] = add(st.p0[0], dp);
+        for b in k + 1..n {
+            let m = self.mass[b];
+            for c in 0..dim {
+                let r = b * dim + c;
+                let g = &st.gradient[r * s..(r + 1) * s];
+                let (mut dp, mut dq) = (0.0, 0.0);
                 for l in 0..s {
-                    let f = st.f[l * n + b];
-                    dp = add(dp, scale(h * self.b[l], f));
-                    dq = add(dq, scale(h * h * self.ba[l] / m, f));
+                    dp -= h * self.b[l] * g[l];
+                    dq -= h * h * self.ba[l] / m * g[l];
                 }
-                let v = scale(h / m, st.p0[b]);
-                st.q0[b] = add(st.q0[b], add(v, dq));
-                st.p0[b] = add(st.p0[b], dp);
-                continue;
+                let previous = &mut st.previous_rows[r * (s + 1)..(r + 1) * (s + 1)];
+                previous[0] = st.q0[b][c];
+                previous[1..].copy_from_slice(&st.x[r * s..(r + 1) * s]);
+                st.q0[b][c] += h / m * st.p0[b][c] + dq;
+                st.p0[b][c] += dp;
             }
+        }
+        for b in 1..=k {
+            let m = self.mass[b];
+            let st = &mut self.slots;
             // z_{k+1} = z_k + h Σ b_l F_l, then the Kepler flow over the whole step.
             let (mut dq, mut dp) = ([0.0; 3], [0.0; 3]);
             for l in 0..s {
