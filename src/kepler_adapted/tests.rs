@@ -9,7 +9,7 @@ use crate::baselines::{GaussCollocationBaseline, integrate_one_step};
 use crate::geometry::{finite_difference_jacobian, relative_symplecticity_defect};
 
 /// Sun, Jupiter and Saturn of the outer solar system (AU, days, solar masses), barycentric.
-fn sun_jupiter_saturn() -> (NBody, Vec<f64>, Vec<f64>) {
+pub(super) fn sun_jupiter_saturn() -> (NBody, Vec<f64>, Vec<f64>) {
     let masses = vec![1.00000597682, 0.000954786104043, 0.000285583733151];
     let nb = NBody::new(masses, 2.95912208286e-4, 3).unwrap();
     let mut q = vec![
@@ -33,7 +33,7 @@ fn sun_jupiter_saturn() -> (NBody, Vec<f64>, Vec<f64>) {
 
 /// A strongly perturbed planar-ish system in units G = 1: a unit star and planets of mass
 /// 1e-2 and 5e-3 at radii 1 and 1.9 (period 2π at radius 1), barycentric.
-fn strong_three_body() -> (NBody, Vec<f64>, Vec<f64>) {
+pub(super) fn strong_three_body() -> (NBody, Vec<f64>, Vec<f64>) {
     let nb = NBody::new(vec![1.0, 1e-2, 5e-3], 1.0, 3).unwrap();
     let mut q = vec![0.0, 0.0, 0.0, 1.0, 0.0, 0.02, -1.2, 1.47, -0.05];
     let w = 1.0 / 1.9f64.sqrt();
@@ -129,7 +129,12 @@ fn interaction_gradient_matches_finite_differences() {
 }
 
 /// Runs `steps` steps of `m` from (q, p).
-fn run(m: &mut impl OneStepMethod, q: &[f64], p: &[f64], steps: usize) -> (Vec<f64>, Vec<f64>) {
+pub(super) fn run(
+    m: &mut impl OneStepMethod,
+    q: &[f64],
+    p: &[f64],
+    steps: usize,
+) -> (Vec<f64>, Vec<f64>) {
     let (qs, ps) = integrate_one_step(m, q, p, steps).unwrap();
     (qs[steps].clone(), ps[steps].clone())
 }
@@ -176,7 +181,7 @@ fn radau_iia(nb: &NBody, h: f64) -> KeplerAdaptedGalerkin {
 }
 
 /// [`radau_iia`] with only `bodies` on their Kepler orbits.
-fn radau_iia_on(nb: &NBody, h: f64, bodies: &[usize]) -> KeplerAdaptedGalerkin {
+pub(super) fn radau_iia_on(nb: &NBody, h: f64, bodies: &[usize]) -> KeplerAdaptedGalerkin {
     let (c, b) = (vec![1.0 / 3.0, 1.0], vec![0.75, 0.25]);
     let a = vec![5.0 / 12.0, -1.0 / 12.0, 0.75, 0.25];
     KeplerAdaptedGalerkin::from_tableau(nb, c, b, a, h, bodies).unwrap()
@@ -185,7 +190,13 @@ fn radau_iia_on(nb: &NBody, h: f64, bodies: &[usize]) -> KeplerAdaptedGalerkin {
 /// The relative symplecticity defect of `steps` steps of `m` at (q, p), in variables (q, p/c)
 /// with one scale c for every momentum (a conformal change that keeps symplectic maps
 /// symplectic), so that one finite-difference step suits positions and momenta.
-fn defect(m: &mut KeplerAdaptedGalerkin, q: &[f64], p: &[f64], c: f64, steps: usize) -> f64 {
+pub(super) fn defect(
+    m: &mut impl OneStepMethod,
+    q: &[f64],
+    p: &[f64],
+    c: f64,
+    steps: usize,
+) -> f64 {
     let cell = std::cell::RefCell::new(m);
     let map = |q0: &[f64], ps: &[f64]| {
         let p0: Vec<f64> = ps.iter().map(|x| x * c).collect();
@@ -215,7 +226,7 @@ fn step_map_is_symplectic_and_radau_in_the_same_picture_is_not() {
 }
 
 /// Total angular momentum Σ qᵢ × pᵢ.
-fn angular_momentum(q: &[f64], p: &[f64]) -> [f64; 3] {
+pub(super) fn angular_momentum(q: &[f64], p: &[f64]) -> [f64; 3] {
     let mut l = [0.0; 3];
     for (a, b) in q.chunks(3).zip(p.chunks(3)) {
         l[0] += a[1] * b[2] - a[2] * b[1];
@@ -377,7 +388,7 @@ fn drift_energy_error_is_unbiased() {
 }
 
 /// The J2000 scene's ten bodies (Sun, Mercury, Venus, Earth-Moon, Mars, Jupiter, Saturn, Uranus, Neptune, Pluto; GM units, G = 1; AU, days), barycentric.
-fn j2000() -> (NBody, Vec<f64>, Vec<f64>) {
+pub(super) fn j2000() -> (NBody, Vec<f64>, Vec<f64>) {
     let gm = vec![
         0.0002959122082855911,
         4.912547451450812e-11,

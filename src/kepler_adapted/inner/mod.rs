@@ -43,6 +43,8 @@
 //! docs/solvers.md).
 
 mod iteration;
+#[cfg(test)]
+mod tests;
 
 use super::jacobi::{Jacobi, add, scale};
 use super::stages::termination;
@@ -107,6 +109,9 @@ pub struct InnerKeplerGalerkin {
     mass: Vec<f64>,
     slots: Slots,
     freeze: BlockFreeze,
+    /// Freeze converged slots (always, except in the tests' comparison with the unfrozen
+    /// iteration).
+    freezing: bool,
     evaluations: usize,
     masked_evaluations: usize,
     iterations: usize,
@@ -175,6 +180,20 @@ impl InnerKeplerGalerkin {
                 reason: format!("s = {stages}; need 1 ≤ s ≤ {MAX_KEPLER_ADAPTED_STAGES}"),
             });
         }
+        let (c, b, a) = gauss_tableau(stages)?;
+        Self::from_tableau(system, c, b, a, h, kepler)
+    }
+
+    /// The step with the Runge–Kutta tableau (c, b, A) (A row-major): Gauss for
+    /// [`new`](Self::new); other tableaux serve as the property tests' negative controls.
+    fn from_tableau(
+        system: &NBody,
+        c: Vec<f64>,
+        b: Vec<f64>,
+        a: Vec<f64>,
+        h: f64,
+        kepler: usize,
+    ) -> Result<Self> {
         if !(h.is_finite() && h > 0.0) {
             return Err(GviError::InvalidStepSize { h });
         }
@@ -188,8 +207,7 @@ impl InnerKeplerGalerkin {
                 ),
             });
         }
-        let (c, b, a) = gauss_tableau(stages)?;
-        let s = stages;
+        let s = c.len();
         let a2t = (0..s * s)
             .map(|lj| {
                 let (l, j) = (lj / s, lj % s);
@@ -272,6 +290,7 @@ impl InnerKeplerGalerkin {
                 has_last: false,
             },
             freeze,
+            freezing: true,
             evaluations: 0,
             masked_evaluations: 0,
             iterations: 0,
@@ -394,7 +413,7 @@ impl InnerKeplerGalerkin {
             iterations,
             reason: format!("inner Kepler-adapted Galerkin (s = {s}): {reason}"),
         };
-        self.freeze.start(true);
+        self.freeze.start(self.freezing);
         let mut solve = SlotIteration {
             m: self,
             last: 0.0,
