@@ -10,7 +10,7 @@ use galerkin_vi::baselines::{
 };
 use galerkin_vi::basis::BasisKind;
 use galerkin_vi::integrator::GalerkinIntegrator;
-use galerkin_vi::kepler_adapted::KeplerAdaptedGalerkin;
+use galerkin_vi::kepler_adapted::{InnerKeplerGalerkin, KeplerAdaptedGalerkin};
 use galerkin_vi::multirate::{MultirateGalerkin, MultirateShape};
 use galerkin_vi::quadrature::QuadratureKind;
 use galerkin_vi::systems::{AnySystem, NBody, System};
@@ -86,7 +86,8 @@ pub enum KeplerBodies {
     /// Every planet (`KeplerAdaptedGalerkin::new`; families `galerkin-kepler-S`).
     All,
     /// Only the body with the shortest orbit about the heaviest one, the others' curves
-    /// polynomial (`KeplerAdaptedGalerkin::with_kepler_bodies`; families
+    /// polynomial (`KeplerAdaptedGalerkin::with_kepler_bodies`, solved by
+    /// `InnerKeplerGalerkin` when that body is body 1, the innermost in Jacobi order; families
     /// `galerkin-kepler-S-fast`).
     Fastest,
 }
@@ -276,14 +277,25 @@ pub fn run_peer<S: System + 'static>(
                 name: "peer".into(),
                 reason: "the Kepler-adapted integrator needs an N-body scene".into(),
             })?;
-            let mut method = match bodies {
-                KeplerBodies::All => KeplerAdaptedGalerkin::new(nbody, s, h)?,
-                KeplerBodies::Fastest => {
-                    let fast = shortest_period_body(nbody, initial)?;
-                    KeplerAdaptedGalerkin::with_kepler_bodies(nbody, s, h, &[fast])?
+            match bodies {
+                KeplerBodies::All => {
+                    let mut method = KeplerAdaptedGalerkin::new(nbody, s, h)?;
+                    sampled(&mut method, initial, divisor, samples)
                 }
-            };
-            sampled(&mut method, initial, divisor, samples)
+                // The innermost body: the same map solved slot by slot with the converged
+                // bodies frozen (`InnerKeplerGalerkin`).
+                KeplerBodies::Fastest => match shortest_period_body(nbody, initial)? {
+                    1 => {
+                        let mut method = InnerKeplerGalerkin::new(nbody, s, h, 1)?;
+                        sampled(&mut method, initial, divisor, samples)
+                    }
+                    fast => {
+                        let mut method =
+                            KeplerAdaptedGalerkin::with_kepler_bodies(nbody, s, h, &[fast])?;
+                        sampled(&mut method, initial, divisor, samples)
+                    }
+                },
+            }
         }
         Peer::Multirate { n, micro_steps } => {
             let nbody = nbody_of(system).ok_or_else(|| LabError::InvalidArgument {
