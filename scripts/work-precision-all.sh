@@ -37,8 +37,11 @@ uptime >&2
 rebound solar-system --repeats 5 --out $E/rebound-solar-system.csv
 # J2000: n and h on a finer grid near the 1e-9 frontier (n = 9, 11, 14; h = Δ/5, Δ/7, Δ/9,
 # Δ/10), as REBOUND's fixed-step families are swept over 33 divisors.
+# The Kepler-adapted families: s up to 10 and h = Δ/5 as well, near the frontier of the
+# family with Mercury alone on its Kepler orbit (galerkin-kepler-S-fast).
 $GVI work-precision solar-system --repeats 3 --bases chebyshev,legendre \
   --ns 8,9,10,11,12,14,16,20,25,32 --divisors 1,2,4,5,6,7,8,9,10 \
+  --kepler-stages 6,8,9,10 --kepler-divisors 2,3,4,5,6,8 \
   --external $E/rebound-solar-system.csv --out docs/studies/work-precision-solar-system
 uptime >&2
 python3 scripts/work-precision-summary.py > docs/studies/work-precision-summary.md
