@@ -26,7 +26,7 @@ STUDIES = [
     ("Outer solar system, T = 182 500 d", "docs/studies/work-precision-outer-solar-system/work_precision.json",
      "gvi work-precision outer-solar-system --repeats 3 --bases chebyshev,legendre --ns 6,8,10,12,14,16,20,24 --divisors 1,2,3,4,6 --external docs/studies/external/rebound-outer-solar-system.csv --out docs/studies/work-precision-outer-solar-system", False),
     ("J2000 10-body, T = 10 000 d", "docs/studies/work-precision-solar-system/work_precision.json",
-     "gvi work-precision solar-system --repeats 3 --bases chebyshev,legendre --ns 8,10,12,16,20,25,32 --divisors 1,2,4,6,8 --external docs/studies/external/rebound-solar-system.csv --out docs/studies/work-precision-solar-system", False),
+     "gvi work-precision solar-system --repeats 3 --bases chebyshev,legendre --ns 8,9,10,11,12,14,16,20,25,32 --divisors 1,2,4,5,6,7,8,9,10 --kepler-stages 6,8,9,10 --kepler-divisors 2,3,4,5,6,8 --external docs/studies/external/rebound-solar-system.csv --out docs/studies/work-precision-solar-system", False),
 ]
 # 1e-11: issue 35 names it for the outer solar system (SABA(10,6,4) levels off at 1.2e-11).
 TARGETS = [1e-6, 1e-9, 1e-11, 1e-12]
@@ -59,7 +59,9 @@ def main():
         "`galerkin-BASIS-econ`, `galerkin-BASIS-compact` and `galerkin-BASIS-colloc`; on the "
         "N-body scenes also the Kepler-adapted Galerkin "
         "integrator, Gauss collocation with S stages in the interaction picture of the Jacobi "
-        "splitting, families `galerkin-kepler-S`), the fastest peer (in-process "
+        "splitting, families `galerkin-kepler-S`, and with only the body of shortest orbit on "
+        "its Kepler orbit, the others polynomial, families `galerkin-kepler-S-fast`; the "
+        "multirate Galerkin integrator, families `galerkin-multirate-R`), the fastest peer (in-process "
         "baselines at their best, DOP853 on a half-decade tolerance grid, and REBOUND 5.2.2 "
         "timed in its own process: IAS15, WHFast with symplectic correctors 11 and 17 in Jacobi "
         "coordinates, WHCKL, SABA(10,6,4) and SABA(8,6,4), swept over dt), "
