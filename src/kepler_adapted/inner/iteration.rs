@@ -4,9 +4,7 @@
 
 use super::super::jacobi::{add, dot, scale, sub};
 use super::super::stages::termination;
-use super::super::{
-    DriftError, ESTIMATE_BELOW, KeplerDrift, MAX_ITERATIONS, MAX_KEPLER_ADAPTED_STAGES,
-};
+use super::super::{DriftError, ESTIMATE_BELOW, KeplerDrift, MAX_ITERATIONS};
 use super::InnerKeplerGalerkin;
 use crate::lagrangian::{ByCoordinate, Mechanical};
 use crate::newton::{Adapt, Correction, NewtonFailure, NewtonIteration, Progress, Termination};
@@ -146,7 +144,10 @@ impl InnerKeplerGalerkin {
             let st = &mut self.slots;
             let mut change = 0.0f64;
             if kepler {
-                let (sq, sp) = (super::norm_max(st.q0[b]), super::norm_max(st.p0[b]));
+                let (iq, ip) = (
+                    1.0 / super::norm_max(st.q0[b]),
+                    1.0 / super::norm_max(st.p0[b]),
+                );
                 for j in 0..s {
                     let (mut dq, mut dp) = ([0.0; 3], [0.0; 3]);
                     for l in 0..s {
@@ -157,8 +158,12 @@ impl InnerKeplerGalerkin {
                     let idx = j * n + b;
                     let (qn, pn) = (add(st.q0[b], dq), add(st.p0[b], dp));
                     for c in 0..3 {
-                        change = change.max((qn[c] - st.q[idx][c]).abs() / sq);
-                        change = change.max((pn[c] - st.zp[idx][c]).abs() / sp);
+                        let dq = (qn[c] - st.q[idx][c]).abs() * iq;
+                        let dp = (pn[c] - st.zp[idx][c]).abs() * ip;
+                        // Comparisons, not `f64::max` (its NaN rule costs; a NaN stage value
+                        // ends the step as a non-finite drift or state, a typed error).
+                        change = if dq > change { dq } else { change };
+                        change = if dp > change { dp } else { change };
                     }
                     st.q[idx] = qn;
                     st.zp[idx] = pn;
@@ -179,30 +184,22 @@ impl InnerKeplerGalerkin {
                 }
                 change /= st.scale[0];
             } else {
-                // A body after the chain, a coordinate (a row over the stages) at a time:
-                // Q_j = q + c_j h v − (h²/m) Σ_l (A²)_jl ∇V_l.
-                let h2m = h * h / m;
-                let mut acc = [0.0; MAX_KEPLER_ADAPTED_STAGES];
-                let acc = &mut acc[..s];
-                for c in 0..self.dim {
-                    let r = b * self.dim + c;
-                    let g = &st.gradient[r * s..(r + 1) * s];
-                    acc.iter_mut().for_each(|x| *x = 0.0);
-                    for (l, &gl) in g.iter().enumerate() {
-                        let column = &self.a2t[l * s..(l + 1) * s];
-                        for (x, &a) in acc.iter_mut().zip(column) {
-                            *x += a * gl;
+                // A body after the chain, a coordinate (a row over the stages) at a time, with
+                // s a constant: Q_j = q + c_j h v − (h²/m) Σ_l (A²)_jl ∇V_l.
+                let rows = b * self.dim * s..(b + 1) * self.dim * s;
+                let (q0, v) = (st.q0[b], scale(h / m, st.p0[b]));
+                let (x, g) = (&mut st.x[rows.clone()], &st.gradient[rows]);
+                let (a2t, c, h2m) = (&self.a2t[..], &self.c[..], h * h / m);
+                macro_rules! stages {
+                    ($($n:literal)*) => {
+                        match s {
+                            $($n => slot_rows::<$n>(x, g, a2t, c, q0, v, h2m),)*
+                            _ => None,
                         }
-                    }
-                    let (q0, v) = (st.q0[b][c], h / m * st.p0[b][c]);
-                    let row = &mut st.x[r * s..(r + 1) * s];
-                    for ((x, &acc), &cj) in row.iter_mut().zip(acc.iter()).zip(&self.c) {
-                        let qn = q0 + (cj * v - h2m * acc);
-                        let d = (qn - *x).abs();
-                        change = if d > change { d } else { change };
-                        *x = qn;
-                    }
+                    };
                 }
+                // (None only if the tables did not have s entries: a failed iteration.)
+                change = stages!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16).unwrap_or(f64::NAN);
                 change /= st.scale[b];
             }
             if freezing {
@@ -214,6 +211,40 @@ impl InnerKeplerGalerkin {
         }
         largest
     }
+}
+
+/// The rows of a polynomial slot after the chain (`x` and `gradient`: one row of S stage
+/// values per coordinate): Q_j ← q + (c_j h v − (h²/m) Σ_l (A²)_jl ∇V_l), with `a2t` holding
+/// (A²)ᵀ row-major. Returns the largest |ΔQ|, or `None` if a table is shorter than S.
+#[allow(clippy::too_many_arguments)]
+fn slot_rows<const S: usize>(
+    x: &mut [f64],
+    gradient: &[f64],
+    a2t: &[f64],
+    c: &[f64],
+    q0: [f64; 3],
+    hv: [f64; 3],
+    h2m: f64,
+) -> Option<f64> {
+    let c: &[f64; S] = c.first_chunk()?;
+    let mut change = 0.0f64;
+    let rows = x.chunks_exact_mut(S).zip(gradient.chunks_exact(S));
+    for ((row, g), (&q0, &v)) in rows.zip(q0.iter().zip(&hv)) {
+        let mut acc = [0.0; S];
+        for (l, &gl) in g.iter().enumerate() {
+            let column: &[f64; S] = a2t.get(l * S..)?.first_chunk()?;
+            for (x, &a) in acc.iter_mut().zip(column) {
+                *x += a * gl;
+            }
+        }
+        for ((x, &acc), &cj) in row.iter_mut().zip(&acc).zip(c) {
+            let qn = q0 + (cj * v - h2m * acc);
+            let d = (qn - *x).abs();
+            change = if d > change { d } else { change };
+            *x = qn;
+        }
+    }
+    Some(change)
 }
 
 /// The stage iteration as a [`NewtonIteration`] (the identity for its linear solve) run by
