@@ -85,6 +85,66 @@ const MAX_ITERATIONS: usize = 40;
 /// (relative to each planet's Jacobi position and momentum).
 const FLOOR: f64 = 1e-14;
 
+/// The Kepler drift of a body of Jacobi mass `m` from position `q` and momentum `p` over
+/// time `t`, warm-started from `anomaly` (the universal anomaly of the same body's last drift
+/// of this kind, NaN before the first), which it updates.
+fn warm_drift(
+    mu: f64,
+    m: f64,
+    q: [f64; 3],
+    p: [f64; 3],
+    t: f64,
+    anomaly: &mut f64,
+) -> std::result::Result<KeplerDrift, DriftError> {
+    let guess = anomaly.is_finite().then_some(*anomaly);
+    let drift = KeplerDrift::new(mu, q, scale(1.0 / m, p), t, guess)?;
+    *anomaly = drift.anomaly();
+    Ok(drift)
+}
+
+/// The stage guesses' extrapolation table of Gauss nodes `c`: row j holds the Lagrange basis
+/// over the nodes 0, c_1, …, c_s evaluated at 1 + c_j (s × (s + 1)), so that the last step's
+/// start and stage values give this step's stage values on the same polynomial.
+fn extrapolation_table(c: &[f64]) -> Vec<f64> {
+    let nodes: Vec<f64> = std::iter::once(0.0).chain(c.iter().copied()).collect();
+    c.iter()
+        .flat_map(|&cj| {
+            let x = 1.0 + cj;
+            let nodes = &nodes;
+            (0..nodes.len()).map(move |l| {
+                (0..nodes.len())
+                    .filter(|&m| m != l)
+                    .map(|m| (x - nodes[m]) / (nodes[l] - nodes[m]))
+                    .product::<f64>()
+            })
+        })
+        .collect()
+}
+
+/// The Cartesian state `q`, `p` (N bodies of `k` ≤ 3 coordinates, body-major) into points of
+/// three (zero-padded).
+fn load_points(k: usize, q: &[f64], p: &[f64], r: &mut [[f64; 3]], pr: &mut [[f64; 3]]) {
+    for (b, (rb, pb)) in r.iter_mut().zip(pr.iter_mut()).enumerate() {
+        *rb = [0.0; 3];
+        *pb = [0.0; 3];
+        rb[..k].copy_from_slice(&q[b * k..b * k + k]);
+        pb[..k].copy_from_slice(&p[b * k..b * k + k]);
+    }
+}
+
+/// [`load_points`] reversed.
+fn store_points(k: usize, r: &[[f64; 3]], pr: &[[f64; 3]], q: &mut [f64], p: &mut [f64]) {
+    for (b, (rb, pb)) in r.iter().zip(pr).enumerate() {
+        q[b * k..b * k + k].copy_from_slice(&rb[..k]);
+        p[b * k..b * k + k].copy_from_slice(&pb[..k]);
+    }
+}
+
+/// Whether two slices hold the same bits (a step starting where the last one ended).
+fn same_bits(a: &[f64], b: &[f64]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+}
+
 /// The Kepler-adapted Galerkin integrator: s-stage Gauss collocation in the interaction
 /// picture of the Jacobi Wisdom–Holman splitting (order 2s; see the [module](self) for the
 /// method and its variational statement).
@@ -257,20 +317,7 @@ impl KeplerAdaptedGalerkin {
         let n = nb - 1;
         let three = vec![[0.0; 3]; nb];
         let stage_values = vec![[0.0; 3]; stages * n];
-        let nodes: Vec<f64> = std::iter::once(0.0).chain(c.iter().copied()).collect();
-        let extrapolate = c
-            .iter()
-            .flat_map(|&cj| {
-                let x = 1.0 + cj;
-                let nodes = &nodes;
-                (0..nodes.len()).map(move |l| {
-                    (0..nodes.len())
-                        .filter(|&m| m != l)
-                        .map(|m| (x - nodes[m]) / (nodes[l] - nodes[m]))
-                        .product::<f64>()
-                })
-            })
-            .collect();
+        let extrapolate = extrapolation_table(&c);
         Ok(KeplerAdaptedGalerkin {
             jacobi: Jacobi::new(system.masses(), system.g()),
             dim: system.body_dim(),
@@ -386,16 +433,8 @@ impl KeplerAdaptedGalerkin {
                 st.pj[body] = p1;
                 continue;
             }
-            let guess = st.full_anomaly[i];
-            let drift = KeplerDrift::new(
-                self.jacobi.mu(body),
-                q1,
-                scale(1.0 / m, p1),
-                h,
-                guess.is_finite().then_some(guess),
-            )
-            .map_err(|e| fail(f64::NAN, 0, format!("Kepler drift of body {body}: {e}")))?;
-            st.full_anomaly[i] = drift.anomaly();
+            let drift = warm_drift(self.jacobi.mu(body), m, q1, p1, h, &mut st.full_anomaly[i])
+                .map_err(|e| fail(f64::NAN, 0, format!("Kepler drift of body {body}: {e}")))?;
             st.rj[body] = drift.position();
             st.pj[body] = scale(m, drift.velocity());
         }
@@ -430,21 +469,17 @@ impl OneStepMethod for KeplerAdaptedGalerkin {
         let (k, nb) = (self.dim, self.jacobi.bodies());
         crate::error::ensure_step_state(nb * k, q, p, q_next, p_next)?;
         let st = &mut self.stages;
-        for b in 0..nb {
-            st.r[b] = [0.0; 3];
-            st.p[b] = [0.0; 3];
-            st.r[b][..k].copy_from_slice(&q[b * k..b * k + k]);
-            st.p[b][..k].copy_from_slice(&p[b * k..b * k + k]);
-        }
+        load_points(k, q, p, &mut st.r, &mut st.p);
         // A step that starts where the last one ended continues from the Jacobi state that
         // step computed: converting the rounded Cartesian state back every step adds a
         // rounding error per step that accumulates (J2000, s = 8, h = 16.7 d: Mercury's
         // error 0.7–1.8e-9 AU depending on a 1e-15 change of the start, Mars's 3.4e-10,
         // against 8.0–9.1e-11 and 6.5e-12 continuing; docs/guide/kepler-adapted.md).
-        let same = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits());
         // (`rj`, `pj` still hold that state: only a step writes them.)
-        let continues =
-            self.continue_jacobi && st.has_last && same(&st.last_q, q) && same(&st.last_p, p);
+        let continues = self.continue_jacobi
+            && st.has_last
+            && same_bits(&st.last_q, q)
+            && same_bits(&st.last_p, p);
         if !continues {
             // A new start: no last step to continue the polynomial bodies' curves from.
             st.has_previous = false;
@@ -456,10 +491,7 @@ impl OneStepMethod for KeplerAdaptedGalerkin {
         let st = &mut self.stages;
         self.jacobi.positions_from_jacobi(&st.rj, &mut st.r);
         self.jacobi.covector_from_jacobi(&st.pj, &mut st.p);
-        for b in 0..nb {
-            q_next[b * k..b * k + k].copy_from_slice(&st.r[b][..k]);
-            p_next[b * k..b * k + k].copy_from_slice(&st.p[b][..k]);
-        }
+        store_points(k, &st.r, &st.p, q_next, p_next);
         let st = &mut self.stages;
         st.last_q.copy_from_slice(q_next);
         st.last_p.copy_from_slice(p_next);

@@ -4,9 +4,7 @@
 //! it.
 
 use super::jacobi::{add, dot, scale};
-use super::{
-    DriftError, ESTIMATE_BELOW, FLOOR, KeplerAdaptedGalerkin, KeplerDrift, MAX_ITERATIONS,
-};
+use super::{DriftError, ESTIMATE_BELOW, FLOOR, KeplerAdaptedGalerkin, MAX_ITERATIONS, warm_drift};
 use crate::newton::{Correction, Divergence, NewtonFailure, NewtonIteration, Termination};
 
 impl KeplerAdaptedGalerkin {
@@ -27,16 +25,9 @@ impl KeplerAdaptedGalerkin {
                     continue;
                 }
                 let m = self.jacobi.jacobi_mass(body);
-                let guess = st.anomaly[k];
-                let drift = KeplerDrift::new(
-                    self.jacobi.mu(body),
-                    st.zq[k],
-                    scale(1.0 / m, st.zp[k]),
-                    self.c[j] * h,
-                    guess.is_finite().then_some(guess),
-                )
-                .map_err(|e| (body, e))?;
-                st.anomaly[k] = drift.anomaly();
+                let (mu, t) = (self.jacobi.mu(body), self.c[j] * h);
+                let drift = warm_drift(mu, m, st.zq[k], st.zp[k], t, &mut st.anomaly[k])
+                    .map_err(|e| (body, e))?;
                 st.positions[body] = drift.position();
                 st.drifts.push(drift);
             }

@@ -4,7 +4,7 @@
 
 use super::super::jacobi::{add, dot, scale, sub};
 use super::super::stages::termination;
-use super::super::{DriftError, ESTIMATE_BELOW, KeplerDrift, MAX_ITERATIONS};
+use super::super::{DriftError, ESTIMATE_BELOW, MAX_ITERATIONS, warm_drift};
 use super::InnerKeplerGalerkin;
 use crate::lagrangian::{ByCoordinate, Mechanical};
 use crate::newton::{Adapt, Correction, NewtonFailure, NewtonIteration, Progress, Termination};
@@ -47,16 +47,9 @@ impl InnerKeplerGalerkin {
             for j in 0..s {
                 let idx = j * n + b;
                 let st = &mut self.slots;
-                let guess = st.anomaly[idx];
-                let drift = KeplerDrift::new(
-                    self.prefix.mu(b),
-                    st.q[idx],
-                    scale(1.0 / m, st.zp[idx]),
-                    self.c[j] * h,
-                    guess.is_finite().then_some(guess),
-                )
-                .map_err(|e| (b, e))?;
-                st.anomaly[idx] = drift.anomaly();
+                let (mu, t) = (self.prefix.mu(b), self.c[j] * h);
+                let drift = warm_drift(mu, m, st.q[idx], st.zp[idx], t, &mut st.anomaly[idx])
+                    .map_err(|e| (b, e))?;
                 st.drifts[idx] = Some(drift);
             }
         }

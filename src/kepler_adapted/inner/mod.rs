@@ -48,7 +48,10 @@ mod tests;
 
 use super::jacobi::{Jacobi, add, scale};
 use super::stages::termination;
-use super::{KeplerDrift, MAX_KEPLER_ADAPTED_STAGES};
+use super::{
+    KeplerDrift, MAX_KEPLER_ADAPTED_STAGES, extrapolation_table, load_points, same_bits,
+    store_points, warm_drift,
+};
 use crate::baselines::{OneStepMethod, gauss_tableau};
 use crate::error::{GviError, Result};
 use crate::integrator::velocity::BlockFreeze;
@@ -217,20 +220,7 @@ impl InnerKeplerGalerkin {
         let ba = (0..s)
             .map(|l| (0..s).map(|j| b[j] * a[j * s + l]).sum())
             .collect();
-        let nodes: Vec<f64> = std::iter::once(0.0).chain(c.iter().copied()).collect();
-        let extrapolate = c
-            .iter()
-            .flat_map(|&cj| {
-                let x = 1.0 + cj;
-                let nodes = &nodes;
-                (0..nodes.len()).map(move |l| {
-                    (0..nodes.len())
-                        .filter(|&m| m != l)
-                        .map(|m| (x - nodes[m]) / (nodes[l] - nodes[m]))
-                        .product::<f64>()
-                })
-            })
-            .collect();
+        let extrapolate = extrapolation_table(&c);
         let masses = system.masses();
         let prefix = Jacobi::new(&masses[..=kepler], system.g());
         let mass = (0..nb)
@@ -466,16 +456,8 @@ impl InnerKeplerGalerkin {
                 dp = add(dp, scale(w, st.f[l * n + b]));
             }
             let (q1, p1) = (add(st.q0[b], dq), add(st.p0[b], dp));
-            let guess = st.full_anomaly[b];
-            let drift = KeplerDrift::new(
-                self.prefix.mu(b),
-                q1,
-                scale(1.0 / m, p1),
-                h,
-                guess.is_finite().then_some(guess),
-            )
-            .map_err(|e| fail(f64::NAN, 0, format!("Kepler drift of body {b}: {e}")))?;
-            st.full_anomaly[b] = drift.anomaly();
+            let drift = warm_drift(self.prefix.mu(b), m, q1, p1, h, &mut st.full_anomaly[b])
+                .map_err(|e| fail(f64::NAN, 0, format!("Kepler drift of body {b}: {e}")))?;
             st.q0[b] = drift.position();
             st.p0[b] = scale(m, drift.velocity());
         }
@@ -513,16 +495,10 @@ impl OneStepMethod for InnerKeplerGalerkin {
         // computed (the rounded Cartesian state converted back every step adds a rounding
         // error per step: `KeplerAdaptedGalerkin::step`).
         let st = &self.slots;
-        let same = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits());
-        let continues = st.has_last && same(&st.last_q, q) && same(&st.last_p, p);
+        let continues = st.has_last && same_bits(&st.last_q, q) && same_bits(&st.last_p, p);
         if !continues {
             let st = &mut self.slots;
-            for b in 0..nb {
-                st.r[b] = [0.0; 3];
-                st.p[b] = [0.0; 3];
-                st.r[b][..k].copy_from_slice(&q[b * k..b * k + k]);
-                st.p[b][..k].copy_from_slice(&p[b * k..b * k + k]);
-            }
+            load_points(k, q, p, &mut st.r, &mut st.p);
             st.has_previous = false;
             self.load_slots();
         }
@@ -530,10 +506,7 @@ impl OneStepMethod for InnerKeplerGalerkin {
         self.advance(t)?;
         self.store_slots();
         let st = &mut self.slots;
-        for b in 0..nb {
-            q_next[b * k..b * k + k].copy_from_slice(&st.r[b][..k]);
-            p_next[b * k..b * k + k].copy_from_slice(&st.p[b][..k]);
-        }
+        store_points(k, &st.r, &st.p, q_next, p_next);
         st.last_q.copy_from_slice(q_next);
         st.last_p.copy_from_slice(p_next);
         st.has_last = true;
