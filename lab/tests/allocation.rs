@@ -164,3 +164,34 @@ fn baseline_steps_do_not_allocate() {
         assert_eq!(*n, 0, "{name}: {n} allocations in 50 steps");
     }
 }
+
+/// The Kepler-adapted steps allocate nothing per step either: `InnerKeplerGalerkin` (its
+/// stage values, drifts, lane-kernel rows and freezing state are owned buffers; the kernel's
+/// scratch is grown in the warm-up) and `KeplerAdaptedGalerkin` with one body on its orbit.
+#[test]
+fn kepler_adapted_steps_do_not_allocate() {
+    use galerkin_vi::kepler_adapted::{InnerKeplerGalerkin, KeplerAdaptedGalerkin};
+    use galerkin_vi::systems::NBody;
+    // A star, a fast inner planet and two slower ones (G = 1, circular orbits).
+    let nb = NBody::new(vec![1.0, 1e-5, 1e-3, 3e-4], 1.0, 3).unwrap();
+    let v = |r: f64| (1.0 / r).sqrt();
+    #[rustfmt::skip]
+    let mut q0 = vec![0.0, 0.0, 0.0, 0.4, 0.0, 0.01, -2.0, 0.0, 0.0, 0.0, 5.0, -0.03];
+    #[rustfmt::skip]
+    let mut v0 = vec![0.0, 0.0, 0.0, 0.0, v(0.4), 0.0, 0.0, -v(2.0), 0.02, -v(5.0), 0.0, 0.0];
+    nb.to_barycentric(&mut q0, &mut v0).unwrap();
+    let p0 = nb.momenta(&v0);
+    let mut inner = InnerKeplerGalerkin::new(&nb, 6, 0.5, 1).unwrap();
+    let inner_count = allocations_in_baseline_steps(&mut inner, &q0, &p0);
+    let mut listed = KeplerAdaptedGalerkin::with_kepler_bodies(&nb, 6, 0.5, &[1]).unwrap();
+    let listed_count = allocations_in_baseline_steps(&mut listed, &q0, &p0);
+    assert!(
+        inner.partial_force_evaluations() > 0,
+        "freezing must have run for the count to cover it"
+    );
+    assert_eq!(
+        (inner_count, listed_count),
+        (0, 0),
+        "allocations in 50 steps: inner {inner_count}, with_kepler_bodies {listed_count}"
+    );
+}
