@@ -1,46 +1,6 @@
-//! The Kepler-adapted step with only the innermost planets on their Kepler orbits, solved the
-//! way the velocity form solves a polynomial step: the map of
-//! [`KeplerAdaptedGalerkin::with_kepler_bodies`](super::KeplerAdaptedGalerkin::with_kepler_bodies)
-//! for the bodies 1 … k, in coordinates where the other bodies' stage equations are those of
-//! plain Gauss collocation of the Cartesian N-body problem.
-//!
-//! # Coordinates
-//!
-//! Take Jacobi coordinates of the first k + 1 bodies only: their centre of mass C (mass
-//! η_k = m₀ + … + m_k), the Jacobi positions r′₁ … r′_k (masses m′ᵢ), and leave the bodies
-//! k + 1 … N − 1 Cartesian. The kinetic energy stays diagonal,
-//! T = |P_C|²/2η_k + Σ_{i≤k} |p′ᵢ|²/2m′ᵢ + Σ_{b>k} |p_b|²/2m_b, and the Kepler terms of the
-//! planets 1 … k are the full Jacobi splitting's (the same r′ᵢ, m′ᵢ and μᵢ = G ηᵢ: a Jacobi
-//! coordinate depends only on the bodies inside it). These coordinates are a linear function of
-//! the full Jacobi coordinates in which r′₁ … r′_k enter only as themselves
-//! (C = R − Σ_{l>k} m_l r′_l/η_l and x_b = R + (1 − m_b/η_b) r′_b − Σ_{l>b} m_l r′_l/η_l for
-//! b > k), and a Runge–Kutta method commutes with linear changes of the variables it treats
-//! polynomially: the step is the map of `with_kepler_bodies(1 … k)` (the same discrete
-//! Lagrangian, so the same variational statement, symplecticity and angular momentum), up to
-//! the stage equations' tolerance and round-off.
-//!
-//! # The stage equations
-//!
-//! The polynomial slots (C and the bodies b > k) obey q̈ = f(q)/m: s-stage Gauss collocation
-//! in its second-order form, the positions the only unknowns,
-//!
-//! Q_j = q_k + h c_j v_k + h² Σ_l (A²)_jl f(Q_l)/m,
-//! q_{k+1} = q_k + h v_k + h² Σ_l (bᵀA)_l f(Q_l)/m,  p_{k+1} = p_k + h Σ_l b_l f(Q_l),
-//!
-//! which is what the velocity form computes with the compact rule (m = n − 1 Gauss points).
-//! The Kepler slots are the interaction picture of the module above: stage values
-//! Z_j = z_k + h Σ_l a_jl F_l with F the pulled-back kick of the perturbation
-//! ∂H_R/∂r′ᵢ = ∂V/∂r′ᵢ + m′ᵢμᵢ r′ᵢ/|r′ᵢ|³ at the drifted positions.
-//!
-//! # Why it is fast
-//!
-//! Picard's iteration converges for each slot at its own rate, about (hωᵢ)² per iteration for
-//! a polynomial one and O(ε h²ω²) for a Kepler one, so the converged slots are frozen as in the
-//! velocity form (`crate::integrator::velocity` freeze): the forces are evaluated, in vector
-//! lanes over the stages, for the pairs with an active body only, and a last correction of
-//! every slot confirms the frozen ones. With the fastest planet on its exact orbit the step
-//! can be set by the slower ones (J2000: Mercury's 88-day orbit no longer sets h; measured in
-//! docs/solvers.md).
+//! [`InnerKeplerGalerkin`]: the Kepler-adapted step with only the innermost planets on their
+//! Kepler orbits, solved the way the velocity form solves a polynomial step (the method is
+//! described on the type).
 
 mod iteration;
 #[cfg(test)]
@@ -62,7 +22,48 @@ use iteration::SlotIteration;
 /// Gauss collocation with the innermost k planets on their exact Kepler orbits (order 2s):
 /// [`KeplerAdaptedGalerkin::with_kepler_bodies`](super::KeplerAdaptedGalerkin::with_kepler_bodies)
 /// with the bodies 1 … k, solved slot by slot with converged slots frozen and the forces in
-/// vector lanes (see the [module](self)).
+/// vector lanes.
+///
+/// # Coordinates
+///
+/// Take Jacobi coordinates of the first k + 1 bodies only: their centre of mass C (mass
+/// η_k = m₀ + … + m_k), the Jacobi positions r′₁ … r′_k (masses m′ᵢ), and leave the bodies
+/// k + 1 … N − 1 Cartesian. The kinetic energy stays diagonal,
+/// T = |P_C|²/2η_k + Σ_{i≤k} |p′ᵢ|²/2m′ᵢ + Σ_{b>k} |p_b|²/2m_b, and the Kepler terms of the
+/// planets 1 … k are the full Jacobi splitting's (the same r′ᵢ, m′ᵢ and μᵢ = G ηᵢ: a Jacobi
+/// coordinate depends only on the bodies inside it). These coordinates are a linear function of
+/// the full Jacobi coordinates in which r′₁ … r′_k enter only as themselves
+/// (C = R − Σ_{l>k} m_l r′_l/η_l and x_b = R + (1 − m_b/η_b) r′_b − Σ_{l>b} m_l r′_l/η_l for
+/// b > k), and a Runge–Kutta method commutes with linear changes of the variables it treats
+/// polynomially: the step is the map of `with_kepler_bodies(1 … k)` (the same discrete
+/// Lagrangian, so the same variational statement, symplecticity and angular momentum), up to
+/// the stage equations' tolerance and round-off.
+///
+/// # The stage equations
+///
+/// The polynomial slots (C and the bodies b > k) obey q̈ = f(q)/m: s-stage Gauss collocation
+/// in its second-order form, the positions the only unknowns,
+///
+/// Q_j = q_k + h c_j v_k + h² Σ_l (A²)_jl f(Q_l)/m,
+/// q_{k+1} = q_k + h v_k + h² Σ_l (bᵀA)_l f(Q_l)/m,  p_{k+1} = p_k + h Σ_l b_l f(Q_l),
+///
+/// which is what the velocity form computes with the collocation rule (n − 1 Gauss points for
+/// n basis functions). The Kepler slots are in the interaction picture of
+/// [`KeplerAdaptedGalerkin`](super::KeplerAdaptedGalerkin): stage values
+/// Z_j = z_k + h Σ_l a_jl F_l with F the pulled-back kick of the perturbation
+/// ∂H_R/∂r′ᵢ = ∂V/∂r′ᵢ + m′ᵢμᵢ r′ᵢ/|r′ᵢ|³ at the drifted positions.
+///
+/// # Why it is fast
+///
+/// Picard's iteration converges for each slot at its own rate, about (hωᵢ)² per iteration for
+/// a polynomial one and O(ε h²ω²) for a Kepler one, so the converged slots are frozen as in the
+/// velocity form (`crate::integrator::velocity` freeze): the forces are evaluated, in vector
+/// lanes over the stages, for the pairs with an active body only, and a last correction of
+/// every slot confirms the frozen ones. With the fastest planet on its exact orbit the step
+/// can be set by the slower ones (J2000: Mercury's 88-day orbit no longer sets h; measured in
+/// docs/solvers.md).
+///
+/// # Example
 ///
 /// ```
 /// use galerkin_vi::baselines::OneStepMethod;
@@ -72,8 +73,8 @@ use iteration::SlotIteration;
 /// // A star, a fast inner planet and a slow outer one.
 /// let nb = NBody::new(vec![1.0, 1e-5, 1e-3], 1.0, 2)?;
 /// let (q, p) = (
-///     [0.0, 0.0, 0.4, 0.0, -2.0, 0.0],
-///     [0.0, 1e-5 / 0.4f64.sqrt() - 1e-3 / 2f64.sqrt(), 0.0, -1e-5 / 0.4f64.sqrt(), 0.0, 1e-3 / 2f64.sqrt()],
+///    [0.0, 0.0, 0.4, 0.0, -2.0, 0.0],
+///    [0.0, 1e-5 / 0.4f64.sqrt() - 1e-3 / 2f64.sqrt(), 0.0, -1e-5 / 0.4f64.sqrt(), 0.0, 1e-3 / 2f64.sqrt()],
 /// );
 /// let mut fast = InnerKeplerGalerkin::new(&nb, 6, 0.5, 1)?;
 /// let mut reference = KeplerAdaptedGalerkin::with_kepler_bodies(&nb, 6, 0.5, &[1])?;
