@@ -55,6 +55,8 @@
 
 pub mod drift;
 mod inner;
+#[cfg(test)]
+mod j2000_fixture;
 mod jacobi;
 mod stages;
 mod stumpff;
